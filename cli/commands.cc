@@ -1,0 +1,9 @@
+#include "commands.h"
+
+namespace svbtdf::cli {
+
+void AddAllCommands(CLI::App& app) {
+  AddBtdfCommand(app);
+}
+
+}  // namespace svbtdf::cli

@@ -1,0 +1,15 @@
+#pragma once
+// Registration of the svbtdf subcommands. Each Add*Command() declares its options on `app`
+// and attaches a callback that does the work and throws svbtdf::Error on failure.
+// To add a command: write cmd_<name>.cc, declare its Add function here, list it in
+// AddAllCommands (commands.cc) and in CMakeLists.txt.
+
+#include <CLI/CLI.hpp>
+
+namespace svbtdf::cli {
+
+void AddAllCommands(CLI::App& app);
+
+void AddBtdfCommand(CLI::App& app);  // svbtdf btdf eval
+
+}  // namespace svbtdf::cli

@@ -1,0 +1,45 @@
+#pragma once
+// A progress bar for long work: "label [#####.....] 512/1600 (32%) 41.2/s, 0:26 left".
+// Draws on stderr only when it is a terminal (otherwise logs a line every few seconds), is
+// thread safe (Advance() may be called from worker threads) and never slows the work it reports.
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <mutex>
+#include <string>
+
+namespace svbtdf {
+
+class ProgressBar {
+ public:
+  ProgressBar(std::string label, int64_t total, std::string unit = "items");
+  ~ProgressBar();  // finishes the line
+  ProgressBar(const ProgressBar&) = delete;
+  ProgressBar& operator=(const ProgressBar&) = delete;
+
+  // Counts `n` more items done. Items resumed from a previous run should be passed to
+  // SkipAlreadyDone() instead, so that the rate and time left reflect only new work.
+  void Advance(int64_t n = 1);
+  void SkipAlreadyDone(int64_t n);
+  void Finish();
+
+  // Globally silences all bars (tests, --quiet).
+  static void SetEnabled(bool enabled);
+
+ private:
+  void MaybeDraw(bool force);
+
+  std::string label_;
+  std::string unit_;
+  int64_t total_;
+  std::atomic<int64_t> done_{0};
+  int64_t skipped_ = 0;
+  std::chrono::steady_clock::time_point start_;
+  std::chrono::steady_clock::time_point last_draw_;
+  std::mutex draw_mutex_;
+  bool finished_ = false;
+  bool is_terminal_ = false;
+};
+
+}  // namespace svbtdf
