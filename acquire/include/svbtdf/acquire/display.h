@@ -1,0 +1,39 @@
+#pragma once
+// The display-dot pattern generator: a monitor behind the sample that shows one white dot at a
+// time (and the calibration patterns). The SDL2 implementation drives a real monitor; the
+// headless one renders the same patterns into images for tests and for the simulated camera.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace svbtdf::acquire {
+
+struct Pattern {
+  enum class Kind { kBlack, kDot, kAllDots, kFlatWhite, kChessboard };
+  Kind kind = Kind::kBlack;
+  double x_px = 0.0, y_px = 0.0;  // dot centre in monitor pixels (kDot)
+  double dot_radius_px = 2.0;     // kDot and kAllDots
+  std::vector<std::pair<double, double>> all_dots_px;  // kAllDots
+  double intensity = 1.0;         // linear emitted intensity in [0, 1]; gamma is applied by the display
+  int board_cols = 9, board_rows = 6;  // inner corners, kChessboard
+  double board_square_px = 80.0;       // kChessboard
+};
+
+struct DisplayInfo {
+  std::string id;             // the --display argument that selects it, e.g. "sdl:1" or "sim"
+  int width_px = 0, height_px = 0;
+  double pixel_pitch_mm = 0.0;  // 0 when unknown
+  double gamma = 2.2;
+};
+
+class Display {
+ public:
+  virtual ~Display() = default;
+  virtual DisplayInfo Info() const = 0;
+  // Shows the pattern and returns only after it has been presented (the caller then waits the
+  // plan's settle time before capturing).
+  virtual void Show(const Pattern& pattern) = 0;
+};
+
+}  // namespace svbtdf::acquire
