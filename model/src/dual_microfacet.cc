@@ -1,0 +1,119 @@
+#include "svbtdf/model/dual_microfacet.h"
+
+#include <cmath>
+#include <string>
+
+#include "svbtdf/common/error.h"
+#include "svbtdf/model/fresnel.h"
+
+namespace svbtdf {
+namespace {
+
+// eta times the in-slab direction whose tangential component is `tangential` (Snell at a flat
+// interface: the tangential component of eta * direction is continuous).
+Vec3 ScaledSlabDirection(double tx, double ty, double eta) {
+  return {tx, ty, std::sqrt(std::max(0.0, eta * eta - tx * tx - ty * ty))};
+}
+
+}  // namespace
+
+DualMicrofacetModel::DualMicrofacetModel(double eta, SmithShadowing shadowing)
+    : eta_(eta), shadowing_(shadowing) {
+  if (!(eta > 1.0) || !std::isfinite(eta)) {
+    ThrowInvalidInput("eta", "the relative index of refraction must be > 1, got " + std::to_string(eta),
+                      "eta = n_slab / n_air, e.g. 1.5 for glass");
+  }
+}
+
+VirtualConfiguration DualMicrofacetModel::RoughEntry(const Vec3& i, const Vec3& o) const {
+  VirtualConfiguration config;
+  if (i.z() >= 0 || o.z() <= 0) return config;
+  const Vec3 om = ScaledSlabDirection(o.x(), o.y(), eta_);
+  const Vec3 sum = i + om;
+  const double length2 = sum.squaredNorm();
+  if (sum.z() <= 0 || length2 <= 0) return config;
+  const Vec3 h = sum / std::sqrt(length2);
+  const double cos_ih = i.dot(h);
+  const double cos_omh = om.dot(h);
+  // Refraction through a facet needs the light below it and the refracted ray above it.
+  if (cos_ih >= 0 || cos_omh <= 0) return config;
+  const double transmit_entry = 1.0 - FresnelDielectric(-cos_ih, eta_);
+  const double transmit_exit = 1.0 - FresnelDielectric(o.z(), eta_);
+  const double g = shadowing_.G(i, om / eta_, h);
+  config.valid = true;
+  config.h = h;
+  config.factor = transmit_entry * transmit_exit * g * std::abs(cos_ih) * cos_omh /
+                  (std::abs(i.z()) * om.z() * length2);
+  return config;
+}
+
+VirtualConfiguration DualMicrofacetModel::RoughExit(const Vec3& i, const Vec3& o) const {
+  VirtualConfiguration config;
+  if (i.z() >= 0 || o.z() <= 0) return config;
+  const Vec3 im = ScaledSlabDirection(-i.x(), -i.y(), eta_);
+  const Vec3 difference = im - o;
+  const double length2 = difference.squaredNorm();
+  if (difference.z() <= 0 || length2 <= 0) return config;
+  const Vec3 h = difference / std::sqrt(length2);
+  const double cos_imh = im.dot(h);
+  const double cos_oh = o.dot(h);
+  if (cos_imh <= 0 || cos_oh <= 0) return config;
+  const double transmit_entry = 1.0 - FresnelDielectric(-i.z(), eta_);
+  const double transmit_exit = 1.0 - FresnelDielectric(cos_oh, eta_);
+  const double g = shadowing_.G(-im / eta_, o, h);
+  config.valid = true;
+  config.h = h;
+  config.factor = transmit_entry * transmit_exit * g * cos_imh * cos_oh / (im.z() * o.z() * length2);
+  return config;
+}
+
+double DualMicrofacetModel::RhoT(const Ndf& ndf, const Vec3& i, const Vec3& o) const {
+  const VirtualConfiguration c = RoughEntry(i, o);
+  return c.valid ? c.factor * ndf.D(c.h) : 0.0;
+}
+
+double DualMicrofacetModel::RhoB(const Ndf& ndf, const Vec3& i, const Vec3& o) const {
+  const VirtualConfiguration c = RoughExit(i, o);
+  return c.valid ? c.factor * ndf.D(c.h) : 0.0;
+}
+
+double DualMicrofacetModel::Rho(const Ndf& ndf, double alpha, const Vec3& i, const Vec3& o) const {
+  if (alpha >= 1.0) return RhoT(ndf, i, o);
+  if (alpha <= 0.0) return RhoB(ndf, i, o);
+  return LogBlend(RhoT(ndf, i, o), RhoB(ndf, i, o), alpha);
+}
+
+double LogBlend(double rho_T, double rho_B, double alpha) {
+  if (alpha >= 1.0) return rho_T;
+  if (alpha <= 0.0) return rho_B;
+  if (rho_T <= 0.0 || rho_B <= 0.0) return 0.0;
+  return std::exp(alpha * std::log(rho_T) + (1.0 - alpha) * std::log(rho_B));
+}
+
+double WalterBtdf(const Ndf& ndf, const Vec3& i, const Vec3& o, double eta_i, double eta_o) {
+  if (i.z() * o.z() >= 0) return 0.0;
+  Vec3 h = -(eta_i * i + eta_o * o);
+  const double length2 = h.squaredNorm();
+  if (length2 <= 0) return 0.0;
+  h /= std::sqrt(length2);
+  if (h.z() < 0) h = -h;
+  const double cos_ih = i.dot(h);
+  const double cos_oh = o.dot(h);
+  if (cos_ih * cos_oh >= 0) return 0.0;
+  const double g = ndf.G1(i, h) * ndf.G1(o, h);
+  if (g <= 0) return 0.0;
+  // The Fresnel term is evaluated on the light's side; sign tells which medium that is.
+  const double transmit = 1.0 - FresnelDielectric(std::abs(cos_ih), eta_o / eta_i);
+  const double denom = eta_i * cos_ih + eta_o * cos_oh;
+  return std::abs(cos_ih * cos_oh / (i.z() * o.z())) * eta_o * eta_o * transmit * g * ndf.D(h) /
+         (denom * denom);
+}
+
+Rgb EvaluateMaterial(const Ndf& ndf, const DualMicrofacetParams& params, const Vec3& i,
+                     const Vec3& o) {
+  const double rho = DualMicrofacetModel(params.eta, params.shadowing).Rho(ndf, params.alpha, i, o);
+  return {params.k_s[0] * rho + params.rho_d[0], params.k_s[1] * rho + params.rho_d[1],
+          params.k_s[2] * rho + params.rho_d[2]};
+}
+
+}  // namespace svbtdf
