@@ -253,7 +253,9 @@ TEST(DualMicrofacet, EnergyNeverExceedsOne) {
                 [&](const Vec3& o) { return model.Rho(*ndf, alpha, i, o); }, -i, kPi, 600, 192);
             EXPECT_LE(energy, 1.0) << "eta " << eta << " roughness " << roughness << " theta "
                                    << theta_deg << " alpha " << alpha;
-            if (theta_deg < 50 && roughness < 0.5) EXPECT_GT(energy, 0.5);
+            if (theta_deg < 50 && roughness < 0.5) {
+              EXPECT_GT(energy, 0.5);
+            }
           }
         }
       }

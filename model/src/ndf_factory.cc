@@ -1,0 +1,21 @@
+#include "svbtdf/model/ndf_factory.h"
+
+#include <string>
+
+#include "svbtdf/common/error.h"
+#include "svbtdf/model/beckmann.h"
+#include "svbtdf/model/ggx.h"
+
+namespace svbtdf {
+
+std::vector<std::string> AnalyticNdfNames() { return {"ggx", "beckmann"}; }
+
+std::unique_ptr<Ndf> MakeAnalyticNdf(std::string_view name, const AnalyticNdfParams& params) {
+  if (name == "ggx") return std::make_unique<GgxNdf>(params.alpha_x, params.alpha_y);
+  if (name == "beckmann") return std::make_unique<BeckmannNdf>(params.alpha_x, params.alpha_y);
+  std::string known;
+  for (const std::string& n : AnalyticNdfNames()) known += (known.empty() ? "" : ", ") + n;
+  ThrowInvalidInput("ndf", "unknown NDF '" + std::string(name) + "'", "known: " + known);
+}
+
+}  // namespace svbtdf
