@@ -254,6 +254,16 @@ void Rig::LayOutDots() {
       dot.position = Vec3(xy.x(), xy.y(), -m.distance);
       dot.radius = radius;
       dot.intensity = m.white_exitance * m.Luminance(g.level) * kPi * radius * radius;
+      // The all-dots image (sample removed) must show every dot to locate it.
+      const std::optional<Vec2> px = camera_.Project(dot.position);
+      const CameraIntrinsics& k = config_.intrinsics;
+      if (!px || px->x() < 2.0 || px->y() < 2.0 || px->x() > k.width - 3.0 ||
+          px->y() > k.height - 3.0) {
+        ThrowInvalidInput("dots", "dot (" + std::to_string(col) + ", " + std::to_string(row) +
+                          ") at (" + Fmt(dot.position.x()) + ", " + Fmt(dot.position.y()) +
+                          ") m is outside the camera's view of the monitor",
+                          "shrink dots.span_scale, or widen the view (image size, fx/fy)");
+      }
       dots_.push_back(dot);
     }
   }
