@@ -18,16 +18,29 @@ namespace {
                            : hint);
 }
 
+void InitVideo(const std::string& subject) {
+  if (SDL_InitSubSystem(SDL_INIT_VIDEO) != 0) {
+    ThrowSdl(subject, "SDL_InitSubSystem(video)",
+             "no display server or DRM device; run inside X11/Wayland, on a console with "
+             "access to /dev/dri, or set SDL_VIDEODRIVER");
+  }
+  // Without a display server SDL silently falls back to an invisible off-screen driver; a
+  // capture against it would photograph a dark monitor for hours. Only accept it on request.
+  const std::string driver = SDL_GetCurrentVideoDriver() ? SDL_GetCurrentVideoDriver() : "";
+  const char* requested = SDL_getenv("SDL_VIDEODRIVER");
+  if ((driver == "offscreen" || driver == "dummy") && (!requested || driver != requested)) {
+    SDL_QuitSubSystem(SDL_INIT_VIDEO);
+    throw Error(ErrorKind::kHardware, subject,
+                "SDL found no real display (it fell back to the '" + driver + "' driver)",
+                "run inside X11/Wayland or on a console with access to /dev/dri; set "
+                "SDL_VIDEODRIVER=" + driver + " only for tests");
+  }
+}
+
 // SDL reference-counts subsystem initialisation; this pairs one Init with one Quit.
 class VideoSubsystem {
  public:
-  VideoSubsystem() {
-    if (SDL_InitSubSystem(SDL_INIT_VIDEO) != 0) {
-      ThrowSdl("sdl", "SDL_InitSubSystem(video)",
-               "no display server or DRM device; run inside X11/Wayland, on a console with "
-               "access to /dev/dri, or set SDL_VIDEODRIVER");
-    }
-  }
+  VideoSubsystem() { InitVideo("sdl"); }
   ~VideoSubsystem() { SDL_QuitSubSystem(SDL_INIT_VIDEO); }
 };
 
@@ -63,9 +76,7 @@ SdlDisplay::SdlDisplay(int index, SdlDisplayOptions options)
   if (!(options_.gamma > 0.0)) ThrowInvalidInput("sdl:" + std::to_string(index), "gamma must be positive");
   // Keep the pattern up when the operator clicks into a terminal on another monitor.
   SDL_SetHint(SDL_HINT_VIDEO_MINIMIZE_ON_FOCUS_LOSS, "0");
-  if (SDL_InitSubSystem(SDL_INIT_VIDEO) != 0) {
-    ThrowSdl("sdl:" + std::to_string(index), "SDL_InitSubSystem(video)");
-  }
+  InitVideo("sdl:" + std::to_string(index));
   try {
     const int count = SDL_GetNumVideoDisplays();
     if (index < 0 || index >= count) {
