@@ -97,8 +97,10 @@ LibcameraRange RangeOf(const lc::Camera& camera, const lc::ControlId& id, double
   const auto& controls = camera.controls();
   const auto found = controls.find(&id);
   if (found == controls.end()) return range;
-  range.present = true;
   const lc::ControlInfo& info = found->second;
+  // Some pipelines advertise a control without limits; get<T>() on an empty value is invalid.
+  if (info.min().type() != id.type() || info.max().type() != id.type()) return range;
+  range.present = true;
   if (id.type() == lc::ControlTypeFloat) {
     range.minimum = info.min().get<float>() * scale;
     range.maximum = info.max().get<float>() * scale;
