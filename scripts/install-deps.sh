@@ -9,7 +9,7 @@ PACKAGES=(
   libopencv-dev
   libopenimageio-dev openimageio-tools libopenexr-dev libpng-dev
   libcamera-dev linux-libc-dev libv4l-dev
-  libgphoto2-dev libsdl2-dev
+  libgphoto2-dev libsdl2-dev libjpeg-dev
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )
