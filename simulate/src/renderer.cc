@@ -450,14 +450,14 @@ double RigRenderer::MeanElectrons(double radiance, const Vec2& pixel, double exp
   return radiance * exposure_s * s.sensitivity * Vignetting(pixel) + s.dark_current * exposure_s;
 }
 
-SensorImage RigRenderer::Expose(const FloatImage& radiance, double exposure_s, uint64_t seed,
+CameraImage RigRenderer::Expose(const FloatImage& radiance, double exposure_s, uint64_t seed,
                                 uint64_t stream) const {
   const SensorConfig& s = rig_.config().sensor;
-  SensorImage out;
+  CameraImage out;
   out.width = radiance.width;
   out.height = radiance.height;
   out.channels = radiance.channels;
-  out.bit_depth = s.bit_depth;
+  out.bits_per_sample = s.bit_depth;
   out.pixels.assign(radiance.pixels.size(), 0);
   const double max_value = std::ldexp(1.0, s.bit_depth) - 1.0;
   const bool srgb = s.response == "srgb";

@@ -26,7 +26,7 @@ std::string Key(const CaptureId& id) {
 class MemorySink : public CaptureSink {
  public:
   bool Contains(const CaptureId& id) const override { return images.count(Key(id)) > 0; }
-  void Write(const CaptureId& id, const SensorImage& image) override {
+  void Write(const CaptureId& id, const CameraImage& image) override {
     images[Key(id)] = image.pixels;
     if (interrupt_after > 0 && static_cast<int>(images.size()) == interrupt_after) {
       SetInterruptRequested(true);
@@ -98,12 +98,12 @@ TEST(Capture, BoardImagesAreFoundAtTheTrueCorners) {
   for (const BoardPose& pose : poses) {
     FloatImage radiance;
     tiny.renderer.RenderBoard(pose, &radiance);
-    const SensorImage stored = tiny.renderer.Expose(radiance, tiny.plan.board_exposure_s, 1, 1);
+    const CameraImage stored = tiny.renderer.Expose(radiance, tiny.plan.board_exposure_s, 1, 1);
     cv::Mat gray(stored.height, stored.width, CV_8U);
     for (int y = 0; y < stored.height; ++y) {
       for (int x = 0; x < stored.width; ++x) {
         gray.at<uint8_t>(y, x) = static_cast<uint8_t>(stored.pixels[(size_t(y) * stored.width + x) * 3] >>
-                                                      (stored.bit_depth - 8));
+                                                      (stored.bits_per_sample - 8));
       }
     }
     std::vector<cv::Point2f> found;

@@ -143,8 +143,8 @@ TEST(RigRenderer, DotImageInvertsToTruth) {
     renderer.RenderDot(dot, &radiance);
     const float peak = *std::max_element(radiance.pixels.begin(), radiance.pixels.end());
     const double exposure = 0.8 * config.sensor.full_well / (peak * config.sensor.sensitivity);
-    const SensorImage image = renderer.Expose(radiance, exposure, 1, q);
-    const double max_value = std::ldexp(1.0, image.bit_depth) - 1.0;
+    const CameraImage image = renderer.Expose(radiance, exposure, 1, q);
+    const double max_value = std::ldexp(1.0, image.bits_per_sample) - 1.0;
     for (int y = 0; y < radiance.height; ++y) {
       for (int x = 0; x < radiance.width; ++x) {
         // Pixels whose every sub-sample falls in one texel.
@@ -273,9 +273,9 @@ TEST(RigRenderer, SensorNoiseStatisticsAndDeterminism) {
   FloatImage flat(200, 200, 1);
   std::fill(flat.pixels.begin(), flat.pixels.end(), 1.0f);
   const double exposure = 0.25 * config.sensor.full_well / config.sensor.sensitivity;
-  const SensorImage a = renderer.Expose(flat, exposure, 42, 3);
-  const SensorImage b = renderer.Expose(flat, exposure, 42, 3);
-  const SensorImage c = renderer.Expose(flat, exposure, 43, 3);
+  const CameraImage a = renderer.Expose(flat, exposure, 42, 3);
+  const CameraImage b = renderer.Expose(flat, exposure, 42, 3);
+  const CameraImage c = renderer.Expose(flat, exposure, 43, 3);
   EXPECT_EQ(a.pixels, b.pixels);
   EXPECT_NE(a.pixels, c.pixels);
   const double scale = (std::ldexp(1.0, 16) - 1) / config.sensor.full_well;  // DN per electron

@@ -34,7 +34,7 @@ class CaptureSink {
   virtual ~CaptureSink() = default;
   // True when this capture is already stored (a resumed run skips it).
   virtual bool Contains(const CaptureId& id) const = 0;
-  virtual void Write(const CaptureId& id, const SensorImage& image) = 0;
+  virtual void Write(const CaptureId& id, const CameraImage& image) = 0;
 };
 
 struct CaptureOptions {

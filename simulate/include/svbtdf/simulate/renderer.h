@@ -17,31 +17,10 @@
 #include <vector>
 
 #include "svbtdf/simulate/rig.h"
+#include "svbtdf/common/image_io.h"
 #include "svbtdf/simulate/truth_material.h"
 
 namespace svbtdf {
-
-// A linear float image, interleaved channels, row 0 at the top.
-struct FloatImage {
-  int width = 0;
-  int height = 0;
-  int channels = 3;
-  std::vector<float> pixels;
-
-  FloatImage() = default;
-  FloatImage(int w, int h, int c) : width(w), height(h), channels(c), pixels(size_t(w) * h * c, 0.f) {}
-  float& at(int x, int y, int c) { return pixels[(size_t(y) * width + x) * channels + c]; }
-  float at(int x, int y, int c) const { return pixels[(size_t(y) * width + x) * channels + c]; }
-};
-
-// Stored sensor values: 0 .. 2^bit_depth - 1 in 16-bit containers.
-struct SensorImage {
-  int width = 0;
-  int height = 0;
-  int channels = 3;
-  int bit_depth = 16;
-  std::vector<uint16_t> pixels;
-};
 
 // Where a chessboard is: board point (bx, by, 0) maps to world rotation * b + translation.
 // Inner corner (i, j) is at board point (i * square, j * square).
@@ -81,7 +60,7 @@ class RigRenderer {
   // The sensor chain: radiance x exposure x sensitivity x vignetting (+ dark current) electrons,
   // Poisson shot noise, Gaussian read noise, full-well clipping, response curve, black offset,
   // quantisation. Noise is a deterministic function of (seed, stream, pixel).
-  SensorImage Expose(const FloatImage& radiance, double exposure_s, uint64_t seed,
+  CameraImage Expose(const FloatImage& radiance, double exposure_s, uint64_t seed,
                      uint64_t stream) const;
   // The noise-free, unquantised, unclipped value on the stored scale (for tests and for the
   // inversion of the chain): (electrons / full_well), before the response curve.
