@@ -11,6 +11,7 @@ namespace svbtdf::cli {
 void AddAllCommands(CLI::App& app);
 
 void AddBtdfCommand(CLI::App& app);     // svbtdf btdf eval
-void AddDevicesCommand(CLI::App& app);  // svbtdf devices
+void AddDevicesCommand(CLI::App& app);   // svbtdf devices
+void AddSimulateCommand(CLI::App& app);  // svbtdf simulate
 
 }  // namespace svbtdf::cli

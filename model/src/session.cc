@@ -105,7 +105,7 @@ std::string SessionVerification::Summary() const {
 
 Session Session::Create(const fs::path& folder, const nlohmann::json& rig, const std::vector<std::string>& planned_keys) {
   if (fs::exists(folder) && (!fs::is_directory(folder) || !fs::is_empty(folder))) {
-    ThrowIoError(folder.string(), "exists and is not empty; an existing session is never overwritten",
+    ThrowInvalidInput(folder.string(), "exists and is not empty; an existing session is never overwritten",
                  "choose a new output folder, or resume with the same command");
   }
   std::error_code error;
@@ -155,7 +155,7 @@ Session Session::CreateOrResume(const fs::path& folder, const nlohmann::json& ri
   if (!fs::exists(folder / kManifest)) return Create(folder, rig, planned_keys);
   Session session = Open(folder);
   if (session.planned_keys_ != planned_keys) {
-    ThrowIoError(folder.string(), "holds a session with a different plan; it will not be changed",
+    ThrowInvalidInput(folder.string(), "holds a session with a different plan; it will not be changed",
                  "resume with the same settings, or choose a new output folder");
   }
   return session;
