@@ -338,12 +338,18 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
     SparseRows data;
     for (size_t k = 0; k < samples.size(); ++k) {
       const Sample& s = samples[k];
-      if (!s.used || !RowDefined(configs.entry[k], configs.exit[k], alpha)) continue;
-      const double w = std::sqrt(s.weight);
+      // Samples too dark to use still get a row, with weight zero: the pattern of the normal
+      // equations then depends only on the view and the light directions, so that texels
+      // sharing them share one symbolic factorisation.
+      if (s.weight <= 0 || !RowDefined(configs.entry[k], configs.exit[k], alpha)) continue;
+      const double w = s.used ? std::sqrt(s.weight) : 0.0;
       const int row = data.rows++;
-      double rhs = std::log(s.rho);
-      if (alpha > 0) rhs -= alpha * std::log(configs.entry[k].factor);
-      if (alpha < 1) rhs -= (1 - alpha) * std::log(configs.exit[k].factor);
+      double rhs = 0.0;
+      if (s.used) {
+        rhs = std::log(s.rho);
+        if (alpha > 0) rhs -= alpha * std::log(configs.entry[k].factor);
+        if (alpha < 1) rhs -= (1 - alpha) * std::log(configs.exit[k].factor);
+      }
       data.rhs.push_back(w * rhs);
       if (alpha > 0) {
         AddInterpolatedTerm(grid_, system.column, options_.horizon_ln_d, configs.entry[k].h, w * alpha, row, &data);
@@ -357,7 +363,8 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
     SparseMatrix normal = NormalMatrix(data, system.num_unknowns, &rhs);
     normal += system.smoothness_normal;
     rhs += system.smoothness_rhs;
-    if (with_symmetry) normal += system.symmetry_normal;
+    // Added with weight zero in the final pass so that both passes share one pattern.
+    normal += (with_symmetry ? 1.0 : 0.0) * system.symmetry_normal;
     const Eigen::VectorXd x = SolveNormalEquations(normal, rhs, state);
     std::vector<double> ln_d(grid_.num_cells(), options_.horizon_ln_d);
     for (int c = 0; c < grid_.num_cells(); ++c) {
