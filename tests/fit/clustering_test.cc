@@ -11,6 +11,8 @@
 namespace svbtdf::fit {
 namespace {
 
+double Square(double x) { return x * x; }
+
 // A synthetic material: `types` distinct slice shapes (Gaussian bumps at different places of a
 // 1-D stand-in for the light hemicube), each texel one of them scaled a little, plus noise.
 struct SyntheticSlices {
@@ -46,8 +48,6 @@ SliceSource SourceOf(const SyntheticSlices& s) {
   source.read = [&s](int64_t t, float* out) { std::copy(s.slices[t].begin(), s.slices[t].end(), out); };
   return source;
 }
-
-inline double Square(double x) { return x * x; }
 
 TEST(Clustering, GroupsTexelsOfTheSameSliceTypeAndPicksMembersAsRepresentatives) {
   const SyntheticSlices s = MakeSlices(5, 400, 0.01, 3);
