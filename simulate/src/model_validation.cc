@@ -1,0 +1,246 @@
+#include "svbtdf/simulate/model_validation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "svbtdf/common/error.h"
+#include "svbtdf/model/dual_microfacet.h"
+#include "svbtdf/model/shadowing.h"
+
+namespace svbtdf {
+namespace {
+
+// Solid angle of the spherical triangle with unit corners a, b, c (Van Oosterom and Strackee 1983).
+double TriangleSolidAngle(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const double numerator = std::abs(a.dot(b.cross(c)));
+  const double denominator = 1.0 + a.dot(b) + b.dot(c) + c.dot(a);
+  return 2.0 * std::atan2(numerator, denominator);
+}
+
+// eta times the in-slab direction with the given tangential components (Snell at a flat interface).
+Vec3 ScaledSlabDirection(double tx, double ty, double eta) {
+  return {tx, ty, std::sqrt(std::max(0.0, eta * eta - tx * tx - ty * ty))};
+}
+
+// The model with its own shadowing term off: G is applied from the NDF instead.
+DualMicrofacetModel UnshadowedModel(double eta) { return DualMicrofacetModel(eta, SmithShadowing::None()); }
+
+double BestBlendAlpha(const std::vector<double>& rho_T_points, const std::vector<double>& rho_B_points,
+                      const CellAverager& averager, const std::vector<double>& mc,
+                      const std::vector<double>& solid_angles, std::vector<double>* blend) {
+  std::vector<double> points(rho_T_points.size());
+  const auto blend_for = [&](double alpha) {
+    for (size_t p = 0; p < points.size(); ++p) points[p] = LogBlend(rho_T_points[p], rho_B_points[p], alpha);
+    return averager.Average(points);
+  };
+  const double alpha = MinimiseOnInterval(
+      [&](double a) { return RelativeL2Error(blend_for(a), mc, solid_angles); }, 0.0, 1.0, 101);
+  *blend = blend_for(alpha);
+  return alpha;
+}
+
+}  // namespace
+
+double RhoTWithNdfShadowing(const Ndf& ndf, double eta, const Vec3& i, const Vec3& o) {
+  const VirtualConfiguration c = UnshadowedModel(eta).RoughEntry(i, o);
+  if (!c.valid) return 0.0;
+  const Vec3 t = ScaledSlabDirection(o.x(), o.y(), eta) / eta;
+  return c.factor * ndf.D(c.h) * ndf.G1(i, c.h) * ndf.G1(t, c.h);
+}
+
+double RhoBWithNdfShadowing(const Ndf& ndf, double eta, const Vec3& i, const Vec3& o) {
+  const VirtualConfiguration c = UnshadowedModel(eta).RoughExit(i, o);
+  if (!c.valid) return 0.0;
+  const Vec3 t_i = -ScaledSlabDirection(-i.x(), -i.y(), eta) / eta;  // in-slab, pointing down
+  return c.factor * ndf.D(c.h) * ndf.G1(t_i, c.h) * ndf.G1(o, c.h);
+}
+
+double SingleInterfaceBtdf(const Ndf& ndf, double eta, const Vec3& i, const Vec3& o) {
+  return WalterBtdf(ndf, i, o, 1.0, eta);
+}
+
+CellAverager::CellAverager(const Hemicube& grid, int subdivisions) : per_cell_(subdivisions * subdivisions) {
+  if (subdivisions < 1) ThrowInvalidInput("cell subdivisions", "must be >= 1");
+  const int cells = grid.num_cells();
+  directions_.reserve(static_cast<size_t>(cells) * per_cell_);
+  weights_.reserve(directions_.capacity());
+  const double step = 1.0 / subdivisions;
+  for (int cell = 0; cell < cells; ++cell) {
+    const size_t first = weights_.size();
+    double cell_solid_angle = 0.0;
+    for (int b = 0; b < subdivisions; ++b) {
+      for (int a = 0; a < subdivisions; ++a) {
+        // Hemicube cell edges are great-circle arcs, so two spherical triangles give the
+        // sub-cell's solid angle exactly.
+        const Vec3 c00 = grid.CellPoint(cell, a * step, b * step);
+        const Vec3 c10 = grid.CellPoint(cell, (a + 1) * step, b * step);
+        const Vec3 c11 = grid.CellPoint(cell, (a + 1) * step, (b + 1) * step);
+        const Vec3 c01 = grid.CellPoint(cell, a * step, (b + 1) * step);
+        const double solid_angle = TriangleSolidAngle(c00, c10, c11) + TriangleSolidAngle(c00, c11, c01);
+        directions_.push_back(FlipZ(grid.CellPoint(cell, (a + 0.5) * step, (b + 0.5) * step)));
+        weights_.push_back(solid_angle);
+        cell_solid_angle += solid_angle;
+      }
+    }
+    for (size_t k = first; k < weights_.size(); ++k) weights_[k] /= cell_solid_angle;
+  }
+}
+
+std::vector<double> CellAverager::Average(const std::vector<double>& point_values) const {
+  std::vector<double> averages(directions_.size() / per_cell_, 0.0);
+  for (size_t p = 0; p < point_values.size(); ++p) averages[p / per_cell_] += weights_[p] * point_values[p];
+  return averages;
+}
+
+std::vector<double> CellAverager::Average(const std::function<double(const Vec3& i)>& f) const {
+  std::vector<double> values(directions_.size());
+  for (size_t p = 0; p < directions_.size(); ++p) values[p] = f(directions_[p]);
+  return Average(values);
+}
+
+double RelativeL2Error(const std::vector<double>& model, const std::vector<double>& reference,
+                       const std::vector<double>& solid_angles) {
+  double difference = 0.0;
+  double norm = 0.0;
+  for (size_t c = 0; c < reference.size(); ++c) {
+    difference += solid_angles[c] * Square(model[c] - reference[c]);
+    norm += solid_angles[c] * Square(reference[c]);
+  }
+  return norm > 0 ? std::sqrt(difference / norm) : std::numeric_limits<double>::infinity();
+}
+
+const char* ToString(RoughSides sides) {
+  switch (sides) {
+    case RoughSides::kEntry: return "entry";
+    case RoughSides::kExit: return "exit";
+    case RoughSides::kBoth: return "both";
+  }
+  return "?";
+}
+
+double MinimiseOnInterval(const std::function<double(double)>& f, double lo, double hi,
+                          int scan_points, double tolerance) {
+  if (!(hi > lo) || scan_points < 3) ThrowInvalidInput("interval", "needs lo < hi and >= 3 points");
+  int best = 0;
+  double best_value = std::numeric_limits<double>::infinity();
+  const double step = (hi - lo) / (scan_points - 1);
+  for (int k = 0; k < scan_points; ++k) {
+    const double value = f(lo + k * step);
+    if (value < best_value) {
+      best_value = value;
+      best = k;
+    }
+  }
+  // Golden-section search in the bracket of the best scan point.
+  double a = lo + std::max(0, best - 1) * step;
+  double b = lo + std::min(scan_points - 1, best + 1) * step;
+  const double ratio = (std::sqrt(5.0) - 1.0) / 2.0;
+  double x1 = b - ratio * (b - a);
+  double x2 = a + ratio * (b - a);
+  double f1 = f(x1);
+  double f2 = f(x2);
+  while (b - a > tolerance) {
+    if (f1 < f2) {
+      b = x2;
+      x2 = x1;
+      f2 = f1;
+      x1 = b - ratio * (b - a);
+      f1 = f(x1);
+    } else {
+      a = x1;
+      x1 = x2;
+      f1 = f2;
+      x2 = a + ratio * (b - a);
+      f2 = f(x2);
+    }
+  }
+  const double x = 0.5 * (a + b);
+  return f(x) <= best_value ? x : lo + best * step;
+}
+
+std::vector<ValidationCase> ValidateModel(const ValidationOptions& options, const Hemicube& grid,
+                                          const std::function<void(const ValidationCase&)>& on_case) {
+  if (!options.make_ndf) ThrowInvalidInput("ndf", "no NDF factory given");
+  if (!(options.eta > 1.0) || !std::isfinite(options.eta)) {
+    ThrowInvalidInput("--eta", "must be finite and > 1, got " + std::to_string(options.eta));
+  }
+  for (double angle : options.incidences_deg) {
+    if (!(angle >= 0.0 && angle < 90.0)) {
+      ThrowInvalidInput("incidence", "must lie in [0, 90) degrees, got " + std::to_string(angle));
+    }
+  }
+  const std::unique_ptr<Ndf> ndf = options.make_ndf(options.roughness);
+  const CellAverager averager(grid, options.cell_subdivisions);
+  const std::vector<Vec3>& points = averager.light_directions();
+  std::vector<double> solid_angles(grid.num_cells());
+  for (int c = 0; c < grid.num_cells(); ++c) solid_angles[c] = grid.CellSolidAngle(c);
+
+  std::vector<ValidationCase> cases;
+  uint64_t case_index = 0;
+  for (RoughSides sides : options.configurations) {
+    Slab slab;
+    slab.eta = options.eta;
+    const bool rough_entry = sides != RoughSides::kExit;
+    const bool rough_exit = sides != RoughSides::kEntry;
+    slab.entry = rough_entry ? SlabInterface::Rough(*ndf) : SlabInterface::Flat();
+    slab.exit = rough_exit ? SlabInterface::Rough(*ndf) : SlabInterface::Flat();
+    const SlabTracer tracer(slab);
+    for (double angle : options.incidences_deg) {
+      ValidationCase result;
+      result.rough_sides = sides;
+      result.incidence_deg = angle;
+      result.o = SphericalDirection(angle * kPi / 180.0, 0.0);
+      const Vec3& o = result.o;
+
+      SliceOptions slice_options = options.slice;
+      slice_options.seed = options.slice.seed + case_index++;
+      result.mc = tracer.SliceForView(o, grid, slice_options);
+      const std::vector<double>& mc = result.mc.rho;
+      double noise = 0.0;
+      double norm = 0.0;
+      for (size_t c = 0; c < mc.size(); ++c) {
+        noise += solid_angles[c] * Square(result.mc.standard_error[c]);
+        norm += solid_angles[c] * Square(mc[c]);
+      }
+      result.mc_noise = std::sqrt(noise / norm);
+
+      std::vector<double> rho_T_points(points.size());
+      std::vector<double> rho_B_points(points.size());
+      std::vector<double> single_points(points.size());
+      for (size_t p = 0; p < points.size(); ++p) {
+        rho_T_points[p] = RhoTWithNdfShadowing(*ndf, options.eta, points[p], o);
+        rho_B_points[p] = RhoBWithNdfShadowing(*ndf, options.eta, points[p], o);
+        single_points[p] = SingleInterfaceBtdf(*ndf, options.eta, points[p], o);
+      }
+      result.rho_T = averager.Average(rho_T_points);
+      result.rho_B = averager.Average(rho_B_points);
+      result.single_same_ndf = averager.Average(single_points);
+      result.best_alpha =
+          BestBlendAlpha(rho_T_points, rho_B_points, averager, mc, solid_angles, &result.blend);
+
+      const auto single_with_roughness = [&](double log_roughness) {
+        const std::unique_ptr<Ndf> fitted = options.make_ndf(std::exp(log_roughness));
+        return averager.Average(
+            [&](const Vec3& i) { return SingleInterfaceBtdf(*fitted, options.eta, i, o); });
+      };
+      const double log_roughness = MinimiseOnInterval(
+          [&](double x) { return RelativeL2Error(single_with_roughness(x), mc, solid_angles); },
+          std::log(options.min_fitted_roughness), std::log(options.max_fitted_roughness), 41, 1e-3);
+      result.fitted_roughness = std::exp(log_roughness);
+      result.single_fitted = single_with_roughness(log_roughness);
+
+      result.errors.rho_T = RelativeL2Error(result.rho_T, mc, solid_angles);
+      result.errors.rho_B = RelativeL2Error(result.rho_B, mc, solid_angles);
+      result.errors.blend = RelativeL2Error(result.blend, mc, solid_angles);
+      result.errors.single_same_ndf = RelativeL2Error(result.single_same_ndf, mc, solid_angles);
+      result.errors.single_fitted = RelativeL2Error(result.single_fitted, mc, solid_angles);
+      if (on_case) on_case(result);
+      cases.push_back(std::move(result));
+    }
+  }
+  return cases;
+}
+
+}  // namespace svbtdf
