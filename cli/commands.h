@@ -10,6 +10,7 @@ namespace svbtdf::cli {
 
 void AddAllCommands(CLI::App& app);
 
-void AddBtdfCommand(CLI::App& app);  // svbtdf btdf eval
+void AddBtdfCommand(CLI::App& app);           // svbtdf btdf eval
+void AddValidateModelCommand(CLI::App& app);  // svbtdf validate-model
 
 }  // namespace svbtdf::cli

@@ -27,18 +27,32 @@ Vec3 ScaledSlabDirection(double tx, double ty, double eta) {
 // The model with its own shadowing term off: G is applied from the NDF instead.
 DualMicrofacetModel UnshadowedModel(double eta) { return DualMicrofacetModel(eta, SmithShadowing::None()); }
 
+// The blend weight alpha minimising the blend's error against MC, given rho_T and rho_B at the
+// averager's points; `scan_points` alphas are scanned before the golden-section refinement.
 double BestBlendAlpha(const std::vector<double>& rho_T_points, const std::vector<double>& rho_B_points,
                       const CellAverager& averager, const std::vector<double>& mc,
-                      const std::vector<double>& solid_angles, std::vector<double>* blend) {
+                      const std::vector<double>& solid_angles, int scan_points,
+                      std::vector<double>* blend) {
   std::vector<double> points(rho_T_points.size());
   const auto blend_for = [&](double alpha) {
     for (size_t p = 0; p < points.size(); ++p) points[p] = LogBlend(rho_T_points[p], rho_B_points[p], alpha);
     return averager.Average(points);
   };
   const double alpha = MinimiseOnInterval(
-      [&](double a) { return RelativeL2Error(blend_for(a), mc, solid_angles); }, 0.0, 1.0, 101);
+      [&](double a) { return RelativeL2Error(blend_for(a), mc, solid_angles); }, 0.0, 1.0,
+      scan_points);
   *blend = blend_for(alpha);
   return alpha;
+}
+
+void EvaluateTerms(const Ndf& ndf, double eta, const std::vector<Vec3>& points, const Vec3& o,
+                   std::vector<double>* rho_T, std::vector<double>* rho_B) {
+  rho_T->resize(points.size());
+  rho_B->resize(points.size());
+  for (size_t p = 0; p < points.size(); ++p) {
+    (*rho_T)[p] = RhoTWithNdfShadowing(ndf, eta, points[p], o);
+    (*rho_B)[p] = RhoBWithNdfShadowing(ndf, eta, points[p], o);
+  }
 }
 
 }  // namespace
@@ -109,6 +123,20 @@ double RelativeL2Error(const std::vector<double>& model, const std::vector<doubl
     norm += solid_angles[c] * Square(reference[c]);
   }
   return norm > 0 ? std::sqrt(difference / norm) : std::numeric_limits<double>::infinity();
+}
+
+double ScaleFreeRelativeL2Error(const std::vector<double>& model, const std::vector<double>& reference,
+                                const std::vector<double>& solid_angles) {
+  double cross = 0.0;
+  double model_norm = 0.0;
+  for (size_t c = 0; c < reference.size(); ++c) {
+    cross += solid_angles[c] * model[c] * reference[c];
+    model_norm += solid_angles[c] * Square(model[c]);
+  }
+  if (!(model_norm > 0) || !(cross > 0)) return RelativeL2Error(model, reference, solid_angles);
+  std::vector<double> scaled(model.size());
+  for (size_t c = 0; c < model.size(); ++c) scaled[c] = model[c] * cross / model_norm;
+  return RelativeL2Error(scaled, reference, solid_angles);
 }
 
 const char* ToString(RoughSides sides) {
@@ -206,19 +234,14 @@ std::vector<ValidationCase> ValidateModel(const ValidationOptions& options, cons
       }
       result.mc_noise = std::sqrt(noise / norm);
 
-      std::vector<double> rho_T_points(points.size());
-      std::vector<double> rho_B_points(points.size());
-      std::vector<double> single_points(points.size());
-      for (size_t p = 0; p < points.size(); ++p) {
-        rho_T_points[p] = RhoTWithNdfShadowing(*ndf, options.eta, points[p], o);
-        rho_B_points[p] = RhoBWithNdfShadowing(*ndf, options.eta, points[p], o);
-        single_points[p] = SingleInterfaceBtdf(*ndf, options.eta, points[p], o);
-      }
+      std::vector<double> rho_T_points, rho_B_points;
+      EvaluateTerms(*ndf, options.eta, points, o, &rho_T_points, &rho_B_points);
       result.rho_T = averager.Average(rho_T_points);
       result.rho_B = averager.Average(rho_B_points);
-      result.single_same_ndf = averager.Average(single_points);
-      result.best_alpha =
-          BestBlendAlpha(rho_T_points, rho_B_points, averager, mc, solid_angles, &result.blend);
+      result.single_same_ndf =
+          averager.Average([&](const Vec3& i) { return SingleInterfaceBtdf(*ndf, options.eta, i, o); });
+      result.best_alpha = BestBlendAlpha(rho_T_points, rho_B_points, averager, mc, solid_angles,
+                                         101, &result.blend);
 
       const auto single_with_roughness = [&](double log_roughness) {
         const std::unique_ptr<Ndf> fitted = options.make_ndf(std::exp(log_roughness));
@@ -231,11 +254,43 @@ std::vector<ValidationCase> ValidateModel(const ValidationOptions& options, cons
       result.fitted_roughness = std::exp(log_roughness);
       result.single_fitted = single_with_roughness(log_roughness);
 
+      if (options.fit_blend_roughness) {
+        // The fitted blend: for each trial roughness, the best alpha (a coarser alpha scan suffices
+        // inside the outer search).
+        const auto fitted_blend = [&](double log_r, std::vector<double>* blend) {
+          const std::unique_ptr<Ndf> trial = options.make_ndf(std::exp(log_r));
+          std::vector<double> trial_T, trial_B;
+          EvaluateTerms(*trial, options.eta, points, o, &trial_T, &trial_B);
+          return BestBlendAlpha(trial_T, trial_B, averager, mc, solid_angles, 21, blend);
+        };
+        const double log_blend_roughness = MinimiseOnInterval(
+            [&](double x) {
+              std::vector<double> blend;
+              fitted_blend(x, &blend);
+              return RelativeL2Error(blend, mc, solid_angles);
+            },
+            std::log(options.min_fitted_roughness), std::log(options.max_fitted_roughness), 21, 1e-3);
+        result.blend_fitted_roughness = std::exp(log_blend_roughness);
+        result.blend_fitted_alpha = fitted_blend(log_blend_roughness, &result.blend_fitted);
+      }
+
       result.errors.rho_T = RelativeL2Error(result.rho_T, mc, solid_angles);
       result.errors.rho_B = RelativeL2Error(result.rho_B, mc, solid_angles);
       result.errors.blend = RelativeL2Error(result.blend, mc, solid_angles);
       result.errors.single_same_ndf = RelativeL2Error(result.single_same_ndf, mc, solid_angles);
       result.errors.single_fitted = RelativeL2Error(result.single_fitted, mc, solid_angles);
+      if (options.fit_blend_roughness) {
+        result.errors.blend_fitted = RelativeL2Error(result.blend_fitted, mc, solid_angles);
+        result.scale_free_errors.blend_fitted =
+            ScaleFreeRelativeL2Error(result.blend_fitted, mc, solid_angles);
+      }
+      result.scale_free_errors.rho_T = ScaleFreeRelativeL2Error(result.rho_T, mc, solid_angles);
+      result.scale_free_errors.rho_B = ScaleFreeRelativeL2Error(result.rho_B, mc, solid_angles);
+      result.scale_free_errors.blend = ScaleFreeRelativeL2Error(result.blend, mc, solid_angles);
+      result.scale_free_errors.single_same_ndf =
+          ScaleFreeRelativeL2Error(result.single_same_ndf, mc, solid_angles);
+      result.scale_free_errors.single_fitted =
+          ScaleFreeRelativeL2Error(result.single_fitted, mc, solid_angles);
       if (on_case) on_case(result);
       cases.push_back(std::move(result));
     }

@@ -12,3 +12,8 @@ inline std::unique_ptr<Ndf> RoughNdf(double roughness) { return std::make_unique
 inline std::unique_ptr<Ndf> SkewedNdf() { return std::make_unique<DevGgx>(0.25); }
 
 }  // namespace svbtdf
+
+namespace svbtdf {
+// TEMPORARY: will be Beckmann (the paper's Gaussian NDF).
+inline std::unique_ptr<Ndf> PaperNdf(double roughness) { return RoughNdf(roughness); }
+}  // namespace svbtdf
