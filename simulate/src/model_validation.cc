@@ -75,7 +75,8 @@ double SingleInterfaceBtdf(const Ndf& ndf, double eta, const Vec3& i, const Vec3
   return WalterBtdf(ndf, i, o, 1.0, eta);
 }
 
-CellAverager::CellAverager(const Hemicube& grid, int subdivisions) : per_cell_(subdivisions * subdivisions) {
+CellAverager::CellAverager(const Hemicube& grid, int subdivisions)
+    : grid_(grid), per_cell_(subdivisions * subdivisions) {
   if (subdivisions < 1) ThrowInvalidInput("cell subdivisions", "must be >= 1");
   const int cells = grid.num_cells();
   directions_.reserve(static_cast<size_t>(cells) * per_cell_);
@@ -188,6 +189,110 @@ double MinimiseOnInterval(const std::function<double(double)>& f, double lo, dou
   return f(x) <= best_value ? x : lo + best * step;
 }
 
+namespace {
+
+// What every case of one validation run shares.
+struct ValidationContext {
+  const ValidationOptions& options;
+  const Ndf& ndf;
+  const CellAverager& averager;
+  std::vector<double> solid_angles;
+};
+
+double RelativeNoise(const BtdfSlice& mc, const std::vector<double>& solid_angles) {
+  double noise = 0.0;
+  double norm = 0.0;
+  for (size_t c = 0; c < mc.rho.size(); ++c) {
+    noise += solid_angles[c] * Square(mc.standard_error[c]);
+    norm += solid_angles[c] * Square(mc.rho[c]);
+  }
+  return std::sqrt(noise / norm);
+}
+
+// Walter's BTDF with the NDF roughness that fits the MC slice best.
+void FitSingleInterface(const ValidationContext& context, ValidationCase* result) {
+  const ValidationOptions& options = context.options;
+  const auto single_with_roughness = [&](double log_roughness) {
+    const std::unique_ptr<Ndf> fitted = options.make_ndf(std::exp(log_roughness));
+    return context.averager.Average(
+        [&](const Vec3& i) { return SingleInterfaceBtdf(*fitted, options.eta, i, result->o); });
+  };
+  const double log_roughness = MinimiseOnInterval(
+      [&](double x) { return RelativeL2Error(single_with_roughness(x), result->mc.rho, context.solid_angles); },
+      std::log(options.min_fitted_roughness), std::log(options.max_fitted_roughness), 41, 1e-3);
+  result->fitted_roughness = std::exp(log_roughness);
+  result->single_fitted = single_with_roughness(log_roughness);
+}
+
+// The blend with both alpha and the NDF roughness fitted: for each trial roughness the best alpha
+// (a coarser alpha scan suffices inside the outer search).
+void FitBlendRoughness(const ValidationContext& context, ValidationCase* result) {
+  const ValidationOptions& options = context.options;
+  const std::vector<Vec3>& points = context.averager.light_directions();
+  const auto fitted_blend = [&](double log_roughness, std::vector<double>* blend) {
+    const std::unique_ptr<Ndf> trial = options.make_ndf(std::exp(log_roughness));
+    std::vector<double> trial_T, trial_B;
+    EvaluateTerms(*trial, options.eta, points, result->o, &trial_T, &trial_B);
+    return BestBlendAlpha(trial_T, trial_B, context.averager, result->mc.rho, context.solid_angles, 21,
+                          blend);
+  };
+  const double log_roughness = MinimiseOnInterval(
+      [&](double x) {
+        std::vector<double> blend;
+        fitted_blend(x, &blend);
+        return RelativeL2Error(blend, result->mc.rho, context.solid_angles);
+      },
+      std::log(options.min_fitted_roughness), std::log(options.max_fitted_roughness), 21, 1e-3);
+  result->blend_fitted_roughness = std::exp(log_roughness);
+  result->blend_fitted_alpha = fitted_blend(log_roughness, &result->blend_fitted);
+}
+
+void ComputeErrors(const std::vector<double>& solid_angles, ValidationCase* result) {
+  const std::vector<double>& mc = result->mc.rho;
+  const auto both = [&](const std::vector<double>& model, double* error, double* scale_free_error) {
+    if (model.empty()) return;  // a column that was not computed
+    *error = RelativeL2Error(model, mc, solid_angles);
+    *scale_free_error = ScaleFreeRelativeL2Error(model, mc, solid_angles);
+  };
+  ModelErrors& e = result->errors;
+  ModelErrors& f = result->scale_free_errors;
+  both(result->rho_T, &e.rho_T, &f.rho_T);
+  both(result->rho_B, &e.rho_B, &f.rho_B);
+  both(result->blend, &e.blend, &f.blend);
+  both(result->single_same_ndf, &e.single_same_ndf, &f.single_same_ndf);
+  both(result->single_fitted, &e.single_fitted, &f.single_fitted);
+  both(result->blend_fitted, &e.blend_fitted, &f.blend_fitted);
+}
+
+ValidationCase RunCase(const ValidationContext& context, const SlabTracer& tracer, RoughSides sides,
+                       double incidence_deg, uint64_t seed) {
+  const ValidationOptions& options = context.options;
+  ValidationCase result;
+  result.rough_sides = sides;
+  result.incidence_deg = incidence_deg;
+  result.o = SphericalDirection(incidence_deg * kPi / 180.0, 0.0);
+  SliceOptions slice_options = options.slice;
+  slice_options.seed = seed;
+  result.mc = tracer.SliceForView(result.o, context.averager.grid(), slice_options);
+  result.mc_noise = RelativeNoise(result.mc, context.solid_angles);
+
+  std::vector<double> rho_T_points, rho_B_points;
+  EvaluateTerms(context.ndf, options.eta, context.averager.light_directions(), result.o, &rho_T_points,
+                &rho_B_points);
+  result.rho_T = context.averager.Average(rho_T_points);
+  result.rho_B = context.averager.Average(rho_B_points);
+  result.best_alpha = BestBlendAlpha(rho_T_points, rho_B_points, context.averager, result.mc.rho,
+                                     context.solid_angles, 101, &result.blend);
+  result.single_same_ndf = context.averager.Average(
+      [&](const Vec3& i) { return SingleInterfaceBtdf(context.ndf, options.eta, i, result.o); });
+  FitSingleInterface(context, &result);
+  if (options.fit_blend_roughness) FitBlendRoughness(context, &result);
+  ComputeErrors(context.solid_angles, &result);
+  return result;
+}
+
+}  // namespace
+
 std::vector<ValidationCase> ValidateModel(const ValidationOptions& options, const Hemicube& grid,
                                           const std::function<void(const ValidationCase&)>& on_case) {
   if (!options.make_ndf) ThrowInvalidInput("ndf", "no NDF factory given");
@@ -196,103 +301,25 @@ std::vector<ValidationCase> ValidateModel(const ValidationOptions& options, cons
   }
   for (double angle : options.incidences_deg) {
     if (!(angle >= 0.0 && angle < 90.0)) {
-      ThrowInvalidInput("incidence", "must lie in [0, 90) degrees, got " + std::to_string(angle));
+      ThrowInvalidInput("--incidence", "must lie in [0, 90) degrees, got " + std::to_string(angle));
     }
   }
   const std::unique_ptr<Ndf> ndf = options.make_ndf(options.roughness);
   const CellAverager averager(grid, options.cell_subdivisions);
-  const std::vector<Vec3>& points = averager.light_directions();
-  std::vector<double> solid_angles(grid.num_cells());
-  for (int c = 0; c < grid.num_cells(); ++c) solid_angles[c] = grid.CellSolidAngle(c);
+  ValidationContext context{options, *ndf, averager, std::vector<double>(grid.num_cells())};
+  for (int c = 0; c < grid.num_cells(); ++c) context.solid_angles[c] = grid.CellSolidAngle(c);
 
   std::vector<ValidationCase> cases;
-  uint64_t case_index = 0;
   for (RoughSides sides : options.configurations) {
     Slab slab;
     slab.eta = options.eta;
-    const bool rough_entry = sides != RoughSides::kExit;
-    const bool rough_exit = sides != RoughSides::kEntry;
-    slab.entry = rough_entry ? SlabInterface::Rough(*ndf) : SlabInterface::Flat();
-    slab.exit = rough_exit ? SlabInterface::Rough(*ndf) : SlabInterface::Flat();
+    slab.entry = sides != RoughSides::kExit ? SlabInterface::Rough(*ndf) : SlabInterface::Flat();
+    slab.exit = sides != RoughSides::kEntry ? SlabInterface::Rough(*ndf) : SlabInterface::Flat();
     const SlabTracer tracer(slab);
     for (double angle : options.incidences_deg) {
-      ValidationCase result;
-      result.rough_sides = sides;
-      result.incidence_deg = angle;
-      result.o = SphericalDirection(angle * kPi / 180.0, 0.0);
-      const Vec3& o = result.o;
-
-      SliceOptions slice_options = options.slice;
-      slice_options.seed = options.slice.seed + case_index++;
-      result.mc = tracer.SliceForView(o, grid, slice_options);
-      const std::vector<double>& mc = result.mc.rho;
-      double noise = 0.0;
-      double norm = 0.0;
-      for (size_t c = 0; c < mc.size(); ++c) {
-        noise += solid_angles[c] * Square(result.mc.standard_error[c]);
-        norm += solid_angles[c] * Square(mc[c]);
-      }
-      result.mc_noise = std::sqrt(noise / norm);
-
-      std::vector<double> rho_T_points, rho_B_points;
-      EvaluateTerms(*ndf, options.eta, points, o, &rho_T_points, &rho_B_points);
-      result.rho_T = averager.Average(rho_T_points);
-      result.rho_B = averager.Average(rho_B_points);
-      result.single_same_ndf =
-          averager.Average([&](const Vec3& i) { return SingleInterfaceBtdf(*ndf, options.eta, i, o); });
-      result.best_alpha = BestBlendAlpha(rho_T_points, rho_B_points, averager, mc, solid_angles,
-                                         101, &result.blend);
-
-      const auto single_with_roughness = [&](double log_roughness) {
-        const std::unique_ptr<Ndf> fitted = options.make_ndf(std::exp(log_roughness));
-        return averager.Average(
-            [&](const Vec3& i) { return SingleInterfaceBtdf(*fitted, options.eta, i, o); });
-      };
-      const double log_roughness = MinimiseOnInterval(
-          [&](double x) { return RelativeL2Error(single_with_roughness(x), mc, solid_angles); },
-          std::log(options.min_fitted_roughness), std::log(options.max_fitted_roughness), 41, 1e-3);
-      result.fitted_roughness = std::exp(log_roughness);
-      result.single_fitted = single_with_roughness(log_roughness);
-
-      if (options.fit_blend_roughness) {
-        // The fitted blend: for each trial roughness, the best alpha (a coarser alpha scan suffices
-        // inside the outer search).
-        const auto fitted_blend = [&](double log_r, std::vector<double>* blend) {
-          const std::unique_ptr<Ndf> trial = options.make_ndf(std::exp(log_r));
-          std::vector<double> trial_T, trial_B;
-          EvaluateTerms(*trial, options.eta, points, o, &trial_T, &trial_B);
-          return BestBlendAlpha(trial_T, trial_B, averager, mc, solid_angles, 21, blend);
-        };
-        const double log_blend_roughness = MinimiseOnInterval(
-            [&](double x) {
-              std::vector<double> blend;
-              fitted_blend(x, &blend);
-              return RelativeL2Error(blend, mc, solid_angles);
-            },
-            std::log(options.min_fitted_roughness), std::log(options.max_fitted_roughness), 21, 1e-3);
-        result.blend_fitted_roughness = std::exp(log_blend_roughness);
-        result.blend_fitted_alpha = fitted_blend(log_blend_roughness, &result.blend_fitted);
-      }
-
-      result.errors.rho_T = RelativeL2Error(result.rho_T, mc, solid_angles);
-      result.errors.rho_B = RelativeL2Error(result.rho_B, mc, solid_angles);
-      result.errors.blend = RelativeL2Error(result.blend, mc, solid_angles);
-      result.errors.single_same_ndf = RelativeL2Error(result.single_same_ndf, mc, solid_angles);
-      result.errors.single_fitted = RelativeL2Error(result.single_fitted, mc, solid_angles);
-      if (options.fit_blend_roughness) {
-        result.errors.blend_fitted = RelativeL2Error(result.blend_fitted, mc, solid_angles);
-        result.scale_free_errors.blend_fitted =
-            ScaleFreeRelativeL2Error(result.blend_fitted, mc, solid_angles);
-      }
-      result.scale_free_errors.rho_T = ScaleFreeRelativeL2Error(result.rho_T, mc, solid_angles);
-      result.scale_free_errors.rho_B = ScaleFreeRelativeL2Error(result.rho_B, mc, solid_angles);
-      result.scale_free_errors.blend = ScaleFreeRelativeL2Error(result.blend, mc, solid_angles);
-      result.scale_free_errors.single_same_ndf =
-          ScaleFreeRelativeL2Error(result.single_same_ndf, mc, solid_angles);
-      result.scale_free_errors.single_fitted =
-          ScaleFreeRelativeL2Error(result.single_fitted, mc, solid_angles);
-      if (on_case) on_case(result);
-      cases.push_back(std::move(result));
+      // Each case gets its own seed so that the cases' MC errors are independent.
+      cases.push_back(RunCase(context, tracer, sides, angle, options.slice.seed + cases.size()));
+      if (on_case) on_case(cases.back());
     }
   }
   return cases;

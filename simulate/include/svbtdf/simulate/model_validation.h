@@ -37,8 +37,10 @@ double SingleInterfaceBtdf(const Ndf& ndf, double eta, const Vec3& i, const Vec3
 // Each cell is split into k x k sub-cells whose solid angles weight the values at their centres.
 class CellAverager {
  public:
+  // `grid` must outlive the averager.
   CellAverager(const Hemicube& grid, int subdivisions);
 
+  const Hemicube& grid() const { return grid_; }
   int num_points() const { return static_cast<int>(directions_.size()); }
   // Light directions (z < 0) of the sub-cell centres, cell by cell.
   const std::vector<Vec3>& light_directions() const { return directions_; }
@@ -48,6 +50,7 @@ class CellAverager {
   std::vector<double> Average(const std::function<double(const Vec3& i)>& f) const;
 
  private:
+  const Hemicube& grid_;
   int per_cell_;
   std::vector<Vec3> directions_;
   std::vector<double> weights_;  // sub-cell solid angle / cell solid angle
