@@ -39,3 +39,42 @@ class DevGgx final : public Ndf {
   double a_;
 };
 }  // namespace svbtdf
+
+namespace svbtdf {
+// TEMPORARY Beckmann (sampled by D cos, weighted to the visible-normal density) until
+// ndf_factory.h lands. Not to be kept.
+class DevBeckmann final : public Ndf {
+ public:
+  explicit DevBeckmann(double a) : a_(a) {}
+  std::string name() const override { return "devbeckmann"; }
+  double D(const Vec3& h) const override {
+    if (h.z() <= 0) return 0;
+    const double c2 = h.z() * h.z(), t2 = (1 - c2) / c2;
+    return std::exp(-t2 / (a_ * a_)) / (kPi * a_ * a_ * c2 * c2);
+  }
+  double G1(const Vec3& v0, const Vec3& h) const override {
+    const Vec3 v = v0.z() < 0 ? Vec3(-v0) : v0;
+    if (v.dot(h) <= 0 || v.z() <= 0) return 0;
+    const double tan_v = std::sqrt(std::max(0.0, 1 - v.z() * v.z())) / v.z();
+    if (tan_v == 0) return 1;
+    const double a = 1 / (a_ * tan_v);
+    const double lambda = (std::erf(a) - 1) / 2 + std::exp(-a * a) / (2 * a * std::sqrt(kPi));
+    return 1 / (1 + lambda);
+  }
+  NormalSample SampleVisibleNormal(const Vec3& v, const Vec2& u) const override {
+    const double t2 = -a_ * a_ * std::log(1 - u.x());
+    const double cos_t = 1 / std::sqrt(1 + t2), sin_t = std::sqrt(std::max(0.0, 1 - cos_t * cos_t));
+    const double phi = kTwoPi * u.y();
+    const Vec3 h(sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t);
+    NormalSample s{h, D(h) * h.z(), 0.0};
+    s.weight = G1(v, h) * std::max(0.0, v.dot(h)) / (v.z() * h.z());
+    return s;
+  }
+  double VisibleNormalPdf(const Vec3& v, const Vec3& h) const override {
+    return D(h) * h.z();
+  }
+  std::unique_ptr<Ndf> Clone() const override { return std::make_unique<DevBeckmann>(a_); }
+ private:
+  double a_;
+};
+}  // namespace svbtdf

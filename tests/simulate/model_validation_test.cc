@@ -80,7 +80,8 @@ TEST(CellAverager, AveragesReproduceSolidAngleIntegrals) {
     EXPECT_NEAR(one[c], 1.0, 1e-12);
   }
   EXPECT_NEAR(solid_angle, kTwoPi, 1e-9);
-  EXPECT_NEAR(cosine_integral, kPi, 1e-4);
+  // The sub-cell midpoint rule is second order: sub-cells 1/64 of a face wide leave ~1e-4.
+  EXPECT_NEAR(cosine_integral, kPi, 5e-4);
 }
 
 }  // namespace

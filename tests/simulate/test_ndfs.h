@@ -15,5 +15,5 @@ inline std::unique_ptr<Ndf> SkewedNdf() { return std::make_unique<DevGgx>(0.25);
 
 namespace svbtdf {
 // TEMPORARY: will be Beckmann (the paper's Gaussian NDF).
-inline std::unique_ptr<Ndf> PaperNdf(double roughness) { return RoughNdf(roughness); }
+inline std::unique_ptr<Ndf> PaperNdf(double roughness) { return std::make_unique<DevBeckmann>(roughness); }
 }  // namespace svbtdf

@@ -43,17 +43,11 @@ class DevHemicube {
     return d.normalized();
   }
   double CellSolidAngle(int cell) const {
-    // numerical: 16x16 midpoint on the face plane
-    double sum = 0;
-    const int k = 16;
-    for (int a = 0; a < k; ++a)
-      for (int b = 0; b < k; ++b) {
-        Vec3 p = Unnormalised(cell, (a + 0.5) / k, (b + 0.5) / k);
-        const double r = p.norm();
-        sum += 1.0 / (r * r * r);
-      }
-    const double du = 2.0 / n_, dv = cell < n_ * n_ ? 2.0 / n_ : 1.0 / (n_ / 2);
-    return sum / (k * k) * du * dv;
+    const Vec3 a = CellPoint(cell, 0, 0), b = CellPoint(cell, 1, 0), c = CellPoint(cell, 1, 1), d = CellPoint(cell, 0, 1);
+    auto tri = [](const Vec3& p, const Vec3& q, const Vec3& r) {
+      return 2 * std::atan2(std::abs(p.dot(q.cross(r))), 1 + p.dot(q) + q.dot(r) + r.dot(p));
+    };
+    return tri(a, b, c) + tri(a, c, d);
   }
 
  private:
