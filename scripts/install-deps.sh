@@ -7,7 +7,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libceres-dev
   libopencv-dev
-  libopenimageio-dev libopenexr-dev
+  libopenimageio-dev libopenexr-dev libpng-dev
   libcamera-dev linux-libc-dev libv4l-dev
   libgphoto2-dev libsdl2-dev
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
