@@ -6,6 +6,7 @@ void AddAllCommands(CLI::App& app) {
   AddBtdfCommand(app);
   AddDevicesCommand(app);
   AddSimulateCommand(app);
+  AddValidateModelCommand(app);
 }
 
 }  // namespace svbtdf::cli

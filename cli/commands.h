@@ -10,8 +10,9 @@ namespace svbtdf::cli {
 
 void AddAllCommands(CLI::App& app);
 
-void AddBtdfCommand(CLI::App& app);     // svbtdf btdf eval
-void AddDevicesCommand(CLI::App& app);   // svbtdf devices
-void AddSimulateCommand(CLI::App& app);  // svbtdf simulate
+void AddBtdfCommand(CLI::App& app);           // svbtdf btdf eval
+void AddDevicesCommand(CLI::App& app);         // svbtdf devices
+void AddSimulateCommand(CLI::App& app);        // svbtdf simulate
+void AddValidateModelCommand(CLI::App& app);  // svbtdf validate-model
 
 }  // namespace svbtdf::cli
