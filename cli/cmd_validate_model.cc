@@ -63,14 +63,25 @@ const ModelColumn kColumns[] = {
      &ModelErrors::blend_fitted},
 };
 
-void CheckOutputsAreFree(const ValidateModelOptions& options) {
-  if (!options.json.empty() && fs::exists(options.json)) {
-    ThrowIoError(options.json, "already exists", "validate-model never overwrites; choose another --json file");
+// Checks and creates the output locations before the (minute-long) run, so that a bad path fails
+// at once instead of after the work.
+void PrepareOutputs(const ValidateModelOptions& options) {
+  std::error_code error;
+  if (!options.json.empty()) {
+    if (fs::exists(options.json)) {
+      ThrowInvalidInput(options.json, "already exists", "validate-model never overwrites; choose another --json file");
+    }
+    const fs::path parent = fs::path(options.json).parent_path();
+    if (!parent.empty()) fs::create_directories(parent, error);
+    if (error) ThrowIoError(parent.string(), "cannot create: " + error.message());
   }
-  if (!options.plots.empty() && fs::exists(options.plots) &&
-      (!fs::is_directory(options.plots) || !fs::is_empty(options.plots))) {
-    ThrowIoError(options.plots, "exists and is not an empty folder",
-                 "validate-model never overwrites; choose a new --plots folder");
+  if (!options.plots.empty()) {
+    if (fs::exists(options.plots) && (!fs::is_directory(options.plots) || !fs::is_empty(options.plots))) {
+      ThrowInvalidInput(options.plots, "exists and is not an empty folder",
+                        "validate-model never overwrites; choose a new --plots folder");
+    }
+    fs::create_directories(options.plots, error);
+    if (error) ThrowIoError(options.plots, "cannot create: " + error.message());
   }
 }
 
@@ -248,7 +259,7 @@ void PrintTable(const std::vector<ValidationCase>& cases) {
 
 void RunValidateModel(const ValidateModelOptions& options) {
   CheckOptions(options);
-  CheckOutputsAreFree(options);
+  PrepareOutputs(options);
   ValidationOptions validation;
   validation.make_ndf = [&](double roughness) {
     AnalyticNdfParams params;
