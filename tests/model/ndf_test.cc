@@ -46,6 +46,13 @@ std::vector<NdfCase> Cases() {
   narrow_skewed.alpha_x = 0.08;
   narrow_skewed.alpha_y = 0.05;
   cases.push_back({"ellipsoid narrow skewed", "ellipsoid", narrow_skewed, false});
+  for (double kappa : {5.0, 200.0, 2000.0}) {
+    AnalyticNdfParams vmf;
+    vmf.kappa = kappa;
+    vmf.mean = Vec3(0.2, -0.1, 1.0).normalized();  // tilted
+    vmf.alpha_x = 1.0 / std::sqrt(kappa);           // its angular width, for the sampler check's bins
+    cases.push_back({"vmf tilted", "vmf", vmf, false});
+  }
   return cases;
 }
 
@@ -181,6 +188,12 @@ TEST(Ndf, FactoryRejectsBadParameters) {
   p.theta_x = std::nan("");
   EXPECT_THROW(MakeAnalyticNdf("ellipsoid", p), Error);
   EXPECT_THROW(MakeAnalyticNdf("cauchy", AnalyticNdfParams{}), Error);
+  AnalyticNdfParams vmf;
+  vmf.kappa = 0.0;
+  EXPECT_THROW(MakeAnalyticNdf("vmf", vmf), Error);
+  vmf.kappa = 10.0;
+  vmf.mean = Vec3(1.0, 0.0, -0.1);
+  EXPECT_THROW(MakeAnalyticNdf("vmf", vmf), Error);
 }
 
 }  // namespace
