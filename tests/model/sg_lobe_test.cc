@@ -39,7 +39,7 @@ TEST(SphericalGaussian, RecoversAKnownLobeExactly) {
   EXPECT_LT(fit.relative_l2, 1e-6);
 }
 
-TEST(SphericalGaussian, SummarisesADualMicrofacetSliceWithinThirtyPercent) {
+TEST(SphericalGaussian, SummarisesADualMicrofacetSliceWithinAQuarter) {
   // A moderately rough slab seen at 45 degrees: one lobe captures most of it; the rest is the
   // lobe's asymmetry. The residual is measured and bounded here so that a regression shows.
   const GgxNdf ndf(0.3);
@@ -47,7 +47,7 @@ TEST(SphericalGaussian, SummarisesADualMicrofacetSliceWithinThirtyPercent) {
   const Vec3 o = SphericalDirection(kPi / 4, 0.0);
   const Slice s = LightHemicube([&](const Vec3& i) { return model.Rho(ndf, 0.5, i, o); });
   const SphericalGaussianFit fit = FitSphericalGaussian(s.directions, s.values, s.weights);
-  EXPECT_LT(fit.relative_l2, 0.3);
+  EXPECT_LT(fit.relative_l2, 0.25);  // measured: 0.19
   EXPECT_GT(fit.lobe.axis.dot(-o), 0.95);  // around the straight-through direction
   RecordProperty("relative_l2", std::to_string(fit.relative_l2));
 }
