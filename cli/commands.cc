@@ -5,6 +5,7 @@ namespace svbtdf::cli {
 void AddAllCommands(CLI::App& app) {
   AddBtdfCommand(app);
   AddDevicesCommand(app);
+  AddEvalCommand(app);
   AddSimulateCommand(app);
   AddValidateModelCommand(app);
 }

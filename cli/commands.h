@@ -12,6 +12,7 @@ void AddAllCommands(CLI::App& app);
 
 void AddBtdfCommand(CLI::App& app);           // svbtdf btdf eval
 void AddDevicesCommand(CLI::App& app);         // svbtdf devices
+void AddEvalCommand(CLI::App& app);            // svbtdf eval
 void AddSimulateCommand(CLI::App& app);        // svbtdf simulate
 void AddValidateModelCommand(CLI::App& app);  // svbtdf validate-model
 
