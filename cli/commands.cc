@@ -6,6 +6,7 @@ void AddAllCommands(CLI::App& app) {
   AddBtdfCommand(app);
   AddDevicesCommand(app);
   AddEvalCommand(app);
+  AddSessionCommand(app);
   AddSimulateCommand(app);
   AddValidateModelCommand(app);
 }
