@@ -48,15 +48,15 @@ TEST_F(SimulateCommand, TinyPresetWritesACompleteSessionAndRefusesToOverwriteIt)
   const auto first = RunSvbtdf("-q simulate --preset tiny --out " + out.string());
   ASSERT_EQ(first.exit_code, 0) << first.output;
   ExpectCompleteSimulation(out);
+  const auto again = RunSvbtdf("-q simulate --preset tiny --out " + out.string());
+  EXPECT_EQ(again.exit_code, 2) << again.output;
+  EXPECT_NE(again.output.find("never overwritten"), std::string::npos) << again.output;
   // `session verify` accepts the session, then names a damaged image and exits 3.
   EXPECT_EQ(RunSvbtdf("session verify " + (out / "session").string()).exit_code, 0);
   fs::remove(out / "session" / Session::FileForKey("dot/q0003/e0/r0"));
   const auto verify = RunSvbtdf("session verify " + (out / "session").string());
   EXPECT_EQ(verify.exit_code, 3) << verify.output;
   EXPECT_NE(verify.output.find("dot/q0003/e0/r0"), std::string::npos) << verify.output;
-  const auto again = RunSvbtdf("-q simulate --preset tiny --out " + out.string());
-  EXPECT_EQ(again.exit_code, 2) << again.output;
-  EXPECT_NE(again.output.find("never overwritten"), std::string::npos) << again.output;
 }
 
 TEST_F(SimulateCommand, AnInterruptedRunResumesToTheSameImages) {
