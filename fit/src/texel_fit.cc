@@ -9,6 +9,7 @@
 #include <string>
 
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/minimize.h"
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/tabulated_ndf.h"
 
@@ -68,28 +69,10 @@ SparseMatrix NormalMatrix(const SparseRows& rows, int num_unknowns, Eigen::Vecto
   return SparseMatrix(a.transpose() * a);
 }
 
-double GoldenSectionMinimum(const std::function<double(double)>& f, double lo, double hi, double tol) {
-  const double inv_phi = (std::sqrt(5.0) - 1.0) / 2.0;
-  double a = lo, b = hi;
-  double c = b - inv_phi * (b - a), d = a + inv_phi * (b - a);
-  double fc = f(c), fd = f(d);
-  while (b - a > tol) {
-    if (fc < fd) {
-      b = d;
-      d = c;
-      fd = fc;
-      c = b - inv_phi * (b - a);
-      fc = f(c);
-    } else {
-      a = c;
-      c = d;
-      fc = fd;
-      d = a + inv_phi * (b - a);
-      fd = f(d);
-    }
-  }
-  // The ends are legitimate answers (one rough side only): compare them too.
-  double best_x = 0.5 * (a + b), best_f = f(best_x);
+// Golden-section search that also considers the interval's ends: alpha = 0 or 1 (one rough side
+// only) are legitimate answers that an interior search only approaches.
+double MinimumIncludingEnds(const std::function<double(double)>& f, double lo, double hi, double tolerance) {
+  double best_x = GoldenSectionSearch(f, lo, hi, tolerance), best_f = f(best_x);
   for (const double x : {lo, hi}) {
     const double fx = f(x);
     if (fx < best_f) best_f = fx, best_x = x;
@@ -378,7 +361,7 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
     const TabulatedNdf ndf(grid_, ln_d);
     std::vector<double> rho_t, rho_b;
     EvaluateConfigurations(ndf, configs, &rho_t, &rho_b);
-    return GoldenSectionMinimum(
+    return MinimumIncludingEnds(
         [&](double alpha) {
           const Vec3 mean = WeightedMeanDirection(samples, [&](size_t k) { return LogBlend(rho_t[k], rho_b[k], alpha); });
           return (mean - measured_mean).squaredNorm();

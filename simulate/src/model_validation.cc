@@ -1,5 +1,7 @@
 #include "svbtdf/simulate/model_validation.h"
 
+#include "svbtdf/common/minimize.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -163,29 +165,9 @@ double MinimiseOnInterval(const std::function<double(double)>& f, double lo, dou
     }
   }
   // Golden-section search in the bracket of the best scan point.
-  double a = lo + std::max(0, best - 1) * step;
-  double b = lo + std::min(scan_points - 1, best + 1) * step;
-  const double ratio = (std::sqrt(5.0) - 1.0) / 2.0;
-  double x1 = b - ratio * (b - a);
-  double x2 = a + ratio * (b - a);
-  double f1 = f(x1);
-  double f2 = f(x2);
-  while (b - a > tolerance) {
-    if (f1 < f2) {
-      b = x2;
-      x2 = x1;
-      f2 = f1;
-      x1 = b - ratio * (b - a);
-      f1 = f(x1);
-    } else {
-      a = x1;
-      x1 = x2;
-      f1 = f2;
-      x2 = a + ratio * (b - a);
-      f2 = f(x2);
-    }
-  }
-  const double x = 0.5 * (a + b);
+  const double a = lo + std::max(0, best - 1) * step;
+  const double b = lo + std::min(scan_points - 1, best + 1) * step;
+  const double x = GoldenSectionSearch(f, a, b, tolerance);
   return f(x) <= best_value ? x : lo + best * step;
 }
 
