@@ -120,6 +120,7 @@ Session Session::Create(const fs::path& folder, const nlohmann::json& rig, const
   session.folder_ = folder;
   session.rig_ = rig;
   session.planned_keys_ = planned_keys;
+  session.planned_.insert(planned_keys.begin(), planned_keys.end());
   const nlohmann::json manifest = {{"format", "svbtdf-session"}, {"version", kSessionFormatVersion},
                                    {"created", UtcNow()},        {"software", "svbtdf"},
                                    {"rig", rig}};
@@ -146,6 +147,7 @@ Session Session::Open(const fs::path& folder) {
   const fs::path plan_path = folder / kPlan;
   session.planned_keys_ = Field<std::vector<std::string>>(ParseJsonFile(plan_path), "captures", plan_path.string());
   for (const std::string& key : session.planned_keys_) RequireValidKey(key, plan_path.string());
+  session.planned_.insert(session.planned_keys_.begin(), session.planned_keys_.end());
   session.ReadJournal();
   return session;
 }
@@ -207,7 +209,7 @@ const SessionEntry& Session::Entry(const std::string& key) const {
 void Session::AddImage(const std::string& key, const CameraImage& image, double exposure_s, double gain) {
   RequireValidKey(key, "capture");
   if (Contains(key)) ThrowIoError(key, "is captured already; a capture is never overwritten");
-  if (std::find(planned_keys_.begin(), planned_keys_.end(), key) == planned_keys_.end()) {
+  if (!planned_.count(key)) {
     ThrowInvalidInput(key, "is not in the session's plan");
   }
   const fs::path file = folder_ / FileForKey(key);

@@ -17,6 +17,7 @@
 #include <optional>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -86,6 +87,7 @@ class Session {
   std::filesystem::path folder_;
   nlohmann::json rig_;
   std::vector<std::string> planned_keys_;
+  std::unordered_set<std::string> planned_;  // the same keys, for lookups
   std::vector<SessionEntry> entries_;
   std::unordered_map<std::string, size_t> index_;  // key -> first entry
 };
