@@ -292,10 +292,6 @@ std::optional<std::array<int, 2>> Rig::TexelAt(const Vec3& x) const {
   return std::array<int, 2>{static_cast<int>(u), static_cast<int>(v)};
 }
 
-Vec3 Rig::TexelCentre(int col, int row) const {
-  const SampleConfig& s = config_.sample;
-  return {-0.5 * s.width + (col + 0.5) * s.texel_pitch(),
-          0.5 * s.height() - (row + 0.5) * s.texel_pitch(), 0.0};
-}
+Vec3 Rig::TexelCentre(int col, int row) const { return config_.sample.TexelCentre(col, row); }
 
 }  // namespace svbtdf

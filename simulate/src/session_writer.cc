@@ -7,6 +7,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/common/session.h"
+#include "svbtdf/model/ndf_factory.h"
 #include "svbtdf/simulate/capture_simulator.h"
 #include "svbtdf/simulate/truth_io.h"
 
@@ -101,6 +102,62 @@ void WriteMaterialTruth(const fs::path& folder, const TruthMaterial& material) {
 }
 
 }  // namespace
+
+MaterialTruth ReadMaterialTruth(const fs::path& folder) {
+  const fs::path manifest_path = folder / "material.json";
+  MaterialTruth truth;
+  try {
+    const nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(manifest_path));
+    if (manifest.at("format") != "svbtdf-truth-material") ThrowFormatError(manifest_path.string(), "is not a truth material");
+    if (manifest.at("ndf").at("kind") != "analytic") {
+      ThrowFormatError(manifest_path.string(), "holds a non-analytic truth, which compare cannot read yet");
+    }
+    truth.eta = manifest.at("eta").get<double>();
+    truth.ndf_name = manifest.at("ndf").at("name").get<std::string>();
+  } catch (const nlohmann::json::exception& e) {
+    ThrowFormatError(manifest_path.string(), std::string("is malformed: ") + e.what());
+  }
+  const auto read = [&](const char* file, int channels) {
+    FloatImage image = ReadFloatImage(folder / file);
+    RequireFinite(image, (folder / file).string());
+    if (image.channels != channels) ThrowFormatError((folder / file).string(), "has the wrong number of channels");
+    return image;
+  };
+  truth.ndf_params = read("ndf_params.exr", 5);
+  truth.alpha = read("alpha.exr", 1);
+  truth.shadowing_roughness = read("shadowing_roughness.exr", 1);
+  truth.k_s = read("k_s.exr", 3);
+  truth.rho_d = read("rho_d.exr", 3);
+  for (const FloatImage* image : {&truth.ndf_params, &truth.shadowing_roughness, &truth.k_s, &truth.rho_d}) {
+    if (image->width != truth.alpha.width || image->height != truth.alpha.height) {
+      ThrowFormatError(folder.string(), "holds maps of different sizes");
+    }
+  }
+  return truth;
+}
+
+DualMicrofacetParams MaterialTruth::Params(int x, int y) const {
+  DualMicrofacetParams p;
+  p.eta = eta;
+  p.alpha = alpha.at(x, y);
+  const double roughness = shadowing_roughness.at(x, y);
+  p.shadowing = roughness > 0 ? SmithShadowing::Ggx(roughness) : SmithShadowing::None();
+  for (int c = 0; c < 3; ++c) {
+    p.k_s[c] = k_s.at(x, y, c);
+    p.rho_d[c] = rho_d.at(x, y, c);
+  }
+  return p;
+}
+
+std::unique_ptr<Ndf> MaterialTruth::TexelNdf(int x, int y) const {
+  AnalyticNdfParams p;
+  p.alpha_x = ndf_params.at(x, y, 0);
+  p.alpha_y = ndf_params.at(x, y, 1);
+  p.theta_x = ndf_params.at(x, y, 2);
+  p.theta_y = ndf_params.at(x, y, 3);
+  p.theta_z = ndf_params.at(x, y, 4);
+  return MakeAnalyticNdf(ndf_name, p);
+}
 
 std::string SessionKey(const CaptureId& id) {
   if (id.kind == "dark") return "dark/e" + std::to_string(id.exposure_index) + "/r" + std::to_string(id.index);

@@ -115,6 +115,10 @@ struct SampleConfig {
 
   double texel_pitch() const { return width / texels_x; }
   double height() const { return texel_pitch() * texels_y; }
+  // Centre of texel (col, row) in the sample frame: x grows with col, y decreases with row.
+  Vec3 TexelCentre(int col, int row) const {
+    return {-0.5 * width + (col + 0.5) * texel_pitch(), 0.5 * height() - (row + 0.5) * texel_pitch(), 0.0};
+  }
 };
 
 // The camera's radiometric chain: irradiance-weighted radiance -> electrons -> digital numbers.

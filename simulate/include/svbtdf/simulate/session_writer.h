@@ -8,6 +8,10 @@
 
 #include "svbtdf/simulate/capture_simulator.h"
 #include "svbtdf/simulate/presets.h"
+#include "svbtdf/common/image_io.h"
+#include "svbtdf/model/dual_microfacet.h"
+#include "svbtdf/model/ndf.h"
+#include <memory>
 
 namespace svbtdf {
 
@@ -31,6 +35,21 @@ struct SimulationOutput {
 // of the same settings is resumed; any other non-empty OUT is refused (svbtdf::Error(kIo)), and a
 // complete session is never touched again.
 SimulationOutput SimulateSession(const std::filesystem::path& out, const SimulationOptions& options);
+
+// The ground-truth material of OUT/truth as the simulator wrote it (docs/truth-format.md).
+struct MaterialTruth {
+  double eta = 1.5;
+  std::string ndf_name = "ggx";
+  FloatImage ndf_params;  // 5 channels: alpha_x, alpha_y, theta_x, theta_y, theta_z
+  FloatImage alpha, shadowing_roughness, k_s, rho_d;
+  int width() const { return alpha.width; }
+  int height() const { return alpha.height; }
+  // The texel's parameters and NDF, as the renderer used them.
+  DualMicrofacetParams Params(int x, int y) const;
+  std::unique_ptr<Ndf> TexelNdf(int x, int y) const;
+};
+// Throws svbtdf::Error naming the file for anything missing or malformed.
+MaterialTruth ReadMaterialTruth(const std::filesystem::path& truth_folder);
 
 // The session key of a simulated capture (e.g. "dot/q0012/e1/r0").
 std::string SessionKey(const CaptureId& id);

@@ -1,0 +1,151 @@
+// svbtdf compare: a fitted material against the simulator's ground truth (issue 5's metrics).
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+#include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/progress.h"
+#include "svbtdf/fit/material.h"
+#include "svbtdf/simulate/session_writer.h"
+#include "svbtdf/simulate/truth_io.h"
+
+namespace svbtdf::cli {
+namespace {
+namespace fs = std::filesystem;
+
+struct CompareOptions {
+  std::string material, truth, json;
+  int max_texels = 1000;
+  uint64_t seed = 1;
+};
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return std::nan("");
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
+double Luminance(const Rgb& rgb) { return (rgb[0] + rgb[1] + rgb[2]) / 3.0; }
+
+// Relative L2 of the normalised NDFs over the cells where the truth's D h.z exceeds 1% of its
+// largest value (where the truth has mass), cells weighted by solid angle.
+double NdfRelativeL2(const Hemicube& grid, const Ndf& fitted, const Ndf& truth) {
+  std::vector<double> truth_values(grid.num_cells());
+  double peak = 0;
+  for (int c = 0; c < grid.num_cells(); ++c) {
+    truth_values[c] = truth.D(grid.CellCenter(c));
+    peak = std::max(peak, truth_values[c] * grid.CellCenter(c).z());
+  }
+  double error = 0, norm = 0;
+  for (int c = 0; c < grid.num_cells(); ++c) {
+    if (truth_values[c] * grid.CellCenter(c).z() < 0.01 * peak) continue;
+    error += Square(fitted.D(grid.CellCenter(c)) - truth_values[c]) * grid.CellSolidAngle(c);
+    norm += Square(truth_values[c]) * grid.CellSolidAngle(c);
+  }
+  return norm > 0 ? std::sqrt(error / norm) : std::nan("");
+}
+
+void RunCompare(const CompareOptions& options) {
+  if (!options.json.empty() && fs::exists(options.json)) {
+    ThrowInvalidInput(options.json, "already exists", "compare never overwrites; choose another --json file");
+  }
+  const fit::Material material = fit::ReadMaterial(options.material);
+  const MaterialTruth truth = ReadMaterialTruth(options.truth);
+  const RigTruth rig = ReadRigTruth(fs::path(options.truth) / "rig.json");
+  if (material.width != truth.width() || material.height != truth.height()) {
+    ThrowInvalidInput(options.material, "is " + std::to_string(material.width) + "x" + std::to_string(material.height) +
+                                            " texels but the truth is " + std::to_string(truth.width()) + "x" +
+                                            std::to_string(truth.height()),
+                      "compare a material fitted at the truth's resolution");
+  }
+  // Held-out dots recorded by the fit, or every dot when the fit withheld none.
+  std::vector<int> dots;
+  bool holdout_recorded = false;
+  if (material.provenance.contains("holdout") && material.provenance["holdout"].contains("dots")) {
+    dots = material.provenance["holdout"]["dots"].get<std::vector<int>>();
+    holdout_recorded = true;
+  } else {
+    for (size_t q = 0; q < rig.dots.size(); ++q) dots.push_back(static_cast<int>(q));
+  }
+  // A random subset of texels keeps large materials quick; the seed makes it repeatable.
+  std::vector<int> texels(static_cast<size_t>(material.width) * material.height);
+  for (size_t t = 0; t < texels.size(); ++t) texels[t] = static_cast<int>(t);
+  std::mt19937_64 rng(options.seed);
+  std::shuffle(texels.begin(), texels.end(), rng);
+  texels.resize(std::min<size_t>(texels.size(), std::max(1, options.max_texels)));
+
+  const fit::MaterialEvaluator evaluator(material);
+  const Hemicube grid(material.ndf_resolution);
+  const Vec3 camera = rig.pose.Centre();
+  std::vector<double> alpha_errors, ndf_errors, rho_d_errors;
+  double heldout_error = 0, heldout_norm = 0;
+  ProgressBar progress("compare", static_cast<int64_t>(texels.size()), "texels");
+  for (int t : texels) {
+    const int x = t % material.width, y = t / material.width;
+    const fit::TexelBtdf fitted = evaluator.Texel(x, y);
+    const DualMicrofacetParams true_params = truth.Params(x, y);
+    const std::unique_ptr<Ndf> true_ndf = truth.TexelNdf(x, y);
+    alpha_errors.push_back(std::abs(fitted.params().alpha - true_params.alpha));
+    ndf_errors.push_back(NdfRelativeL2(grid, fitted.ndf(), *true_ndf));
+    const double true_rho_d = Luminance(true_params.rho_d);
+    if (true_rho_d > 1e-3) rho_d_errors.push_back(std::abs(Luminance(fitted.params().rho_d) / true_rho_d - 1.0));
+    const Vec3 position = rig.sample.TexelCentre(x, y);
+    const Vec3 o = (camera - position).normalized();
+    for (int q : dots) {
+      if (q < 0 || q >= static_cast<int>(rig.dots.size())) {
+        ThrowFormatError(options.material, "records held-out dot " + std::to_string(q) + ", which the rig does not have");
+      }
+      const Vec3 i = (rig.dots[q].position - position).normalized();
+      const double expected = Luminance(EvaluateMaterial(*true_ndf, true_params, i, o));
+      heldout_error += Square(Luminance(fitted.Evaluate(i, o)) - expected);
+      heldout_norm += Square(expected);
+    }
+    progress.Advance();
+  }
+  progress.Finish();
+  const double within = static_cast<double>(std::count_if(alpha_errors.begin(), alpha_errors.end(),
+                                                          [](double e) { return e <= 0.05; })) /
+                        alpha_errors.size();
+  const auto number_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  const nlohmann::json out = {
+      {"material", options.material},
+      {"truth", options.truth},
+      {"texels_compared", texels.size()},
+      {"alpha_within_0_05", within},
+      {"alpha_error_median", Median(alpha_errors)},
+      {"ndf_rel_l2_median", number_or_null(Median(ndf_errors))},
+      {"rho_d_rel_error_median", number_or_null(Median(rho_d_errors))},
+      {"heldout_rel_rmse", heldout_norm > 0 ? nlohmann::json(std::sqrt(heldout_error / heldout_norm)) : nlohmann::json(nullptr)},
+      {"heldout_dots", dots.size()},
+      {"holdout_recorded", holdout_recorded},
+  };
+  std::printf("compared %zu texels: alpha within 0.05 on %.1f%%, NDF rel. L2 median %.3f, held-out rel. RMSE %.4f%s\n",
+              texels.size(), 100 * within, Median(ndf_errors), heldout_norm > 0 ? std::sqrt(heldout_error / heldout_norm) : 0.0,
+              holdout_recorded ? "" : " (no held-out dots recorded: all dots)");
+  if (!options.json.empty()) WriteTextAtomically(options.json, out.dump(2) + "\n", /*overwrite=*/false);
+}
+
+}  // namespace
+
+void AddCompareCommand(CLI::App& app) {
+  auto options = std::make_shared<CompareOptions>();
+  CLI::App* compare = app.add_subcommand("compare", "Compare a fitted material with a simulator ground truth");
+  compare->add_option("material", options->material, "fitted material folder")->required();
+  compare->add_option("truth", options->truth, "ground-truth folder written by 'svbtdf simulate' (OUT/truth)")->required();
+  compare->add_option("--json", options->json, "write the metrics to this new JSON file");
+  compare->add_option("--texels", options->max_texels, "compare at most this many texels (random, seeded)")
+      ->capture_default_str();
+  compare->add_option("--seed", options->seed, "seed of the texel subset")->capture_default_str();
+  compare->callback([options] { RunCompare(*options); });
+}
+
+}  // namespace svbtdf::cli
