@@ -4,6 +4,7 @@ namespace svbtdf::cli {
 
 void AddAllCommands(CLI::App& app) {
   AddBtdfCommand(app);
+  AddCalibrateCommand(app);
 }
 
 }  // namespace svbtdf::cli

@@ -10,6 +10,7 @@ namespace svbtdf::cli {
 
 void AddAllCommands(CLI::App& app);
 
-void AddBtdfCommand(CLI::App& app);  // svbtdf btdf eval
+void AddBtdfCommand(CLI::App& app);       // svbtdf btdf eval
+void AddCalibrateCommand(CLI::App& app);  // svbtdf calibrate
 
 }  // namespace svbtdf::cli
