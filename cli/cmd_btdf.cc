@@ -22,7 +22,8 @@ namespace {
 struct BtdfEvalOptions {
   std::string ndf = "ggx";
   double roughness = 0.2;
-  double roughness_y = -1.0;  // < 0: isotropic
+  double roughness_y = 0.2;
+  bool anisotropic = false;  // --roughness-y given
   double eta = 1.5;
   double alpha = 0.5;
   std::string shadowing = "none";
@@ -57,6 +58,12 @@ void ValidateDirections(const Vec3& wi, const Vec3& wo) {
   }
 }
 
+void RequireRoughness(const char* flag, double value) {
+  if (!(value > 0) || !std::isfinite(value)) {
+    ThrowInvalidInput(flag, "must be a finite number > 0 (the GGX/Beckmann alpha), got " + std::to_string(value));
+  }
+}
+
 SmithShadowing MakeShadowing(const BtdfEvalOptions& options) {
   if (options.shadowing == "none") {
     if (options.shadowing_roughness >= 0) {
@@ -84,9 +91,11 @@ void RunBtdfEval(const BtdfEvalOptions& options) {
   if (!(options.alpha >= 0.0 && options.alpha <= 1.0)) {
     ThrowInvalidInput("--alpha", "the blend weight must lie in [0, 1], got " + std::to_string(options.alpha));
   }
+  RequireRoughness("--roughness", options.roughness);
+  if (options.anisotropic) RequireRoughness("--roughness-y", options.roughness_y);
   AnalyticNdfParams ndf_params;
   ndf_params.alpha_x = options.roughness;
-  ndf_params.alpha_y = options.roughness_y < 0 ? options.roughness : options.roughness_y;
+  ndf_params.alpha_y = options.anisotropic ? options.roughness_y : options.roughness;
   const std::unique_ptr<Ndf> ndf = MakeAnalyticNdf(options.ndf, ndf_params);
 
   DualMicrofacetParams params;
@@ -161,7 +170,10 @@ void AddBtdfCommand(CLI::App& app) {
   eval->add_option("--ks", options->k_s, "RGB transmission scale k_s")->expected(3);
   eval->add_option("--rho-d", options->rho_d, "RGB diffuse transmission rho_d")->expected(3);
   eval->add_flag("--json", options->json, "print one JSON object");
-  eval->callback([options] { RunBtdfEval(*options); });
+  eval->callback([options, eval] {
+    options->anisotropic = eval->count("--roughness-y") > 0;
+    RunBtdfEval(*options);
+  });
 }
 
 }  // namespace svbtdf::cli

@@ -5,6 +5,11 @@ namespace svbtdf::cli {
 void AddAllCommands(CLI::App& app) {
   AddBtdfCommand(app);
   AddCalibrateCommand(app);
+  AddDevicesCommand(app);
+  AddEvalCommand(app);
+  AddSessionCommand(app);
+  AddSimulateCommand(app);
+  AddValidateModelCommand(app);
 }
 
 }  // namespace svbtdf::cli

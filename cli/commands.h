@@ -10,7 +10,12 @@ namespace svbtdf::cli {
 
 void AddAllCommands(CLI::App& app);
 
-void AddBtdfCommand(CLI::App& app);       // svbtdf btdf eval
-void AddCalibrateCommand(CLI::App& app);  // svbtdf calibrate
+void AddBtdfCommand(CLI::App& app);           // svbtdf btdf eval
+void AddCalibrateCommand(CLI::App& app);      // svbtdf calibrate
+void AddDevicesCommand(CLI::App& app);         // svbtdf devices
+void AddEvalCommand(CLI::App& app);            // svbtdf eval
+void AddSessionCommand(CLI::App& app);         // svbtdf session verify
+void AddSimulateCommand(CLI::App& app);        // svbtdf simulate
+void AddValidateModelCommand(CLI::App& app);  // svbtdf validate-model
 
 }  // namespace svbtdf::cli

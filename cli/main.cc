@@ -55,6 +55,8 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
     return app.exit(e);  // --help, --version
+  } catch (const CLI::RuntimeError& e) {
+    return e.get_exit_code();  // a command that reported its own outcome (e.g. an incomplete session)
   } catch (const CLI::ParseError& e) {
     std::fprintf(stderr, "svbtdf: error: %s (see 'svbtdf %s--help')\n", e.what(),
                  SelectedCommandPath(app).c_str());

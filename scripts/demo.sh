@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# The main job on the simulated rig: installs what is needed, builds svbtdf, and runs the
-# model validation against a Monte Carlo ground truth, writing figures and an HTML report.
-# Results go to out/demo/ (override with SVBTDF_DEMO_OUT).
+# The main job on the simulated rig: installs what is needed, builds svbtdf, simulates a capture
+# session of a known material (what a lab capture writes), validates the BTDF model against a
+# Monte Carlo slab, and writes an HTML report. Results go to out/demo/ (SVBTDF_DEMO_OUT overrides);
+# a previous demo there is moved aside, never overwritten.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -12,10 +13,45 @@ cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$BUILD_DIR" --parallel "$(nproc)" --target svbtdf
 SVBTDF="$BUILD_DIR/cli/svbtdf"
 
+if [ -e "$OUT" ]; then
+  mv "$OUT" "$OUT.previous-$(date +%Y%m%d-%H%M%S)"
+fi
 mkdir -p "$OUT"
-"$SVBTDF" validate-model --json "$OUT/validation.json" --plots "$OUT/report"
+
+echo "== 1/2 simulating a capture session of the 'demo' material (about a minute)"
+"$SVBTDF" simulate --preset demo --out "$OUT/simulated"
+
+echo "== 2/2 validating the dual-microfacet model against a Monte Carlo slab (about a minute)"
+"$SVBTDF" validate-model --json "$OUT/validation.json" --plots "$OUT/validation"
+
+# A small report page: the simulated images next to the model validation.
+mkdir -p "$OUT/images"
+for key in board/v00 sample_plane/v00 all_dots/e0 dot/q0010/e1/r0; do
+  name=$(echo "$key" | tr / _)
+  source="$OUT/simulated/session/images/$key.png"
+  # Camera values fill only the sensor's bit depth: stretch the brightest to white, gamma 2.2.
+  max=$(oiiotool --stats "$source" | awk '/Stats Max/ {m=$3; for (i=4;i<=5;i++) if ($i>m) m=$i; print m; exit}')
+  oiiotool "$source" --mulc "$(awk -v m="${max:-65535}" 'BEGIN {print (m > 0 ? 65535 / m : 1)}')" --powc 0.4545 \
+    -d uint8 -o "$OUT/images/$name.png"
+done
+images=$(grep -c '"key"' "$OUT/simulated/session/journal.jsonl")
+cat > "$OUT/index.html" <<HTML
+<!doctype html><html><head><meta charset="utf-8"><title>svbtdf demo report</title>
+<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto}img{max-width:260px;margin:4px;border:1px solid #ccc}</style>
+</head><body>
+<h1>svbtdf demo report</h1>
+<h2>1. Simulated capture session</h2>
+<p>$images images in <code>simulated/session</code> (format: docs/session-format.md), ground truth in
+<code>simulated/truth</code>. A calibration board view, the board in the sample holder, all dots, and one dot seen through the sample:</p>
+<p><img src="images/board_v00.png"><img src="images/sample_plane_v00.png"><img src="images/all_dots_e0.png"><img src="images/dot_q0010_e1_r0.png"></p>
+<h2>2. The dual-microfacet model against a Monte Carlo slab</h2>
+<p>Relative L2 errors of the model and of single-interface baselines, with plane-of-incidence plots:
+<a href="validation/index.html">validation/index.html</a> (docs/validation.md explains the cases).</p>
+</body></html>
+HTML
 
 echo
 echo "svbtdf demo finished."
-echo "  model validation (JSON):  $OUT/validation.json"
-echo "  report (open in a browser): $OUT/report/index.html"
+echo "  simulated session:  $OUT/simulated/session   (truth: $OUT/simulated/truth)"
+echo "  model validation:   $OUT/validation.json"
+echo "  report:             $OUT/index.html"

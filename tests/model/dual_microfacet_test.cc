@@ -222,45 +222,56 @@ TEST(DualMicrofacet, StraightThroughLimit) {
     const Vec3 i = LightDirection(theta_deg, 20.0);
     const double expected = Square(1 - FresnelDielectric(-i.z(), eta));
     double previous_error = 1.0;
-    for (double roughness : {0.04, 0.02, 0.01}) {
+    for (double roughness : {0.02, 0.005, 0.00125}) {  // the error falls about linearly with roughness
       const auto ndf = Ggx(roughness, roughness);
-      const double lobe = 40 * roughness;  // the lobe in o is narrower than this
+      // The whole hemisphere, with the radial nodes concentrated around the straight-through
+      // direction where the lobe is: GGX's heavy tails carry ~0.3% of the energy beyond 40 alpha.
       const double energy_T = IntegrateProjectedAround(
-          [&](const Vec3& o) { return model.RhoT(*ndf, i, o); }, -i, lobe, 1200, 96);
+          [&](const Vec3& o) { return model.RhoT(*ndf, i, o); }, -i, kPi, 2000, 96);
       const double energy_B = IntegrateProjectedAround(
-          [&](const Vec3& o) { return model.RhoB(*ndf, i, o); }, -i, lobe, 1200, 96);
+          [&](const Vec3& o) { return model.RhoB(*ndf, i, o); }, -i, kPi, 2000, 96);
       const double error = std::max(std::abs(energy_T - expected), std::abs(energy_B - expected));
       EXPECT_LT(error, previous_error * 1.01) << "theta " << theta_deg << " roughness " << roughness;
       previous_error = error;
     }
-    EXPECT_LT(previous_error, 2e-3) << "theta " << theta_deg;
+    EXPECT_LT(previous_error, 5e-4) << "theta " << theta_deg;
   }
 }
 
 TEST(DualMicrofacet, EnergyNeverExceedsOne) {
-  // With Fresnel and shadowing, the energy transmitted into the camera hemisphere is <= 1 for
-  // every configuration and blend; without the paper's extracted eq. 26 Jacobian error it is also
-  // well above zero for moderate roughness.
+  // With Fresnel and a shadowing term consistent with the NDF (Smith roughness >= the NDF's),
+  // the energy transmitted into the camera hemisphere is <= 1 for both configurations and, by
+  // Hoelder's inequality, for every log-space blend. It is also well above zero for moderate
+  // roughness (the paper's extracted eq. 26 Jacobian gives about 1.58 at 60 degrees).
   for (double eta : {1.1, 1.5, 2.0}) {
     for (double roughness : {0.05, 0.2, 0.6}) {
       const auto ndf = Ggx(roughness, 0.7 * roughness);
-      for (const SmithShadowing shadowing : {SmithShadowing::None(), SmithShadowing::Ggx(0.2)}) {
-        const DualMicrofacetModel model(eta, shadowing);
-        for (double theta_deg : {0.0, 45.0, 80.0}) {
-          const Vec3 i = LightDirection(theta_deg, 30.0);
-          for (double alpha : {0.0, 0.5, 1.0}) {
-            const double energy = IntegrateProjectedAround(
-                [&](const Vec3& o) { return model.Rho(*ndf, alpha, i, o); }, -i, kPi, 600, 192);
-            EXPECT_LE(energy, 1.0) << "eta " << eta << " roughness " << roughness << " theta "
-                                   << theta_deg << " alpha " << alpha;
-            if (theta_deg < 50 && roughness < 0.5) {
-              EXPECT_GT(energy, 0.5);
-            }
+      const DualMicrofacetModel model(eta, SmithShadowing::Ggx(roughness));
+      for (double theta_deg : {0.0, 45.0, 80.0}) {
+        const Vec3 i = LightDirection(theta_deg, 30.0);
+        for (double alpha : {0.0, 0.5, 1.0}) {
+          const double energy = IntegrateProjectedAround(
+              [&](const Vec3& o) { return model.Rho(*ndf, alpha, i, o); }, -i, kPi, 600, 192);
+          EXPECT_LE(energy, 1.0) << "eta " << eta << " roughness " << roughness << " theta " << theta_deg
+                                 << " alpha " << alpha;
+          if (theta_deg < 50 && roughness < 0.5) {
+            EXPECT_GT(energy, 0.5);
           }
         }
       }
     }
   }
+}
+
+TEST(DualMicrofacet, WithoutShadowingARoughNdfCanExceedOne) {
+  // The reason the energy check needs a consistent G: without masking, a rough (alpha 0.6)
+  // interface at eta 1.1 transmits more than it receives. Documented in docs/model.md.
+  const auto ndf = Ggx(0.6, 0.42);
+  const DualMicrofacetModel model(1.1);
+  const Vec3 i = LightDirection(45.0, 30.0);
+  const double energy =
+      IntegrateProjectedAround([&](const Vec3& o) { return model.RhoT(*ndf, i, o); }, -i, kPi, 600, 192);
+  EXPECT_GT(energy, 1.0);
 }
 
 TEST(DualMicrofacet, Reciprocity) {

@@ -1,0 +1,80 @@
+// svbtdf eval: the fitted material's BTDF R(x, i, o) at one texel for one pair of directions.
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+#include "svbtdf/common/error.h"
+#include "svbtdf/fit/material.h"
+
+namespace svbtdf::cli {
+namespace {
+
+struct EvalOptions {
+  std::string material;
+  std::vector<int> texel;
+  std::vector<double> wi, wo;
+  bool json = false;
+};
+
+Vec3 Direction(const std::vector<double>& xyz, const char* flag, bool toward_light) {
+  const Vec3 v(xyz.at(0), xyz.at(1), xyz.at(2));
+  if (!v.allFinite() || v.norm() == 0.0) ThrowInvalidInput(flag, "must be a non-zero finite vector X Y Z");
+  if (toward_light ? !(v.z() < 0) : !(v.z() > 0)) {
+    ThrowInvalidInput(flag, toward_light ? "must point toward the light, below the sample (z < 0)"
+                                         : "must point toward the camera, above the sample (z > 0)");
+  }
+  return v.normalized();
+}
+
+void RunEval(const EvalOptions& options) {
+  const Vec3 wi = Direction(options.wi, "--wi", true), wo = Direction(options.wo, "--wo", false);
+  const fit::Material material = fit::ReadMaterial(options.material);
+  const fit::MaterialEvaluator evaluator(material);
+  const int x = options.texel.at(0), y = options.texel.at(1);
+  const fit::TexelBtdf texel = evaluator.Texel(x, y);
+  const Rgb value = texel.Evaluate(wi, wo);
+  const DualMicrofacetModel model(texel.params().eta, texel.params().shadowing);
+  const double rho_T = model.RhoT(texel.ndf(), wi, wo), rho_B = model.RhoB(texel.ndf(), wi, wo);
+  if (!options.json) {
+    std::printf("R = %.9g %.9g %.9g   (rho_T %.6g, rho_B %.6g, alpha %.3f)\n", value[0], value[1], value[2], rho_T,
+                rho_B, texel.params().alpha);
+    return;
+  }
+  const DualMicrofacetParams& p = texel.params();
+  const nlohmann::json out = {
+      {"texel", {x, y}},
+      {"rgb", {value[0], value[1], value[2]}},
+      {"rho_T", rho_T},
+      {"rho_B", rho_B},
+      {"rho", LogBlend(rho_T, rho_B, p.alpha)},
+      {"alpha", p.alpha},
+      {"eta", p.eta},
+      {"shadowing_roughness", p.shadowing.roughness()},
+      {"k_s", p.k_s},
+      {"rho_d", p.rho_d},
+      {"wi", {wi.x(), wi.y(), wi.z()}},
+      {"wo", {wo.x(), wo.y(), wo.z()}},
+  };
+  std::cout << out.dump(2) << "\n";
+}
+
+}  // namespace
+
+void AddEvalCommand(CLI::App& app) {
+  auto options = std::make_shared<EvalOptions>();
+  CLI::App* eval = app.add_subcommand("eval", "Evaluate a fitted material at one texel for one light and view direction");
+  eval->add_option("material", options->material, "material folder (docs/material-format.md)")->required();
+  eval->add_option("--texel", options->texel, "texel column and row, U V")->expected(2)->required();
+  eval->add_option("--wi", options->wi, "direction toward the light, X Y Z with Z < 0")->expected(3)->required();
+  eval->add_option("--wo", options->wo, "direction toward the camera, X Y Z with Z > 0")->expected(3)->required();
+  eval->add_flag("--json", options->json, "print one JSON object");
+  eval->callback([options] { RunEval(*options); });
+}
+
+}  // namespace svbtdf::cli

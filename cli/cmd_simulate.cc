@@ -1,0 +1,36 @@
+// svbtdf simulate: a synthetic capture session of a known material, for tests and demos.
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "commands.h"
+#include "svbtdf/simulate/presets.h"
+#include "svbtdf/simulate/session_writer.h"
+
+namespace svbtdf::cli {
+
+void AddSimulateCommand(CLI::App& app) {
+  auto options = std::make_shared<SimulationOptions>();
+  auto out = std::make_shared<std::string>();
+  std::string presets;
+  for (const std::string& name : PresetNames()) presets += (presets.empty() ? "" : ", ") + name;
+  CLI::App* simulate = app.add_subcommand(
+      "simulate", "Render a synthetic capture session (OUT/session) of a known material (OUT/truth)");
+  simulate->add_option("--preset", options->preset, "rig and material preset: " + presets)->required();
+  simulate->add_option("--out", *out, "output folder (new, or an unfinished simulation to resume)")->required();
+  simulate->add_option("--seed", options->seed, "seed of the material pattern and the noise")->capture_default_str();
+  simulate->add_option("--eta", options->eta, "override the preset's relative index of refraction (> 1)");
+  simulate->add_option("--truth", options->truth, "model: render with the dual-microfacet model")
+      ->check(CLI::IsMember({"model", "montecarlo"}))
+      ->capture_default_str();
+  simulate->add_option("--threads", options->threads, "worker threads (0: all cores)")->capture_default_str();
+  simulate->callback([options, out] {
+    const SimulationOutput result = SimulateSession(*out, *options);
+    std::printf("simulated %lld images (%lld resumed) of preset '%s'\n  session: %s\n  truth:   %s\n",
+                static_cast<long long>(result.images), static_cast<long long>(result.resumed),
+                options->preset.c_str(), result.session.c_str(), result.truth.c_str());
+  });
+}
+
+}  // namespace svbtdf::cli

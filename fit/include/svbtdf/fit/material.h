@@ -1,0 +1,86 @@
+#pragma once
+// A fitted svbtdf material on disk (docs/material-format.md, version 1): a folder with a JSON
+// manifest and OpenEXR maps. Representatives carry full ln D tables; every texel is an affine
+// combination of representatives (paper Sec. 4.3), whose weights also interpolate D linearly.
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "svbtdf/common/image_io.h"
+#include "svbtdf/fit/clustering.h"
+#include "svbtdf/fit/texel_fit.h"
+#include "svbtdf/model/dual_microfacet.h"
+#include "svbtdf/model/hemicube.h"
+#include "svbtdf/model/tabulated_ndf.h"
+
+namespace svbtdf::fit {
+
+inline constexpr int kMaterialFormatVersion = 1;
+
+struct Material {
+  int width = 0, height = 0;   // texels
+  double eta = 1.5;
+  int ndf_resolution = 32;
+  // Per-representative fits.
+  std::vector<int64_t> representative_texels;        // texel index (y * width + x)
+  std::vector<std::vector<double>> representative_ln_d;  // num_cells values each, normalised
+  // Per-texel maps (interpolated for non-representatives).
+  FloatImage alpha;                // 1 channel
+  FloatImage shadowing_roughness;  // 1 channel; 0 = no shadowing
+  FloatImage k_s;                  // 3 channels
+  FloatImage rho_d;                // 3 channels
+  FloatImage residual;             // 1 channel: relative RMSE of the texel's own samples (-1: not fitted)
+  FloatImage cluster;              // 1 channel: the representative of the texel's cluster
+  // Affine weights: K channels of representative indices and K of weights (sum 1; unused: 0, 0).
+  FloatImage weight_index;
+  FloatImage weight_value;
+  nlohmann::json provenance = nlohmann::json::object();  // session, settings, statistics, holdout
+};
+
+// Assembles a material from the representatives' fits (in the order of clustering.representatives)
+// and every texel's affine weights: alpha, shadowing roughness, k_s and D are interpolated with
+// the weights; rho_d is the texel's own (measured directly, no fit needed).
+Material AssembleMaterial(int width, int height, double eta, int ndf_resolution, const Clustering& clustering,
+                          const std::vector<TexelFitResult>& representative_fits, const FloatImage& rho_d);
+
+// Writes MATERIAL/ (a new or empty folder; an existing material is never overwritten).
+void WriteMaterial(const std::filesystem::path& folder, const Material& material);
+// Reads and checks a material; every problem is an svbtdf::Error naming the file.
+Material ReadMaterial(const std::filesystem::path& folder);
+
+// One texel of a material, ready to evaluate at many direction pairs.
+class TexelBtdf {
+ public:
+  TexelBtdf(TabulatedNdf ndf, DualMicrofacetParams params) : ndf_(std::move(ndf)), params_(params) {}
+  Rgb Evaluate(const Vec3& i, const Vec3& o) const { return EvaluateMaterial(ndf_, params_, i, o); }
+  const TabulatedNdf& ndf() const { return ndf_; }
+  const DualMicrofacetParams& params() const { return params_; }
+
+ private:
+  TabulatedNdf ndf_;
+  DualMicrofacetParams params_;
+};
+
+// Evaluates R(x, i, o) for any texel: D = sum of w_j D_j over the texel's representatives.
+class MaterialEvaluator {
+ public:
+  explicit MaterialEvaluator(const Material& material);
+  // The texel's BTDF. Building it normalises its NDF table: reuse it for many directions.
+  // Throws svbtdf::Error(kInvalidInput) for a texel outside the material.
+  TexelBtdf Texel(int x, int y) const;
+  // One-off evaluation (builds the texel each call).
+  Rgb Evaluate(int x, int y, const Vec3& i, const Vec3& o) const { return Texel(x, y).Evaluate(i, o); }
+  // The texel's own NDF table (ln of the weighted sum of the representatives' D).
+  TabulatedNdf TexelNdf(int x, int y) const;
+
+ private:
+  const Material& material_;
+  Hemicube grid_;
+};
+
+}  // namespace svbtdf::fit

@@ -1,0 +1,130 @@
+#pragma once
+// Fitting the dual-microfacet model to one texel's measured BTDF slice (Dai et al. 2009,
+// Sec. 4.2; docs/fitting.md). The unknowns are ln D over an NDF hemicube and the blend weight
+// alpha; the shadowing roughness and the transmission scale are refined afterwards.
+//
+//   1. For fixed alpha, ln D solves a sparse linear least-squares problem: one data row per
+//      sample, alpha ln D(h_T) + (1 - alpha) ln D(h_B) = ln rho - alpha ln A_T - (1 - alpha) ln A_B,
+//      with ln D(h) the bilinear interpolation of the cell unknowns (so the rows stay linear),
+//      Laplacian smoothness rows, horizon cells fixed at ln(1e-6), and in the first pass polar
+//      symmetry rows ln D(h) = ln D(-h.x, -h.y, h.z).
+//   2. For fixed D, alpha minimises the distance between the BTDF-weighted mean incident
+//      directions of the measured and the model slice (paper eq. 18), by golden-section search.
+//   3. Alternate from alpha = 0.5 until alpha moves less than 0.01, then solve D once more
+//      without symmetry rows and normalise it (projected integral 1; the scale goes into k_s).
+//   4. Refine the Smith shadowing roughness (and the scale) with Ceres' Levenberg-Marquardt on the
+//      log residuals (paper eq. 15) with D and alpha fixed.
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "svbtdf/model/dual_microfacet.h"
+#include "svbtdf/model/hemicube.h"
+#include "svbtdf/model/tabulated_ndf.h"
+#include "svbtdf/model/shadowing.h"
+#include "svbtdf/model/vec.h"
+
+namespace svbtdf::fit {
+
+// One texel's measured refractive BTDF slice (the diffuse part rho_d already removed).
+struct TexelSlice {
+  Vec3 view = Vec3::UnitZ();        // o: unit, o.z > 0
+  std::vector<Vec3> light;          // i_k: unit, i_k.z < 0
+  std::vector<double> rho;          // luminance rho(i_k, o) >= 0
+  std::vector<double> solid_angle;  // solid angle each sample stands for (eq. 18 weights); empty: equal
+  std::vector<double> weight;       // confidence of each sample, 0 drops it; empty: all 1
+  std::vector<std::array<double, 3>> rho_rgb;  // optional per-channel values, for k_s per channel
+};
+
+struct TexelFitOptions {
+  int ndf_resolution = 32;          // the paper's 32x32 top face
+  double smoothness_weight = 0.3;   // weight of the rows 4 x_h - sum of its 4 neighbours = 0
+  double symmetry_weight = 1.0;     // weight of the first-pass rows x_h - x_mirror(h) = 0
+  // Relative weight of the symmetry rows in the final pass. The paper drops them (0), but with one
+  // view the data cannot tell how D is split between the h_T and h_B regions (a null space of
+  // the log-blend rows); a weak prior picks the most symmetric of the equivalent solutions and
+  // keeps D's normalisation, and so k_s, right (docs/fitting.md).
+  double final_symmetry_weight = 0.1;
+  double horizon_ln_d = -13.815510557964274;  // ln(1e-6): the paper's value at the NDF's horizon
+  double dark_fraction = 2e-3;      // samples below this fraction of the slice maximum are too
+                                    // dark for their logarithm to mean anything: dropped from (1)
+  double initial_alpha = 0.5;
+  double alpha_tolerance = 0.01;
+  int max_alternations = 12;
+  double initial_shadowing_roughness = 0.2;
+  bool refine_shadowing = true;
+};
+
+struct TexelFitResult {
+  double alpha = 0.5;
+  double shadowing_roughness = 0.2;
+  double k_s = 1.0;                      // luminance scale of the refractive part
+  std::array<double, 3> k_s_rgb = {1.0, 1.0, 1.0};
+  std::vector<double> ln_d;              // per NDF hemicube cell; D normalised to projected integral 1
+  double log_rms = 0.0;                  // RMS of the ln rho residuals over the samples used
+  double relative_rmse = 0.0;            // sqrt(sum (model - rho)^2 / sum rho^2) over all samples
+  int alternations = 0;
+  int samples_used = 0;
+};
+
+// Reusable per-thread state: the sparse Cholesky factorisation whose symbolic analysis is shared
+// by every texel whose normal-equation pattern matches the previous one.
+class FitWorkspace {
+ public:
+  FitWorkspace();
+  ~FitWorkspace();
+  FitWorkspace(FitWorkspace&&) noexcept;
+  FitWorkspace& operator=(FitWorkspace&&) noexcept;
+
+  int64_t factorizations() const;
+  int64_t symbolic_analyses() const;
+
+  struct State;  // the solver and its analysed pattern (texel_fit.cc)
+
+ private:
+  friend class TexelFitter;
+  std::unique_ptr<State> state_;
+};
+
+// A fitted texel as an evaluable BTDF: luminance rho(i, o) = k_s rho_dual(i, o; D, alpha, G).
+class FittedTexel {
+ public:
+  FittedTexel(const Hemicube& grid, double eta, const TexelFitResult& fit);
+  double Rho(const Vec3& i, const Vec3& o) const;
+  const TabulatedNdf& ndf() const { return *ndf_; }
+
+ private:
+  std::shared_ptr<const TabulatedNdf> ndf_;
+  DualMicrofacetModel model_;
+  double alpha_;
+  double k_s_;
+};
+
+class TexelFitter {
+ public:
+  // Throws svbtdf::Error(kInvalidInput) for eta <= 1 or bad options.
+  TexelFitter(double eta, const TexelFitOptions& options = {});
+
+  const Hemicube& ndf_grid() const { return grid_; }
+  double eta() const { return eta_; }
+  const TexelFitOptions& options() const { return options_; }
+
+  // Throws svbtdf::Error(kInvalidInput) when the slice is malformed (sizes, directions) and
+  // kNumerical when it holds too few usable samples to constrain a fit.
+  TexelFitResult Fit(const TexelSlice& slice, FitWorkspace* workspace = nullptr) const;
+
+  // The fitted model, ready to evaluate at many direction pairs.
+  FittedTexel Model(const TexelFitResult& fit) const;
+
+ private:
+  struct GridSystem;  // the rows that do not depend on the data, built once per fitter
+
+  double eta_;
+  TexelFitOptions options_;
+  Hemicube grid_;
+  std::shared_ptr<const GridSystem> system_;
+};
+
+}  // namespace svbtdf::fit

@@ -1,0 +1,115 @@
+#include "svbtdf/fit/baseline_fit.h"
+
+#include <ceres/ceres.h>
+
+#include <cmath>
+
+#include "svbtdf/common/error.h"
+#include "svbtdf/model/dual_microfacet.h"
+#include "svbtdf/model/ggx.h"
+
+namespace svbtdf::fit {
+namespace {
+
+// Parameters: ln alpha_x, ln alpha_y, azimuth, ln k.
+double BaselineRho(const double* p, double eta, const Vec3& i, const Vec3& o) {
+  const GgxNdf ndf(std::exp(p[0]), std::exp(p[1]));
+  const Eigen::AngleAxisd unrotate(-p[2], Vec3::UnitZ());
+  return std::exp(p[3]) * WalterBtdf(ndf, unrotate * i, unrotate * o, 1.0, eta);
+}
+
+struct BaselineResidual {
+  const TexelSlice* slice;
+  const std::vector<int>* rows;
+  double eta;
+
+  bool operator()(double const* const* parameters, double* residuals) const {
+    for (size_t j = 0; j < rows->size(); ++j) {
+      const int k = (*rows)[j];
+      const double rho = BaselineRho(parameters[0], eta, slice->light[k], slice->view);
+      // A direction the single refraction cannot reach costs as much as a 1000x miss, so the
+      // optimiser is pulled toward covering every bright sample.
+      const double model = rho > 0 ? rho : 1e-3 * slice->rho[k];
+      const double weight = slice->weight.empty() ? 1.0 : slice->weight[k];
+      residuals[j] = std::sqrt(weight) * (std::log(model) - std::log(slice->rho[k]));
+    }
+    return true;
+  }
+};
+
+}  // namespace
+
+BaselineFitter::BaselineFitter(double eta, double dark_fraction) : eta_(eta), dark_fraction_(dark_fraction) {
+  DualMicrofacetModel validate_eta(eta);
+}
+
+double BaselineFitter::Rho(const BaselineFitResult& fit, const Vec3& i, const Vec3& o) const {
+  const double p[4] = {std::log(fit.alpha_x), std::log(fit.alpha_y), fit.azimuth, std::log(fit.k_s)};
+  return BaselineRho(p, eta_, i, o);
+}
+
+BaselineFitResult BaselineFitter::Fit(const TexelSlice& slice) const {
+  if (slice.rho.size() != slice.light.size()) ThrowInvalidInput("texel slice", "rho and light sizes differ");
+  double brightest = 0;
+  for (size_t k = 0; k < slice.rho.size(); ++k) {
+    if (slice.weight.empty() || slice.weight[k] > 0) brightest = std::max(brightest, slice.rho[k]);
+  }
+  std::vector<int> rows;
+  for (size_t k = 0; k < slice.rho.size(); ++k) {
+    const bool weighted = slice.weight.empty() || slice.weight[k] > 0;
+    if (weighted && slice.rho[k] > 0 && slice.rho[k] >= dark_fraction_ * brightest) rows.push_back(static_cast<int>(k));
+  }
+  if (rows.size() < 8) {
+    throw Error(ErrorKind::kNumerical, "texel slice", "too few bright samples for the baseline fit");
+  }
+  // Start from a moderate isotropic lobe with the scale matching the brightest sample.
+  double p[4] = {std::log(0.2), std::log(0.2), 0.0, 0.0};
+  double sum_log_ratio = 0;
+  int counted = 0;
+  for (int k : rows) {
+    const double model = BaselineRho(p, eta_, slice.light[k], slice.view);
+    if (model > 0) sum_log_ratio += std::log(slice.rho[k] / model), ++counted;
+  }
+  if (counted > 0) p[3] = sum_log_ratio / counted;
+
+  auto* cost = new ceres::DynamicNumericDiffCostFunction<BaselineResidual, ceres::CENTRAL>(
+      new BaselineResidual{&slice, &rows, eta_});
+  cost->AddParameterBlock(4);
+  cost->SetNumResiduals(static_cast<int>(rows.size()));
+  ceres::Problem problem;
+  problem.AddResidualBlock(cost, nullptr, p);
+  for (int axis = 0; axis < 2; ++axis) {
+    problem.SetParameterLowerBound(p, axis, std::log(1e-3));
+    problem.SetParameterUpperBound(p, axis, std::log(3.0));
+  }
+  ceres::Solver::Options options;
+  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.max_num_iterations = 100;
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+
+  BaselineFitResult result;
+  result.alpha_x = std::exp(p[0]);
+  result.alpha_y = std::exp(p[1]);
+  result.azimuth = std::remainder(p[2], kPi);
+  result.k_s = std::exp(p[3]);
+  result.converged = summary.IsSolutionUsable();
+  double squared_error = 0, squared_rho = 0, squared_log = 0;
+  for (size_t k = 0; k < slice.rho.size(); ++k) {
+    if (!(slice.weight.empty() || slice.weight[k] > 0)) continue;
+    const double model = Rho(result, slice.light[k], slice.view);
+    squared_error += Square(model - slice.rho[k]);
+    squared_rho += Square(slice.rho[k]);
+  }
+  for (int k : rows) {
+    const double model = Rho(result, slice.light[k], slice.view);
+    if (model > 0) squared_log += Square(std::log(model / slice.rho[k]));
+  }
+  result.relative_rmse = squared_rho > 0 ? std::sqrt(squared_error / squared_rho) : 0.0;
+  result.log_rms = std::sqrt(squared_log / rows.size());
+  return result;
+}
+
+}  // namespace svbtdf::fit

@@ -1,0 +1,292 @@
+#include "svbtdf/fit/clustering.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <random>
+#include <string>
+#include <thread>
+
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/interrupt.h"
+
+namespace svbtdf::fit {
+namespace {
+
+using MatrixF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+using VectorF = Eigen::VectorXf;
+
+int ThreadCount(int requested) {
+  const int hardware = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return requested > 0 ? requested : hardware;
+}
+
+// Runs body(begin, end) over [0, n) in contiguous chunks on `threads` threads.
+void ParallelFor(int64_t n, int threads, const std::function<void(int64_t, int64_t)>& body) {
+  threads = static_cast<int>(std::min<int64_t>(threads, std::max<int64_t>(n, 1)));
+  if (threads <= 1) {
+    body(0, n);
+    return;
+  }
+  std::vector<std::thread> pool;
+  const int64_t chunk = (n + threads - 1) / threads;
+  for (int t = 0; t < threads; ++t) {
+    const int64_t begin = t * chunk, end = std::min(n, begin + chunk);
+    if (begin < end) pool.emplace_back(body, begin, end);
+  }
+  for (std::thread& thread : pool) thread.join();
+}
+
+std::vector<int64_t> RandomSubset(int64_t n, int64_t m, std::mt19937_64& rng) {
+  std::vector<int64_t> all(n);
+  std::iota(all.begin(), all.end(), 0);
+  if (m >= n) return all;
+  for (int64_t k = 0; k < m; ++k) {  // partial Fisher-Yates
+    std::uniform_int_distribution<int64_t> pick(k, n - 1);
+    std::swap(all[k], all[pick(rng)]);
+  }
+  all.resize(m);
+  std::sort(all.begin(), all.end());
+  return all;
+}
+
+struct Pca {
+  VectorF mean;
+  MatrixF components;  // dimension x p, orthonormal columns
+  double explained_variance = 0.0;
+};
+
+// Top principal components of a subsample by a randomised range finder (Halko et al. 2011):
+// O(m d p) instead of the O(m d^2) of a covariance matrix.
+Pca ComputePca(const SliceSource& source, const ClusteringOptions& options, std::mt19937_64& rng) {
+  const std::vector<int64_t> subset = RandomSubset(source.num_texels, options.pca_subsample, rng);
+  const int64_t m = static_cast<int64_t>(subset.size());
+  const int d = source.dimension;
+  MatrixF x(m, d);
+  for (int64_t r = 0; r < m; ++r) source.read(subset[r], x.row(r).data());
+  Pca pca;
+  pca.mean = x.colwise().mean().transpose();
+  x.rowwise() -= pca.mean.transpose();
+  const int p = std::min<int>({options.pca_dimensions, d, static_cast<int>(m)});
+  const int sketch = std::min<int>(p + 10, std::min<int>(d, static_cast<int>(m)));
+  std::normal_distribution<float> gauss(0.0f, 1.0f);
+  MatrixF omega(d, sketch);
+  for (int r = 0; r < d; ++r) {
+    for (int c = 0; c < sketch; ++c) omega(r, c) = gauss(rng);
+  }
+  Eigen::MatrixXf y = x * omega;
+  for (int power = 0; power < 2; ++power) {  // two power iterations sharpen the spectrum
+    Eigen::HouseholderQR<Eigen::MatrixXf> qr(y);
+    const Eigen::MatrixXf q = qr.householderQ() * Eigen::MatrixXf::Identity(y.rows(), sketch);
+    y = x * (x.transpose() * q);
+  }
+  Eigen::HouseholderQR<Eigen::MatrixXf> qr(y);
+  const Eigen::MatrixXf q = qr.householderQ() * Eigen::MatrixXf::Identity(y.rows(), sketch);
+  const Eigen::MatrixXf b = q.transpose() * x;  // sketch x d
+  Eigen::BDCSVD<Eigen::MatrixXf> svd(b, Eigen::ComputeThinV);
+  pca.components = svd.matrixV().leftCols(p);
+  const double total = x.squaredNorm();
+  const double kept = svd.singularValues().head(p).squaredNorm();
+  pca.explained_variance = total > 0 ? kept / total : 1.0;
+  return pca;
+}
+
+MatrixF ProjectAll(const SliceSource& source, const Pca& pca, int threads) {
+  const int p = static_cast<int>(pca.components.cols());
+  MatrixF z(source.num_texels, p);
+  ParallelFor(source.num_texels, threads, [&](int64_t begin, int64_t end) {
+    VectorF slice(source.dimension);
+    for (int64_t t = begin; t < end; ++t) {
+      source.read(t, slice.data());
+      z.row(t) = ((slice - pca.mean).transpose() * pca.components);
+    }
+  });
+  return z;
+}
+
+// Squared distances between rows of `points` [begin, end) and all `centres`, by ||a||^2 - 2ab + ||b||^2.
+MatrixF BlockDistances(const MatrixF& points, int64_t begin, int64_t end, const MatrixF& centres,
+                       const VectorF& centre_norms) {
+  const auto block = points.middleRows(begin, end - begin);
+  MatrixF distances = -2.0f * (block * centres.transpose());
+  const VectorF norms = block.rowwise().squaredNorm();
+  distances.colwise() += norms;
+  distances.rowwise() += centre_norms.transpose();
+  return distances;
+}
+
+MatrixF SeedKMeansPlusPlus(const MatrixF& z, int k, const ClusteringOptions& options, std::mt19937_64& rng) {
+  const std::vector<int64_t> subset = RandomSubset(z.rows(), std::max<int64_t>(options.seeding_subsample, k), rng);
+  const int64_t s = static_cast<int64_t>(subset.size());
+  MatrixF centres(k, z.cols());
+  std::uniform_int_distribution<int64_t> first(0, s - 1);
+  centres.row(0) = z.row(subset[first(rng)]);
+  std::vector<double> nearest(s, std::numeric_limits<double>::infinity());
+  for (int c = 1; c < k; ++c) {
+    double total = 0.0;
+    for (int64_t r = 0; r < s; ++r) {
+      nearest[r] = std::min<double>(nearest[r], (z.row(subset[r]) - centres.row(c - 1)).squaredNorm());
+      total += nearest[r];
+    }
+    int64_t chosen = first(rng);
+    if (total > 0) {
+      std::uniform_real_distribution<double> uniform(0.0, total);
+      double target = uniform(rng);
+      for (chosen = 0; chosen < s - 1 && (target -= nearest[chosen]) > 0; ++chosen) {
+      }
+    }
+    centres.row(c) = z.row(subset[chosen]);
+  }
+  return centres;
+}
+
+// Assigns each point its nearest centre; returns the squared distances too.
+void Assign(const MatrixF& z, const MatrixF& centres, int threads, std::vector<int>* label,
+            std::vector<float>* distance) {
+  const VectorF centre_norms = centres.rowwise().squaredNorm();
+  label->resize(z.rows());
+  distance->resize(z.rows());
+  constexpr int64_t kBlock = 2048;
+  const int64_t blocks = (z.rows() + kBlock - 1) / kBlock;
+  ParallelFor(blocks, threads, [&](int64_t block_begin, int64_t block_end) {
+    for (int64_t b = block_begin; b < block_end; ++b) {
+      const int64_t begin = b * kBlock, end = std::min<int64_t>(z.rows(), begin + kBlock);
+      const MatrixF d = BlockDistances(z, begin, end, centres, centre_norms);
+      for (int64_t r = 0; r < end - begin; ++r) {
+        Eigen::Index best;
+        (*distance)[begin + r] = std::max(0.0f, d.row(r).minCoeff(&best));
+        (*label)[begin + r] = static_cast<int>(best);
+      }
+    }
+  });
+}
+
+}  // namespace
+
+std::vector<double> SolveAffineWeights(const std::vector<std::vector<float>>& basis,
+                                       const std::vector<float>& target, double regularization) {
+  const int m = static_cast<int>(basis.size());
+  if (m == 0) ThrowInvalidInput("affine weights", "no basis slices");
+  const int d = static_cast<int>(target.size());
+  Eigen::MatrixXd b(d, m);
+  for (int j = 0; j < m; ++j) {
+    if (static_cast<int>(basis[j].size()) != d) ThrowInvalidInput("affine weights", "basis sizes differ");
+    for (int r = 0; r < d; ++r) b(r, j) = basis[j][r];
+  }
+  Eigen::VectorXd t(d);
+  for (int r = 0; r < d; ++r) t[r] = target[r];
+  // KKT system of min |B w - t|^2 + lambda |w - 1/m|^2 subject to sum(w) = 1.
+  const Eigen::MatrixXd gram = b.transpose() * b;
+  const double lambda = regularization * std::max(gram.trace() / m, 1e-30);
+  Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(m + 1, m + 1);
+  kkt.topLeftCorner(m, m) = gram + lambda * Eigen::MatrixXd::Identity(m, m);
+  kkt.block(0, m, m, 1).setOnes();
+  kkt.block(m, 0, 1, m).setOnes();
+  Eigen::VectorXd rhs(m + 1);
+  rhs.head(m) = b.transpose() * t + Eigen::VectorXd::Constant(m, lambda / m);
+  rhs[m] = 1.0;
+  const Eigen::VectorXd solution = kkt.fullPivLu().solve(rhs);
+  return std::vector<double>(solution.data(), solution.data() + m);
+}
+
+Clustering ClusterSlices(const SliceSource& source, const ClusteringOptions& options) {
+  if (source.num_texels <= 0 || source.dimension <= 0 || !source.read) {
+    ThrowInvalidInput("clustering", "no slices to cluster");
+  }
+  if (!(options.representative_fraction > 0 && options.representative_fraction <= 1)) {
+    ThrowInvalidInput("--representatives", "the fraction must lie in (0, 1]");
+  }
+  const int threads = ThreadCount(options.threads);
+  std::mt19937_64 rng(options.seed);
+  const int64_t n = source.num_texels;
+  const int k = static_cast<int>(std::clamp<int64_t>(
+      std::llround(options.representative_fraction * n), std::max(1, options.min_representatives), n));
+
+  const Pca pca = ComputePca(source, options, rng);
+  const MatrixF z = ProjectAll(source, pca, threads);
+  ThrowIfInterrupted("clustering");
+
+  MatrixF centres = SeedKMeansPlusPlus(z, k, options, rng);
+  std::vector<int> label;
+  std::vector<float> distance;
+  for (int iteration = 0; iteration < options.kmeans_iterations; ++iteration) {
+    Assign(z, centres, threads, &label, &distance);
+    MatrixF sums = MatrixF::Zero(k, z.cols());
+    std::vector<int64_t> counts(k, 0);
+    for (int64_t t = 0; t < n; ++t) {
+      sums.row(label[t]) += z.row(t);
+      ++counts[label[t]];
+    }
+    for (int c = 0; c < k; ++c) {
+      if (counts[c] > 0) {
+        centres.row(c) = sums.row(c) / static_cast<float>(counts[c]);
+      } else {  // an empty cluster restarts at the point worst served so far
+        const int64_t worst = std::max_element(distance.begin(), distance.end()) - distance.begin();
+        centres.row(c) = z.row(worst);
+        distance[worst] = 0.0f;
+      }
+    }
+    ThrowIfInterrupted("clustering");
+  }
+  Assign(z, centres, threads, &label, &distance);
+
+  // The representative of a cluster is its member nearest the centre.
+  Clustering result;
+  result.explained_variance = pca.explained_variance;
+  std::vector<int64_t> nearest_member(k, -1);
+  for (int64_t t = 0; t < n; ++t) {
+    const int c = label[t];
+    if (nearest_member[c] < 0 || distance[t] < distance[nearest_member[c]]) nearest_member[c] = t;
+  }
+  std::vector<int> representative_of_cluster(k, -1);
+  for (int c = 0; c < k; ++c) {
+    if (nearest_member[c] < 0) continue;
+    representative_of_cluster[c] = static_cast<int>(result.representatives.size());
+    result.representatives.push_back(nearest_member[c]);
+  }
+  const int r = static_cast<int>(result.representatives.size());
+  MatrixF rep_z(r, z.cols());
+  for (int j = 0; j < r; ++j) rep_z.row(j) = z.row(result.representatives[j]);
+  result.cluster.resize(n);
+  for (int64_t t = 0; t < n; ++t) result.cluster[t] = representative_of_cluster[label[t]];
+
+  // Affine weights over the nearest representatives, in PCA space.
+  result.weights.resize(n);
+  const int neighbours = std::min(options.neighbours, r);
+  std::vector<int> rep_index_of_texel(n, -1);
+  for (int j = 0; j < r; ++j) rep_index_of_texel[result.representatives[j]] = j;
+  const VectorF rep_norms = rep_z.rowwise().squaredNorm();
+  constexpr int64_t kBlock = 1024;
+  const int64_t blocks = (n + kBlock - 1) / kBlock;
+  ParallelFor(blocks, threads, [&](int64_t block_begin, int64_t block_end) {
+    std::vector<int> order(r);
+    for (int64_t b = block_begin; b < block_end; ++b) {
+      const int64_t begin = b * kBlock, end = std::min<int64_t>(n, begin + kBlock);
+      const MatrixF d = BlockDistances(z, begin, end, rep_z, rep_norms);
+      for (int64_t row = 0; row < end - begin; ++row) {
+        const int64_t t = begin + row;
+        if (rep_index_of_texel[t] >= 0) {
+          result.weights[t].terms = {{rep_index_of_texel[t], 1.0f}};
+          continue;
+        }
+        std::iota(order.begin(), order.end(), 0);
+        std::partial_sort(order.begin(), order.begin() + neighbours, order.end(),
+                          [&](int a, int c) { return d(row, a) < d(row, c); });
+        // Centred coordinates: the mean cancels in an affine combination, and the small
+        // PCA vectors keep the KKT system cheap.
+        std::vector<std::vector<float>> basis(neighbours);
+        for (int j = 0; j < neighbours; ++j) {
+          basis[j].assign(rep_z.row(order[j]).data(), rep_z.row(order[j]).data() + z.cols());
+        }
+        const std::vector<float> target(z.row(t).data(), z.row(t).data() + z.cols());
+        const std::vector<double> w = SolveAffineWeights(basis, target, options.weight_regularization);
+        for (int j = 0; j < neighbours; ++j) result.weights[t].terms.emplace_back(order[j], static_cast<float>(w[j]));
+      }
+    }
+  });
+  return result;
+}
+
+}  // namespace svbtdf::fit

@@ -1,0 +1,230 @@
+#include "svbtdf/fit/material.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/error.h"
+
+namespace svbtdf::fit {
+namespace fs = std::filesystem;
+namespace {
+
+// The map files and the channel count each must have.
+struct MapSpec {
+  const char* key;
+  const char* file;
+  FloatImage Material::*image;
+  int channels;  // 0: any (the weights' K)
+};
+
+const MapSpec kMaps[] = {
+    {"alpha", "alpha.exr", &Material::alpha, 1},
+    {"shadowing_roughness", "shadowing_roughness.exr", &Material::shadowing_roughness, 1},
+    {"k_s", "k_s.exr", &Material::k_s, 3},
+    {"rho_d", "rho_d.exr", &Material::rho_d, 3},
+    {"residual", "residual.exr", &Material::residual, 1},
+    {"cluster", "cluster.exr", &Material::cluster, 1},
+    {"weight_index", "weight_index.exr", &Material::weight_index, 0},
+    {"weight_value", "weight_value.exr", &Material::weight_value, 0},
+};
+
+void CheckShape(const FloatImage& image, int width, int height, int channels, const std::string& source) {
+  if (image.width != width || image.height != height || (channels > 0 && image.channels != channels)) {
+    ThrowFormatError(source, "is " + std::to_string(image.width) + "x" + std::to_string(image.height) + "x" +
+                                 std::to_string(image.channels) + ", expected " + std::to_string(width) + "x" +
+                                 std::to_string(height) + (channels > 0 ? "x" + std::to_string(channels) : ""));
+  }
+}
+
+}  // namespace
+
+Material AssembleMaterial(int width, int height, double eta, int ndf_resolution, const Clustering& clustering,
+                          const std::vector<TexelFitResult>& representative_fits, const FloatImage& rho_d) {
+  const size_t texels = static_cast<size_t>(width) * height;
+  if (clustering.weights.size() != texels || representative_fits.size() != clustering.representatives.size()) {
+    ThrowInvalidInput("material", "the clustering, the fits and the material size disagree");
+  }
+  CheckShape(rho_d, width, height, 3, "rho_d map");
+  Material m;
+  m.width = width;
+  m.height = height;
+  m.eta = eta;
+  m.ndf_resolution = ndf_resolution;
+  m.representative_texels = clustering.representatives;
+  for (const TexelFitResult& fit : representative_fits) m.representative_ln_d.push_back(fit.ln_d);
+  size_t max_terms = 1;
+  for (const AffineWeights& w : clustering.weights) max_terms = std::max(max_terms, w.terms.size());
+  const int k = static_cast<int>(max_terms);
+  m.alpha = FloatImage(width, height, 1);
+  m.shadowing_roughness = FloatImage(width, height, 1);
+  m.k_s = FloatImage(width, height, 3);
+  m.rho_d = rho_d;
+  m.residual = FloatImage(width, height, 1, -1.0f);
+  m.cluster = FloatImage(width, height, 1);
+  m.weight_index = FloatImage(width, height, k);
+  m.weight_value = FloatImage(width, height, k);
+  for (size_t r = 0; r < clustering.representatives.size(); ++r) {
+    const int64_t t = clustering.representatives[r];
+    m.residual.pixels[t] = static_cast<float>(representative_fits[r].relative_rmse);
+  }
+  for (size_t t = 0; t < texels; ++t) {
+    const int x = static_cast<int>(t % width), y = static_cast<int>(t / width);
+    double alpha = 0, shadowing = 0;
+    std::array<double, 3> k_s = {0, 0, 0};
+    const auto& terms = clustering.weights[t].terms;
+    for (size_t j = 0; j < terms.size(); ++j) {
+      const auto& [rep, w] = terms[j];
+      const TexelFitResult& fit = representative_fits[rep];
+      alpha += w * fit.alpha;
+      shadowing += w * fit.shadowing_roughness;
+      for (int c = 0; c < 3; ++c) k_s[c] += w * fit.k_s_rgb[c];
+      m.weight_index.at(x, y, static_cast<int>(j)) = static_cast<float>(rep);
+      m.weight_value.at(x, y, static_cast<int>(j)) = w;
+    }
+    m.alpha.at(x, y) = static_cast<float>(std::clamp(alpha, 0.0, 1.0));
+    m.shadowing_roughness.at(x, y) = static_cast<float>(std::max(0.0, shadowing));
+    for (int c = 0; c < 3; ++c) m.k_s.at(x, y, c) = static_cast<float>(std::max(0.0, k_s[c]));
+    m.cluster.at(x, y) = static_cast<float>(clustering.cluster[t]);
+  }
+  return m;
+}
+
+void WriteMaterial(const fs::path& folder, const Material& m) {
+  if (fs::exists(folder) && (!fs::is_directory(folder) || !fs::is_empty(folder))) {
+    ThrowInvalidInput(folder.string(), "exists and is not empty; a material is never overwritten",
+                      "choose a new --out folder");
+  }
+  std::error_code error;
+  fs::create_directories(folder, error);
+  if (error) ThrowIoError(folder.string(), "cannot create: " + error.message());
+  const Hemicube grid(m.ndf_resolution);
+  if (m.representative_ln_d.size() != m.representative_texels.size() || m.representative_texels.empty()) {
+    ThrowInvalidInput("material", "needs one ln D table per representative, and at least one representative");
+  }
+  FloatImage tables(grid.num_cells(), static_cast<int>(m.representative_ln_d.size()), 1);
+  for (size_t r = 0; r < m.representative_ln_d.size(); ++r) {
+    if (static_cast<int>(m.representative_ln_d[r].size()) != grid.num_cells()) {
+      ThrowInvalidInput("material", "representative " + std::to_string(r) + " has a table of the wrong size");
+    }
+    for (int c = 0; c < grid.num_cells(); ++c) tables.at(c, static_cast<int>(r)) = static_cast<float>(m.representative_ln_d[r][c]);
+  }
+  WriteFloatImage(folder / "ndf_ln_d.exr", tables, /*half_precision=*/false, false);
+  nlohmann::json maps = nlohmann::json::object();
+  for (const MapSpec& spec : kMaps) {
+    CheckShape(m.*spec.image, m.width, m.height, spec.channels, std::string("material map ") + spec.key);
+    // Parameters in full float: k_s and rho_d would survive half, indices would not.
+    WriteFloatImage(folder / spec.file, m.*spec.image, /*half_precision=*/false, false);
+    maps[spec.key] = spec.file;
+  }
+  const nlohmann::json manifest = {
+      {"format", "svbtdf-material"},
+      {"version", kMaterialFormatVersion},
+      {"conventions", "docs/model.md version 1: z toward the camera, i toward the light (i.z < 0)"},
+      {"model", "dual-microfacet: R = k_s exp(alpha ln rho_T + (1 - alpha) ln rho_B) + rho_d"},
+      {"eta", m.eta},
+      {"width", m.width},
+      {"height", m.height},
+      {"shadowing", "smith-ggx (roughness map; 0 = none)"},
+      {"ndf", {{"kind", "tabulated-hemicube"}, {"resolution", m.ndf_resolution}, {"cells", grid.num_cells()},
+               {"storage", "ln D, rows = representatives, columns = hemicube cells"}, {"table", "ndf_ln_d.exr"}}},
+      {"representatives", {{"count", m.representative_texels.size()}, {"texels", m.representative_texels}}},
+      {"maps", maps},
+      {"provenance", m.provenance},
+  };
+  WriteTextAtomically(folder / "material.json", manifest.dump(2) + "\n", false);
+}
+
+Material ReadMaterial(const fs::path& folder) {
+  const fs::path manifest_path = folder / "material.json";
+  nlohmann::json manifest;
+  try {
+    manifest = nlohmann::json::parse(ReadTextFile(manifest_path));
+  } catch (const nlohmann::json::exception& e) {
+    ThrowFormatError(manifest_path.string(), std::string("is not valid JSON: ") + e.what());
+  }
+  Material m;
+  try {
+    if (manifest.at("format") != "svbtdf-material") ThrowFormatError(manifest_path.string(), "is not an svbtdf material");
+    const int version = manifest.at("version").get<int>();
+    if (version != kMaterialFormatVersion) {
+      ThrowFormatError(manifest_path.string(), "has material format version " + std::to_string(version) +
+                                                   "; this svbtdf reads version " + std::to_string(kMaterialFormatVersion));
+    }
+    m.eta = manifest.at("eta").get<double>();
+    m.width = manifest.at("width").get<int>();
+    m.height = manifest.at("height").get<int>();
+    m.ndf_resolution = manifest.at("ndf").at("resolution").get<int>();
+    m.representative_texels = manifest.at("representatives").at("texels").get<std::vector<int64_t>>();
+    m.provenance = manifest.value("provenance", nlohmann::json::object());
+  } catch (const nlohmann::json::exception& e) {
+    ThrowFormatError(manifest_path.string(), std::string("misses a field or has a wrong type: ") + e.what());
+  }
+  if (m.width <= 0 || m.height <= 0 || !(m.eta > 1.0)) ThrowFormatError(manifest_path.string(), "has an invalid size or eta");
+  const Hemicube grid(m.ndf_resolution);
+  const FloatImage tables = ReadFloatImage(folder / "ndf_ln_d.exr");
+  RequireFinite(tables, (folder / "ndf_ln_d.exr").string());
+  CheckShape(tables, grid.num_cells(), static_cast<int>(m.representative_texels.size()), 1,
+             (folder / "ndf_ln_d.exr").string());
+  for (int r = 0; r < tables.height; ++r) {
+    std::vector<double> row(grid.num_cells());
+    for (int c = 0; c < grid.num_cells(); ++c) row[c] = tables.at(c, r);
+    m.representative_ln_d.push_back(std::move(row));
+  }
+  for (const MapSpec& spec : kMaps) {
+    const fs::path file = folder / spec.file;
+    m.*spec.image = ReadFloatImage(file);
+    RequireFinite(m.*spec.image, file.string());
+    CheckShape(m.*spec.image, m.width, m.height, spec.channels, file.string());
+  }
+  if (m.weight_index.channels != m.weight_value.channels) {
+    ThrowFormatError((folder / "weight_value.exr").string(), "has a different channel count than weight_index.exr");
+  }
+  const int reps = static_cast<int>(m.representative_texels.size());
+  for (float index : m.weight_index.pixels) {
+    if (index < 0 || index >= reps || index != std::floor(index)) {
+      ThrowFormatError((folder / "weight_index.exr").string(), "holds an index that is not a representative");
+    }
+  }
+  return m;
+}
+
+MaterialEvaluator::MaterialEvaluator(const Material& material) : material_(material), grid_(material.ndf_resolution) {}
+
+TabulatedNdf MaterialEvaluator::TexelNdf(int x, int y) const {
+  const int cells = grid_.num_cells();
+  std::vector<double> d(cells, 0.0);
+  for (int k = 0; k < material_.weight_index.channels; ++k) {
+    const double w = material_.weight_value.at(x, y, k);
+    if (w == 0.0) continue;
+    const auto& table = material_.representative_ln_d[static_cast<size_t>(material_.weight_index.at(x, y, k))];
+    for (int c = 0; c < cells; ++c) d[c] += w * std::exp(table[c]);
+  }
+  // Affine weights may be negative: keep D positive where the combination undershoots.
+  std::vector<double> ln_d(cells);
+  for (int c = 0; c < cells; ++c) ln_d[c] = std::log(std::max(d[c], 1e-12));
+  TabulatedNdf ndf(grid_, std::move(ln_d));
+  ndf.Normalize();
+  return ndf;
+}
+
+TexelBtdf MaterialEvaluator::Texel(int x, int y) const {
+  if (x < 0 || y < 0 || x >= material_.width || y >= material_.height) {
+    ThrowInvalidInput("--texel", "(" + std::to_string(x) + ", " + std::to_string(y) + ") is outside the " +
+                                     std::to_string(material_.width) + "x" + std::to_string(material_.height) +
+                                     " material");
+  }
+  DualMicrofacetParams params;
+  params.eta = material_.eta;
+  params.alpha = std::clamp<double>(material_.alpha.at(x, y), 0.0, 1.0);
+  const double roughness = material_.shadowing_roughness.at(x, y);
+  params.shadowing = roughness > 0 ? SmithShadowing::Ggx(roughness) : SmithShadowing::None();
+  for (int c = 0; c < 3; ++c) {
+    params.k_s[c] = material_.k_s.at(x, y, c);
+    params.rho_d[c] = material_.rho_d.at(x, y, c);
+  }
+  return TexelBtdf(TexelNdf(x, y), params);
+}
+
+}  // namespace svbtdf::fit

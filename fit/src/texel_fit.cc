@@ -1,0 +1,460 @@
+#include "svbtdf/fit/texel_fit.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/minimize.h"
+#include "svbtdf/model/dual_microfacet.h"
+#include "svbtdf/model/tabulated_ndf.h"
+
+namespace svbtdf::fit {
+
+using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+using Triplet = Eigen::Triplet<double, int>;
+
+// ------------------------------------------------------------------------------------------------
+// The data-independent part of the ln D system.
+
+struct TexelFitter::GridSystem {
+  std::vector<int> column;  // unknown index of each cell, -1 for the fixed horizon cells
+  int num_unknowns = 0;
+  // Normal-equation blocks of the smoothness rows and of the symmetry rows (already weighted),
+  // and their right-hand sides (the fixed horizon values moved across).
+  SparseMatrix smoothness_normal;
+  Eigen::VectorXd smoothness_rhs;
+  SparseMatrix symmetry_normal;
+};
+
+namespace {
+
+struct Sample {
+  Vec3 light;
+  double rho = 0.0;
+  double weight = 1.0;
+  double solid_angle = 1.0;
+  bool used = false;  // bright enough for the log-space rows
+};
+
+struct SparseRows {
+  std::vector<Triplet> triplets;
+  std::vector<double> rhs;
+  int rows = 0;
+};
+
+// Accumulates coefficient * ln D(h) into `row`, moving fixed horizon values to the right side.
+void AddInterpolatedTerm(const Hemicube& grid, const std::vector<int>& column, double horizon_ln_d,
+                         const Vec3& h, double coefficient, int row, SparseRows* rows) {
+  for (const auto& [cell, weight] : grid.Interpolation(h)) {
+    if (weight == 0.0) continue;
+    const int col = column[cell];
+    if (col < 0) {
+      rows->rhs[row] -= coefficient * weight * horizon_ln_d;
+    } else {
+      rows->triplets.emplace_back(row, col, coefficient * weight);
+    }
+  }
+}
+
+SparseMatrix NormalMatrix(const SparseRows& rows, int num_unknowns, Eigen::VectorXd* normal_rhs) {
+  SparseMatrix a(rows.rows, num_unknowns);
+  a.setFromTriplets(rows.triplets.begin(), rows.triplets.end());
+  const Eigen::Map<const Eigen::VectorXd> b(rows.rhs.data(), rows.rows);
+  *normal_rhs = a.transpose() * b;
+  return SparseMatrix(a.transpose() * a);
+}
+
+// Golden-section search that also considers the interval's ends: alpha = 0 or 1 (one rough side
+// only) are legitimate answers that an interior search only approaches.
+double MinimumIncludingEnds(const std::function<double(double)>& f, double lo, double hi, double tolerance) {
+  double best_x = GoldenSectionSearch(f, lo, hi, tolerance), best_f = f(best_x);
+  for (const double x : {lo, hi}) {
+    const double fx = f(x);
+    if (fx < best_f) best_f = fx, best_x = x;
+  }
+  return best_x;
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------------------------------------
+
+struct FitWorkspace::State {
+  Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<int>> solver;
+  std::vector<int> outer, inner;  // the pattern the solver was analysed for
+  int64_t factorizations = 0;
+  int64_t symbolic_analyses = 0;
+};
+
+FitWorkspace::FitWorkspace() : state_(std::make_unique<State>()) {}
+FitWorkspace::~FitWorkspace() = default;
+FitWorkspace::FitWorkspace(FitWorkspace&&) noexcept = default;
+FitWorkspace& FitWorkspace::operator=(FitWorkspace&&) noexcept = default;
+int64_t FitWorkspace::factorizations() const { return state_->factorizations; }
+int64_t FitWorkspace::symbolic_analyses() const { return state_->symbolic_analyses; }
+
+namespace {
+
+// Solves N x = b reusing the symbolic analysis when N's pattern is the one analysed last.
+Eigen::VectorXd SolveNormalEquations(const SparseMatrix& normal, const Eigen::VectorXd& rhs,
+                                     FitWorkspace::State* state) {
+  const int n = static_cast<int>(normal.cols());
+  const int nnz = static_cast<int>(normal.nonZeros());
+  const bool same_pattern =
+      static_cast<int>(state->outer.size()) == n + 1 && static_cast<int>(state->inner.size()) == nnz &&
+      std::equal(state->outer.begin(), state->outer.end(), normal.outerIndexPtr()) &&
+      std::equal(state->inner.begin(), state->inner.end(), normal.innerIndexPtr());
+  if (!same_pattern) {
+    state->solver.analyzePattern(normal);
+    state->outer.assign(normal.outerIndexPtr(), normal.outerIndexPtr() + n + 1);
+    state->inner.assign(normal.innerIndexPtr(), normal.innerIndexPtr() + nnz);
+    ++state->symbolic_analyses;
+  }
+  state->solver.factorize(normal);
+  ++state->factorizations;
+  if (state->solver.info() != Eigen::Success) {
+    throw Error(ErrorKind::kNumerical, "NDF solve", "the normal equations are singular",
+                "increase the smoothness weight");
+  }
+  return state->solver.solve(rhs);
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------------------------------------
+
+TexelFitter::TexelFitter(double eta, const TexelFitOptions& options)
+    : eta_(eta), options_(options), grid_(options.ndf_resolution) {
+  DualMicrofacetModel validate_eta(eta);  // throws for eta <= 1
+  if (!(options.smoothness_weight > 0)) {
+    ThrowInvalidInput("smoothness weight", "must be > 0 (it keeps cells without data determined)");
+  }
+  if (!(options.alpha_tolerance > 0) || options.max_alternations < 1) {
+    ThrowInvalidInput("alpha search", "needs a positive tolerance and at least one alternation");
+  }
+  auto system = std::make_shared<GridSystem>();
+  const int cells = grid_.num_cells();
+  system->column.assign(cells, -1);
+  for (int c = 0; c < cells; ++c) {
+    if (!grid_.IsHorizon(c)) system->column[c] = system->num_unknowns++;
+  }
+  const int n = system->num_unknowns;
+
+  SparseRows smooth;
+  for (int c = 0; c < cells; ++c) {
+    const int col = system->column[c];
+    if (col < 0) continue;
+    const int row = smooth.rows++;
+    smooth.rhs.push_back(0.0);
+    int neighbours = 0;
+    for (const int nb : grid_.Neighbours(c)) {
+      if (nb < 0) continue;
+      ++neighbours;
+      if (system->column[nb] < 0) {
+        smooth.rhs[row] += options.smoothness_weight * options.horizon_ln_d;
+      } else {
+        smooth.triplets.emplace_back(row, system->column[nb], -options.smoothness_weight);
+      }
+    }
+    smooth.triplets.emplace_back(row, col, options.smoothness_weight * neighbours);
+  }
+  system->smoothness_normal = NormalMatrix(smooth, n, &system->smoothness_rhs);
+
+  SparseRows symmetry;
+  for (int c = 0; c < cells; ++c) {
+    const int mirror = grid_.MirroredCell(c);
+    const int col = system->column[c], mirror_col = system->column[mirror];
+    if (col < 0 || mirror_col < 0 || mirror <= c) continue;  // each pair once
+    const int row = symmetry.rows++;
+    symmetry.rhs.push_back(0.0);
+    symmetry.triplets.emplace_back(row, col, options.symmetry_weight);
+    symmetry.triplets.emplace_back(row, mirror_col, -options.symmetry_weight);
+  }
+  Eigen::VectorXd unused_rhs;
+  system->symmetry_normal = NormalMatrix(symmetry, n, &unused_rhs);
+  system_ = std::move(system);
+}
+
+namespace {
+
+std::vector<Sample> PrepareSamples(const TexelSlice& slice, double dark_fraction) {
+  const size_t n = slice.light.size();
+  const auto size_error = [](const char* what) {
+    ThrowInvalidInput("texel slice", std::string(what) + " has a different length than the light directions");
+  };
+  if (slice.rho.size() != n) size_error("rho");
+  if (!slice.solid_angle.empty() && slice.solid_angle.size() != n) size_error("solid_angle");
+  if (!slice.weight.empty() && slice.weight.size() != n) size_error("weight");
+  if (!slice.rho_rgb.empty() && slice.rho_rgb.size() != n) size_error("rho_rgb");
+  if (!(slice.view.z() > 0) || std::abs(slice.view.norm() - 1) > 1e-6) {
+    ThrowInvalidInput("texel slice", "the view direction must be a unit vector with z > 0");
+  }
+  std::vector<Sample> samples(n);
+  double brightest = 0.0;
+  for (size_t k = 0; k < n; ++k) {
+    Sample& s = samples[k];
+    s.light = slice.light[k];
+    s.rho = slice.rho[k];
+    s.weight = slice.weight.empty() ? 1.0 : slice.weight[k];
+    s.solid_angle = slice.solid_angle.empty() ? 1.0 : slice.solid_angle[k];
+    if (!(s.light.z() < 0) || std::abs(s.light.norm() - 1) > 1e-6) {
+      ThrowInvalidInput("texel slice", "light direction " + std::to_string(k) + " is not a unit vector with z < 0");
+    }
+    if (!std::isfinite(s.rho) || !std::isfinite(s.weight) || s.weight < 0) {
+      ThrowInvalidInput("texel slice", "sample " + std::to_string(k) + " has a non-finite value or negative weight");
+    }
+    if (s.weight > 0) brightest = std::max(brightest, s.rho);
+  }
+  for (Sample& s : samples) s.used = s.weight > 0 && s.rho > 0 && s.rho >= dark_fraction * brightest;
+  return samples;
+}
+
+// Mean incident direction weighted by rho times solid angle (paper eq. 18).
+template <typename RhoOf>
+Vec3 WeightedMeanDirection(const std::vector<Sample>& samples, RhoOf rho_of) {
+  Vec3 sum = Vec3::Zero();
+  double total = 0.0;
+  for (size_t k = 0; k < samples.size(); ++k) {
+    if (samples[k].weight <= 0) continue;
+    const double w = rho_of(k) * samples[k].solid_angle;
+    sum += w * samples[k].light;
+    total += w;
+  }
+  return total > 0 ? Vec3(sum / total) : Vec3::Zero();
+}
+
+}  // namespace
+
+namespace {
+
+SmithShadowing ShadowingFor(double roughness) {
+  return roughness > 0 ? SmithShadowing::Ggx(roughness) : SmithShadowing::None();
+}
+
+// The two virtual configurations of every sample, without D.
+struct Configurations {
+  std::vector<VirtualConfiguration> entry, exit;
+};
+
+Configurations ComputeConfigurations(const DualMicrofacetModel& model, const std::vector<Sample>& samples,
+                                     const Vec3& view) {
+  Configurations c;
+  c.entry.reserve(samples.size());
+  c.exit.reserve(samples.size());
+  for (const Sample& s : samples) {
+    c.entry.push_back(model.RoughEntry(s.light, view));
+    c.exit.push_back(model.RoughExit(s.light, view));
+  }
+  return c;
+}
+
+// Does the blend with this alpha have a finite logarithm for this sample's configurations?
+bool RowDefined(const VirtualConfiguration& entry, const VirtualConfiguration& exit, double alpha) {
+  if (alpha >= 1.0) return entry.valid && entry.factor > 0;
+  if (alpha <= 0.0) return exit.valid && exit.factor > 0;
+  return entry.valid && exit.valid && entry.factor > 0 && exit.factor > 0;
+}
+
+// Per-sample model values for a fixed D: rho_T and rho_B.
+void EvaluateConfigurations(const Ndf& ndf, const Configurations& configs, std::vector<double>* rho_t,
+                            std::vector<double>* rho_b) {
+  const size_t n = configs.entry.size();
+  rho_t->assign(n, 0.0);
+  rho_b->assign(n, 0.0);
+  for (size_t k = 0; k < n; ++k) {
+    if (configs.entry[k].valid) (*rho_t)[k] = configs.entry[k].factor * ndf.D(configs.entry[k].h);
+    if (configs.exit[k].valid) (*rho_b)[k] = configs.exit[k].factor * ndf.D(configs.exit[k].h);
+  }
+}
+
+// Log residuals of the fitted model for Ceres: the shadowing roughness and ln k_s are free.
+struct ShadowingResidual {
+  const std::vector<Sample>* samples;
+  const std::vector<int>* rows;  // indices of the samples used
+  const TabulatedNdf* ndf;
+  Vec3 view;
+  double eta;
+  double alpha;
+
+  bool operator()(double const* const* parameters, double* residuals) const {
+    const double roughness = parameters[0][0];
+    const double ln_k = parameters[0][1];
+    if (!(roughness > 0)) return false;
+    const DualMicrofacetModel model(eta, SmithShadowing::Ggx(roughness));
+    for (size_t j = 0; j < rows->size(); ++j) {
+      const Sample& s = (*samples)[(*rows)[j]];
+      const double rho = model.Rho(*ndf, alpha, s.light, view);
+      if (!(rho > 0)) return false;
+      residuals[j] = std::sqrt(s.weight) * (std::log(rho) + ln_k - std::log(s.rho));
+    }
+    return true;
+  }
+};
+
+}  // namespace
+
+TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace) const {
+  FitWorkspace local_workspace;
+  FitWorkspace::State* state = (workspace ? workspace : &local_workspace)->state_.get();
+  const std::vector<Sample> samples = PrepareSamples(slice, options_.dark_fraction);
+  const Vec3& view = slice.view;
+  const int used = static_cast<int>(std::count_if(samples.begin(), samples.end(), [](const Sample& s) { return s.used; }));
+  if (used < 8) {
+    throw Error(ErrorKind::kNumerical, "texel slice",
+                "only " + std::to_string(used) + " samples are bright enough to fit",
+                "check the exposure and the validity mask of this texel");
+  }
+  const GridSystem& system = *system_;
+  const Vec3 measured_mean = WeightedMeanDirection(samples, [&](size_t k) { return samples[k].rho; });
+
+  double shadowing_roughness = options_.initial_shadowing_roughness;
+  const DualMicrofacetModel initial_model(eta_, ShadowingFor(shadowing_roughness));
+  const Configurations configs = ComputeConfigurations(initial_model, samples, view);
+
+  // (1) ln D for a fixed alpha.
+  const auto solve_ln_d = [&](double alpha, bool with_symmetry) {
+    SparseRows data;
+    for (size_t k = 0; k < samples.size(); ++k) {
+      const Sample& s = samples[k];
+      // Samples too dark to use still get a row, with weight zero: the pattern of the normal
+      // equations then depends only on the view and the light directions, so that texels
+      // sharing them share one symbolic factorisation.
+      if (s.weight <= 0 || !RowDefined(configs.entry[k], configs.exit[k], alpha)) continue;
+      const double w = s.used ? std::sqrt(s.weight) : 0.0;
+      const int row = data.rows++;
+      double rhs = 0.0;
+      if (s.used) {
+        rhs = std::log(s.rho);
+        if (alpha > 0) rhs -= alpha * std::log(configs.entry[k].factor);
+        if (alpha < 1) rhs -= (1 - alpha) * std::log(configs.exit[k].factor);
+      }
+      data.rhs.push_back(w * rhs);
+      if (alpha > 0) {
+        AddInterpolatedTerm(grid_, system.column, options_.horizon_ln_d, configs.entry[k].h, w * alpha, row, &data);
+      }
+      if (alpha < 1) {
+        AddInterpolatedTerm(grid_, system.column, options_.horizon_ln_d, configs.exit[k].h, w * (1 - alpha), row,
+                            &data);
+      }
+    }
+    Eigen::VectorXd rhs;
+    SparseMatrix normal = NormalMatrix(data, system.num_unknowns, &rhs);
+    normal += system.smoothness_normal;
+    rhs += system.smoothness_rhs;
+    // Added with weight zero in the final pass so that both passes share one pattern.
+    normal += (with_symmetry ? 1.0 : Square(options_.final_symmetry_weight)) * system.symmetry_normal;
+    const Eigen::VectorXd x = SolveNormalEquations(normal, rhs, state);
+    std::vector<double> ln_d(grid_.num_cells(), options_.horizon_ln_d);
+    for (int c = 0; c < grid_.num_cells(); ++c) {
+      if (system.column[c] >= 0) ln_d[c] = x[system.column[c]];
+    }
+    return ln_d;
+  };
+
+  // (2) alpha for a fixed D, by the paper's mean-direction criterion.
+  const auto search_alpha = [&](const std::vector<double>& ln_d) {
+    const TabulatedNdf ndf(grid_, ln_d);
+    std::vector<double> rho_t, rho_b;
+    EvaluateConfigurations(ndf, configs, &rho_t, &rho_b);
+    return MinimumIncludingEnds(
+        [&](double alpha) {
+          const Vec3 mean = WeightedMeanDirection(samples, [&](size_t k) { return LogBlend(rho_t[k], rho_b[k], alpha); });
+          return (mean - measured_mean).squaredNorm();
+        },
+        0.0, 1.0, 1e-4);
+  };
+
+  TexelFitResult result;
+  double alpha = std::clamp(options_.initial_alpha, 0.0, 1.0);
+  std::vector<double> ln_d = solve_ln_d(alpha, /*with_symmetry=*/true);
+  for (result.alternations = 1; result.alternations <= options_.max_alternations; ++result.alternations) {
+    const double next_alpha = search_alpha(ln_d);
+    const double moved = std::abs(next_alpha - alpha);
+    alpha = next_alpha;
+    ln_d = solve_ln_d(alpha, /*with_symmetry=*/true);
+    if (moved < options_.alpha_tolerance) break;
+  }
+  result.alternations = std::min(result.alternations, options_.max_alternations);
+  ln_d = solve_ln_d(alpha, /*with_symmetry=*/false);
+
+  // (3) Normalise D; its scale is the transmission scale k_s.
+  TabulatedNdf ndf(grid_, ln_d);
+  const double scale = ndf.Normalize();
+  result.alpha = alpha;
+  result.ln_d = ndf.ln_d();
+  result.k_s = scale;
+
+  // (4) Shadowing roughness and scale by Levenberg-Marquardt on the log residuals (eq. 15).
+  std::vector<int> rows;
+  for (size_t k = 0; k < samples.size(); ++k) {
+    if (samples[k].used && RowDefined(configs.entry[k], configs.exit[k], alpha)) rows.push_back(static_cast<int>(k));
+  }
+  if (options_.refine_shadowing && shadowing_roughness > 0 && rows.size() >= 2) {
+    double parameters[2] = {shadowing_roughness, std::log(scale)};
+    auto* cost = new ceres::DynamicNumericDiffCostFunction<ShadowingResidual, ceres::CENTRAL>(
+        new ShadowingResidual{&samples, &rows, &ndf, view, eta_, alpha});
+    cost->AddParameterBlock(2);
+    cost->SetNumResiduals(static_cast<int>(rows.size()));
+    ceres::Problem problem;
+    problem.AddResidualBlock(cost, nullptr, parameters);
+    problem.SetParameterLowerBound(parameters, 0, 0.01);
+    problem.SetParameterUpperBound(parameters, 0, 2.0);
+    ceres::Solver::Options solver_options;
+    solver_options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+    solver_options.linear_solver_type = ceres::DENSE_QR;
+    solver_options.max_num_iterations = 50;
+    solver_options.logging_type = ceres::SILENT;
+    solver_options.num_threads = 1;
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver_options, &problem, &summary);
+    if (summary.IsSolutionUsable()) {
+      shadowing_roughness = parameters[0];
+      result.k_s = std::exp(parameters[1]);
+    }
+  }
+  result.shadowing_roughness = shadowing_roughness;
+
+  // Residuals and per-channel scales of the final model.
+  const FittedTexel fitted(grid_, eta_, result);
+  double squared_error = 0, squared_rho = 0, squared_log = 0, model_squared = 0;
+  std::array<double, 3> model_dot_rgb = {0, 0, 0};
+  for (size_t k = 0; k < samples.size(); ++k) {
+    const Sample& s = samples[k];
+    if (s.weight <= 0) continue;
+    const double predicted = fitted.Rho(s.light, view);
+    squared_error += Square(predicted - s.rho);
+    squared_rho += Square(s.rho);
+    if (s.used && predicted > 0) {
+      squared_log += Square(std::log(predicted) - std::log(s.rho));
+      ++result.samples_used;
+    }
+    if (!slice.rho_rgb.empty()) {
+      const double shape = predicted / result.k_s;
+      model_squared += shape * shape;
+      for (int c = 0; c < 3; ++c) model_dot_rgb[c] += shape * slice.rho_rgb[k][c];
+    }
+  }
+  result.relative_rmse = squared_rho > 0 ? std::sqrt(squared_error / squared_rho) : 0.0;
+  result.log_rms = result.samples_used > 0 ? std::sqrt(squared_log / result.samples_used) : 0.0;
+  for (int c = 0; c < 3; ++c) {
+    result.k_s_rgb[c] = slice.rho_rgb.empty() || model_squared <= 0 ? result.k_s : model_dot_rgb[c] / model_squared;
+  }
+  return result;
+}
+
+FittedTexel TexelFitter::Model(const TexelFitResult& fit) const { return FittedTexel(grid_, eta_, fit); }
+
+FittedTexel::FittedTexel(const Hemicube& grid, double eta, const TexelFitResult& fit)
+    : ndf_(std::make_shared<TabulatedNdf>(grid, fit.ln_d)),
+      model_(eta, ShadowingFor(fit.shadowing_roughness)),
+      alpha_(fit.alpha),
+      k_s_(fit.k_s) {}
+
+double FittedTexel::Rho(const Vec3& i, const Vec3& o) const { return k_s_ * model_.Rho(*ndf_, alpha_, i, o); }
+
+}  // namespace svbtdf::fit

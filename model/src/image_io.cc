@@ -1,0 +1,134 @@
+#include "svbtdf/common/image_io.h"
+
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
+#include <memory>
+
+#include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/error.h"
+
+namespace svbtdf {
+namespace fs = std::filesystem;
+namespace {
+
+std::unique_ptr<OIIO::ImageInput> OpenForReading(const fs::path& path) {
+  if (!fs::exists(path)) ThrowIoError(path.string(), "does not exist");
+  auto input = OIIO::ImageInput::open(path.string());
+  if (!input) {
+    ThrowFormatError(path.string(), "cannot be decoded as an image: " + OIIO::geterror(),
+                     "is the file complete and in a format OpenImageIO reads (PNG, TIFF, EXR)?");
+  }
+  return input;
+}
+
+std::vector<std::string> ChannelNames(int channels) {
+  if (channels == 1) return {"Y"};
+  if (channels == 3) return {"R", "G", "B"};
+  if (channels == 4) return {"R", "G", "B", "A"};
+  std::vector<std::string> names;
+  for (int c = 0; c < channels; ++c) names.push_back("A" + std::to_string(c));
+  return names;
+}
+
+// Writes pixels of `type` through OpenImageIO into `temp`, which WriteFileAtomically renames.
+void WritePixels(const fs::path& final_path, const fs::path& temp, OIIO::ImageSpec spec, const void* pixels) {
+  // The temporary name hides the extension, so the format is chosen from the final path.
+  auto output = OIIO::ImageOutput::create(final_path.string());
+  if (!output) ThrowIoError(final_path.string(), "no image writer for this extension: " + OIIO::geterror());
+  if (!output->open(temp.string(), spec) || !output->write_image(spec.format, pixels) || !output->close()) {
+    ThrowIoError(final_path.string(), "write failed: " + output->geterror(), "is the disk full?");
+  }
+}
+
+}  // namespace
+
+CameraImage ReadCameraImage(const fs::path& path) {
+  auto input = OpenForReading(path);
+  const OIIO::ImageSpec& spec = input->spec();
+  if (spec.format.basetype != OIIO::TypeDesc::UINT8 && spec.format.basetype != OIIO::TypeDesc::UINT16) {
+    ThrowFormatError(path.string(), "is not an 8- or 16-bit integer image (got " + std::string(spec.format.c_str()) + ")",
+                     "camera frames are stored as 16-bit PNG or TIFF");
+  }
+  const int stored_channels = spec.nchannels;
+  const int channels = stored_channels == 4 || stored_channels == 2 ? stored_channels - 1 : stored_channels;
+  if (channels != 1 && channels != 3) {
+    ThrowFormatError(path.string(), "has " + std::to_string(stored_channels) + " channels; 1 or 3 expected");
+  }
+  CameraImage image;
+  image.width = spec.width;
+  image.height = spec.height;
+  image.channels = channels;
+  image.bits_per_sample = spec.format.basetype == OIIO::TypeDesc::UINT8 ? 8 : 16;
+  const int stored_bits = spec.get_int_attribute("oiio:BitsPerSample", image.bits_per_sample);
+  if (stored_bits > 0 && stored_bits < image.bits_per_sample) image.bits_per_sample = stored_bits;
+  image.pixels.resize(static_cast<size_t>(spec.width) * spec.height * channels);
+  // Read in the file's own type so that values are not rescaled, then widen to 16 bits.
+  if (spec.format.basetype == OIIO::TypeDesc::UINT8) {
+    std::vector<uint8_t> narrow(image.pixels.size());
+    if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, narrow.data())) {
+      ThrowFormatError(path.string(), "is truncated or corrupt: " + input->geterror());
+    }
+    std::copy(narrow.begin(), narrow.end(), image.pixels.begin());
+  } else if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT16, image.pixels.data())) {
+    ThrowFormatError(path.string(), "is truncated or corrupt: " + input->geterror());
+  }
+  return image;
+}
+
+void WriteCameraImage(const fs::path& path, const CameraImage& image, bool overwrite) {
+  if (image.channels != 1 && image.channels != 3) ThrowInvalidInput(path.string(), "camera images have 1 or 3 channels");
+  if (image.pixels.size() != static_cast<size_t>(image.width) * image.height * image.channels) {
+    ThrowInvalidInput(path.string(), "pixel count does not match the image size");
+  }
+  OIIO::ImageSpec spec(image.width, image.height, image.channels, OIIO::TypeDesc::UINT16);
+  spec.channelnames = ChannelNames(image.channels);
+  spec.attribute("oiio:BitsPerSample", image.bits_per_sample);
+  WriteFileAtomically(path, [&](const fs::path& temp) { WritePixels(path, temp, spec, image.pixels.data()); }, overwrite);
+}
+
+FloatImage ReadFloatImage(const fs::path& path) {
+  auto input = OpenForReading(path);
+  const OIIO::ImageSpec& spec = input->spec();
+  FloatImage image(spec.width, spec.height, spec.nchannels);
+  if (!input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
+    ThrowFormatError(path.string(), "is truncated or corrupt: " + input->geterror());
+  }
+  return image;
+}
+
+void WriteFloatImage(const fs::path& path, const FloatImage& image, bool half_precision, bool overwrite) {
+  if (image.pixels.size() != static_cast<size_t>(image.width) * image.height * image.channels || image.channels < 1) {
+    ThrowInvalidInput(path.string(), "pixel count does not match the image size");
+  }
+  OIIO::ImageSpec spec(image.width, image.height, image.channels,
+                       half_precision ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT);
+  spec.channelnames = ChannelNames(image.channels);
+  spec.attribute("compression", "zip");
+  // Convert on our side: OpenImageIO converts float -> half when the buffer type is FLOAT.
+  WriteFileAtomically(
+      path,
+      [&](const fs::path& temp) {
+        auto output = OIIO::ImageOutput::create(path.string());
+        if (!output) ThrowIoError(path.string(), "no image writer for this extension: " + OIIO::geterror());
+        if (!output->open(temp.string(), spec) || !output->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) ||
+            !output->close()) {
+          ThrowIoError(path.string(), "write failed: " + output->geterror(), "is the disk full?");
+        }
+      },
+      overwrite);
+}
+
+void RequireFinite(const FloatImage& image, const std::string& source) {
+  for (size_t k = 0; k < image.pixels.size(); ++k) {
+    if (!std::isfinite(image.pixels[k])) {
+      const size_t pixel = k / image.channels;
+      ThrowFormatError(source, "holds a non-finite value at pixel (" + std::to_string(pixel % image.width) + ", " +
+                                   std::to_string(pixel / image.width) + ")",
+                       "the file is corrupt or was written by a broken tool");
+    }
+  }
+}
+
+}  // namespace svbtdf

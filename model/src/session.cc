@@ -1,0 +1,258 @@
+#include "svbtdf/common/session.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <ctime>
+#include <fstream>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/error.h"
+
+namespace svbtdf {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr const char* kManifest = "session.json";
+constexpr const char* kPlan = "plan.json";
+constexpr const char* kJournal = "journal.jsonl";
+
+std::string UtcNow() {
+  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char buffer[32];
+  std::strftime(buffer, sizeof buffer, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  return buffer;
+}
+
+nlohmann::json ParseJsonFile(const fs::path& path) {
+  const std::string text = ReadTextFile(path);
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {  // parse errors, but also number overflow
+    ThrowFormatError(path.string(), std::string("is not valid JSON: ") + e.what());
+  }
+}
+
+// Keys are short ASCII paths: letters, digits, '_', '-', '.', separated by '/', no "..".
+void RequireValidKey(const std::string& key, const std::string& source) {
+  static const std::regex pattern(R"([A-Za-z0-9_\-]+(\.[A-Za-z0-9_\-]+)*(/[A-Za-z0-9_\-]+(\.[A-Za-z0-9_\-]+)*)*)");
+  if (key.empty() || key.size() > 200 || !std::regex_match(key, pattern)) {
+    ThrowFormatError(source, "invalid capture key '" + key.substr(0, 80) + "'");
+  }
+}
+
+template <typename T>
+T Field(const nlohmann::json& object, const char* name, const std::string& source) {
+  if (!object.is_object() || !object.contains(name)) ThrowFormatError(source, std::string("missing field '") + name + "'");
+  try {
+    return object.at(name).get<T>();
+  } catch (const nlohmann::json::exception&) {
+    ThrowFormatError(source, std::string("field '") + name + "' has the wrong type");
+  }
+}
+
+void AppendLineDurably(const fs::path& path, const std::string& line) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) ThrowIoError(path.string(), std::string("cannot open for appending: ") + std::strerror(errno));
+  const std::string data = line + "\n";
+  const ssize_t written = ::write(fd, data.data(), data.size());
+  const bool ok = written == static_cast<ssize_t>(data.size()) && ::fsync(fd) == 0;
+  const int saved = errno;
+  ::close(fd);
+  if (!ok) ThrowIoError(path.string(), std::string("journal append failed: ") + std::strerror(saved), "is the disk full?");
+}
+
+}  // namespace
+
+uint32_t FileCrc32(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) ThrowIoError(path.string(), "cannot be read");
+  uLong crc = crc32(0L, Z_NULL, 0);
+  char buffer[1 << 16];
+  while (in) {
+    in.read(buffer, sizeof buffer);
+    if (in.gcount() > 0) crc = crc32(crc, reinterpret_cast<const Bytef*>(buffer), static_cast<uInt>(in.gcount()));
+  }
+  return static_cast<uint32_t>(crc);
+}
+
+std::string Session::FileForKey(const std::string& key) { return "images/" + key + ".png"; }
+
+std::string SessionVerification::Summary() const {
+  std::ostringstream out;
+  const auto list = [&](const char* what, const std::vector<std::string>& keys) {
+    if (keys.empty()) return;
+    out << keys.size() << " " << what << " (";
+    for (size_t k = 0; k < keys.size() && k < 5; ++k) out << (k ? ", " : "") << keys[k];
+    out << (keys.size() > 5 ? ", ..." : "") << "); ";
+  };
+  list("missing", missing);
+  list("corrupt", corrupt);
+  list("duplicated", duplicated);
+  list("unexpected", unexpected);
+  std::string text = out.str();
+  return text.empty() ? "complete and intact" : text.substr(0, text.size() - 2);
+}
+
+Session Session::Create(const fs::path& folder, const nlohmann::json& rig, const std::vector<std::string>& planned_keys) {
+  if (fs::exists(folder) && (!fs::is_directory(folder) || !fs::is_empty(folder))) {
+    ThrowInvalidInput(folder.string(), "exists and is not empty; an existing session is never overwritten",
+                 "choose a new output folder, or resume with the same command");
+  }
+  std::error_code error;
+  fs::create_directories(folder / "images", error);
+  if (error) ThrowIoError(folder.string(), "cannot create: " + error.message());
+  std::set<std::string> unique;
+  for (const std::string& key : planned_keys) {
+    RequireValidKey(key, "plan");
+    if (!unique.insert(key).second) ThrowInvalidInput("plan", "capture key '" + key + "' is planned twice");
+  }
+  Session session;
+  session.folder_ = folder;
+  session.rig_ = rig;
+  session.planned_keys_ = planned_keys;
+  const nlohmann::json manifest = {{"format", "svbtdf-session"}, {"version", kSessionFormatVersion},
+                                   {"created", UtcNow()},        {"software", "svbtdf"},
+                                   {"rig", rig}};
+  WriteTextAtomically(folder / kPlan, nlohmann::json({{"captures", planned_keys}}).dump(1) + "\n", false);
+  WriteTextAtomically(folder / kManifest, manifest.dump(2) + "\n", false);
+  return session;
+}
+
+Session Session::Open(const fs::path& folder) {
+  if (!fs::is_directory(folder)) ThrowIoError(folder.string(), "is not a session folder (does not exist)");
+  Session session;
+  session.folder_ = folder;
+  const fs::path manifest_path = folder / kManifest;
+  const nlohmann::json manifest = ParseJsonFile(manifest_path);
+  if (Field<std::string>(manifest, "format", manifest_path.string()) != "svbtdf-session") {
+    ThrowFormatError(manifest_path.string(), "is not an svbtdf session manifest");
+  }
+  const int version = Field<int>(manifest, "version", manifest_path.string());
+  if (version != kSessionFormatVersion) {
+    ThrowFormatError(manifest_path.string(), "has session format version " + std::to_string(version) +
+                                                 "; this svbtdf reads version " + std::to_string(kSessionFormatVersion));
+  }
+  session.rig_ = manifest.value("rig", nlohmann::json::object());
+  const fs::path plan_path = folder / kPlan;
+  session.planned_keys_ = Field<std::vector<std::string>>(ParseJsonFile(plan_path), "captures", plan_path.string());
+  for (const std::string& key : session.planned_keys_) RequireValidKey(key, plan_path.string());
+  session.ReadJournal();
+  return session;
+}
+
+Session Session::CreateOrResume(const fs::path& folder, const nlohmann::json& rig,
+                                const std::vector<std::string>& planned_keys) {
+  if (!fs::exists(folder / kManifest)) return Create(folder, rig, planned_keys);
+  Session session = Open(folder);
+  if (session.planned_keys_ != planned_keys) {
+    ThrowInvalidInput(folder.string(), "holds a session with a different plan; it will not be changed",
+                 "resume with the same settings, or choose a new output folder");
+  }
+  return session;
+}
+
+void Session::ReadJournal() {
+  const fs::path path = folder_ / kJournal;
+  entries_.clear();
+  index_.clear();
+  if (!fs::exists(path)) return;
+  const std::string text = ReadTextFile(path);
+  std::istringstream lines(text);
+  std::string line;
+  int number = 0;
+  const bool ends_cleanly = text.empty() || text.back() == '\n';
+  while (std::getline(lines, line)) {
+    ++number;
+    const std::string where = path.string() + ":" + std::to_string(number);
+    if (line.empty()) continue;
+    nlohmann::json object;
+    try {
+      object = nlohmann::json::parse(line);
+    } catch (const nlohmann::json::exception&) {  // parse errors, but also number overflow
+      // Only the very last line may be cut short, by a crash during the append.
+      if (!ends_cleanly && lines.peek() == EOF) break;
+      ThrowFormatError(where, "is not a valid journal line");
+    }
+    SessionEntry entry;
+    entry.key = Field<std::string>(object, "key", where);
+    RequireValidKey(entry.key, where);
+    entry.file = Field<std::string>(object, "file", where);
+    if (entry.file != FileForKey(entry.key)) ThrowFormatError(where, "file does not match the key");
+    entry.bytes = Field<uint64_t>(object, "bytes", where);
+    entry.crc32 = Field<uint32_t>(object, "crc32", where);
+    entry.exposure_s = Field<double>(object, "exposure_s", where);
+    entry.gain = Field<double>(object, "gain", where);
+    entry.time = object.value("time", "");
+    index_.emplace(entry.key, entries_.size());
+    entries_.push_back(std::move(entry));
+  }
+}
+
+const SessionEntry& Session::Entry(const std::string& key) const {
+  const auto it = index_.find(key);
+  if (it == index_.end()) ThrowIoError((folder_ / FileForKey(key)).string(), "is not in the session journal", "is the session complete? run 'svbtdf session verify'");
+  return entries_[it->second];
+}
+
+void Session::AddImage(const std::string& key, const CameraImage& image, double exposure_s, double gain) {
+  RequireValidKey(key, "capture");
+  if (Contains(key)) ThrowIoError(key, "is captured already; a capture is never overwritten");
+  if (std::find(planned_keys_.begin(), planned_keys_.end(), key) == planned_keys_.end()) {
+    ThrowInvalidInput(key, "is not in the session's plan");
+  }
+  const fs::path file = folder_ / FileForKey(key);
+  std::error_code error;
+  fs::create_directories(file.parent_path(), error);
+  if (error) ThrowIoError(file.parent_path().string(), "cannot create: " + error.message());
+  // A file without a journal line is left over from a crash mid-capture: replace it.
+  WriteCameraImage(file, image, /*overwrite=*/true);
+  SessionEntry entry{key, FileForKey(key), fs::file_size(file), FileCrc32(file), exposure_s, gain, UtcNow()};
+  const nlohmann::json line = {{"key", entry.key},   {"file", entry.file},       {"bytes", entry.bytes},
+                               {"crc32", entry.crc32}, {"exposure_s", exposure_s}, {"gain", gain},
+                               {"time", entry.time}};
+  AppendLineDurably(folder_ / kJournal, line.dump());
+  index_.emplace(key, entries_.size());
+  entries_.push_back(std::move(entry));
+}
+
+CameraImage Session::ReadImage(const std::string& key, bool check_crc) const {
+  const SessionEntry& entry = Entry(key);
+  const fs::path file = folder_ / entry.file;
+  std::error_code error;
+  const uint64_t size = fs::file_size(file, error);
+  if (error) ThrowIoError(file.string(), "is journalled but missing", "run 'svbtdf session verify'");
+  if (size != entry.bytes || (check_crc && FileCrc32(file) != entry.crc32)) {
+    ThrowFormatError(file.string(), "does not match its journal entry (corrupt)", "re-capture it: resume the session");
+  }
+  return ReadCameraImage(file);
+}
+
+SessionVerification Session::Verify(bool check_crc) const {
+  SessionVerification report;
+  const std::set<std::string> planned(planned_keys_.begin(), planned_keys_.end());
+  std::set<std::string> seen;
+  for (const SessionEntry& entry : entries_) {
+    if (!seen.insert(entry.key).second) report.duplicated.push_back(entry.key);
+    if (!planned.count(entry.key)) report.unexpected.push_back(entry.key);
+    const fs::path file = folder_ / entry.file;
+    std::error_code error;
+    const uint64_t size = fs::file_size(file, error);
+    if (error || size != entry.bytes || (check_crc && FileCrc32(file) != entry.crc32)) report.corrupt.push_back(entry.key);
+  }
+  for (const std::string& key : planned_keys_) {
+    if (!seen.count(key)) report.missing.push_back(key);
+  }
+  return report;
+}
+
+}  // namespace svbtdf

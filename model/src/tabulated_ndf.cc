@@ -1,0 +1,204 @@
+#include "svbtdf/model/tabulated_ndf.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <string>
+
+#include "svbtdf/common/error.h"
+
+namespace svbtdf {
+namespace {
+
+constexpr int kSubCells = 4;        // quadrature points per cell side for the integrals
+constexpr int kAreaThetaSteps = 64; // projected-area table over the direction of v
+constexpr int kAreaPhiSteps = 64;
+
+// Quadrature nodes of the hemicube: directions and solid-angle weights, kSubCells^2 per cell.
+struct Quadrature {
+  std::vector<Vec3> directions;
+  std::vector<double> weights;
+};
+
+Quadrature CellQuadrature(const Hemicube& grid, int sub) {
+  Quadrature q;
+  q.directions.reserve(static_cast<size_t>(grid.num_cells()) * sub * sub);
+  for (int c = 0; c < grid.num_cells(); ++c) {
+    // Sub-cell solid angles are proportional to 1/r^3 on the face plane; normalise them to the
+    // cell's exact solid angle.
+    const size_t first = q.directions.size();
+    double total = 0;
+    for (int a = 0; a < sub; ++a) {
+      for (int b = 0; b < sub; ++b) {
+        const Vec3 d = grid.CellPoint(c, (a + 0.5) / sub, (b + 0.5) / sub);
+        // |dω/dA| on a unit-distance plane is cos^3 of the angle to the plane's normal, i.e.
+        // the cube of the direction's largest component.
+        const double dominant = std::max({std::abs(d.x()), std::abs(d.y()), d.z()});
+        const double w = dominant * dominant * dominant;
+        q.directions.push_back(d);
+        q.weights.push_back(w);
+        total += w;
+      }
+    }
+    for (size_t k = first; k < q.directions.size(); ++k) q.weights[k] *= grid.CellSolidAngle(c) / total;
+  }
+  return q;
+}
+
+}  // namespace
+
+struct TabulatedNdf::AreaTable {
+  std::vector<double> area;  // (kAreaThetaSteps + 1) x kAreaPhiSteps, theta in [0, pi/2]
+  double At(const Vec3& v) const {
+    const double theta = std::acos(std::clamp(v.z(), 0.0, 1.0));
+    double phi = std::atan2(v.y(), v.x());
+    if (phi < 0) phi += kTwoPi;
+    const double t = theta / (0.5 * kPi) * kAreaThetaSteps;
+    const double p = phi / kTwoPi * kAreaPhiSteps;
+    const int t0 = std::min(static_cast<int>(t), kAreaThetaSteps - 1);
+    const int p0 = static_cast<int>(p) % kAreaPhiSteps;
+    const int p1 = (p0 + 1) % kAreaPhiSteps;
+    const double ft = t - t0, fp = p - std::floor(p);
+    const auto a = [&](int ti, int pi) { return area[static_cast<size_t>(ti) * kAreaPhiSteps + pi]; };
+    return (1 - ft) * ((1 - fp) * a(t0, p0) + fp * a(t0, p1)) + ft * ((1 - fp) * a(t0 + 1, p0) + fp * a(t0 + 1, p1));
+  }
+};
+
+TabulatedNdf::TabulatedNdf(const Hemicube& grid, std::vector<double> ln_d) : grid_(grid), ln_d_(std::move(ln_d)) {
+  if (static_cast<int>(ln_d_.size()) != grid_.num_cells()) {
+    ThrowInvalidInput("tabulated NDF", "has " + std::to_string(ln_d_.size()) + " values for " +
+                                           std::to_string(grid_.num_cells()) + " hemicube cells");
+  }
+  for (double value : ln_d_) {
+    if (!std::isfinite(value)) ThrowInvalidInput("tabulated NDF", "holds a non-finite ln D value");
+  }
+}
+
+TabulatedNdf::TabulatedNdf(const Hemicube& grid, const Ndf& ndf) : grid_(grid), ln_d_(grid.num_cells()) {
+  for (int c = 0; c < grid_.num_cells(); ++c) {
+    const double d = ndf.D(grid_.CellCenter(c));
+    ln_d_[c] = d > 0 ? std::max(std::log(d), -700.0) : -700.0;
+  }
+}
+
+TabulatedNdf::TabulatedNdf(const TabulatedNdf& other) : grid_(other.grid_), ln_d_(other.ln_d_) {}
+
+double TabulatedNdf::D(const Vec3& h) const {
+  if (h.z() <= 0) return 0.0;
+  double ln = 0;
+  for (const auto& [cell, w] : grid_.Interpolation(h)) ln += w * ln_d_[cell];
+  return std::exp(ln);
+}
+
+double TabulatedNdf::ProjectedIntegral() const {
+  // The nodes depend only on the resolution; fits normalise thousands of tables of one size.
+  static thread_local int cached_resolution = 0;
+  static thread_local Quadrature quadrature;
+  if (cached_resolution != grid_.resolution()) {
+    quadrature = CellQuadrature(grid_, kSubCells);
+    cached_resolution = grid_.resolution();
+  }
+  double integral = 0;
+  for (size_t k = 0; k < quadrature.directions.size(); ++k) {
+    integral += D(quadrature.directions[k]) * quadrature.directions[k].z() * quadrature.weights[k];
+  }
+  return integral;
+}
+
+double TabulatedNdf::Normalize() {
+  const double integral = ProjectedIntegral();
+  if (!(integral > 0) || !std::isfinite(integral)) {
+    throw Error(ErrorKind::kNumerical, "tabulated NDF", "cannot be normalised (its integral is " +
+                                                           std::to_string(integral) + ")");
+  }
+  const double shift = std::log(integral);
+  for (double& value : ln_d_) value -= shift;
+  // The projected areas scale too; drop the cached table.
+  std::lock_guard<std::mutex> lock(areas_mutex_);
+  areas_.reset();
+  return integral;
+}
+
+const TabulatedNdf::AreaTable& TabulatedNdf::Areas() const {
+  std::lock_guard<std::mutex> lock(areas_mutex_);
+  if (!areas_) {
+    auto table = std::make_shared<AreaTable>();
+    const Quadrature q = CellQuadrature(grid_, 2);
+    std::vector<double> d_weight(q.directions.size());
+    for (size_t k = 0; k < q.directions.size(); ++k) d_weight[k] = D(q.directions[k]) * q.weights[k];
+    table->area.resize(static_cast<size_t>(kAreaThetaSteps + 1) * kAreaPhiSteps);
+    for (int t = 0; t <= kAreaThetaSteps; ++t) {
+      const double theta = std::min(0.5 * kPi * t / kAreaThetaSteps, 0.5 * kPi - 1e-6);
+      for (int p = 0; p < kAreaPhiSteps; ++p) {
+        const Vec3 v = SphericalDirection(theta, kTwoPi * p / kAreaPhiSteps);
+        double area = 0;
+        for (size_t k = 0; k < q.directions.size(); ++k) area += std::max(0.0, v.dot(q.directions[k])) * d_weight[k];
+        table->area[static_cast<size_t>(t) * kAreaPhiSteps + p] = area;
+      }
+    }
+    areas_ = std::move(table);
+  }
+  return *areas_;
+}
+
+double TabulatedNdf::ProjectedArea(const Vec3& v) const { return Areas().At(v); }
+
+double TabulatedNdf::G1(const Vec3& v, const Vec3& h) const {
+  const Vec3 side_adjusted = v.z() < 0 ? Vec3(-v) : v;
+  if (side_adjusted.dot(h) <= 0 || side_adjusted.z() <= 0) return 0.0;
+  const double area = ProjectedArea(side_adjusted);
+  return area > 0 ? std::min(1.0, side_adjusted.z() / area) : 1.0;
+}
+
+double TabulatedNdf::VisibleNormalPdf(const Vec3& v, const Vec3& h) const {
+  if (v.z() <= 0 || h.z() <= 0) return 0.0;
+  const double area = ProjectedArea(v);
+  return area > 0 ? std::max(0.0, v.dot(h)) * D(h) / area : 0.0;
+}
+
+NormalSample TabulatedNdf::SampleVisibleNormal(const Vec3& v, const Vec2& u) const {
+  // Proposal: a cell chosen in proportion to a bound of the target over it, then a point uniform
+  // on the cell's face rectangle. The target in face-plane area measure is
+  // max(0, v.h) D(h) |dω/dA|; each cell's bound uses the largest ln D of the cells its
+  // interpolation can touch, the largest cosine over the cell and |dω/dA| <= 1.
+  const int cells = grid_.num_cells();
+  std::vector<double> cumulative(cells);
+  double total = 0;
+  const double half_diagonal = 1.5 * std::sqrt(2.0) * (2.0 / grid_.resolution());  // generous angle bound
+  for (int c = 0; c < cells; ++c) {
+    double max_ln = ln_d_[c];
+    for (int nb : grid_.Neighbours(c)) {
+      if (nb < 0) continue;
+      max_ln = std::max(max_ln, ln_d_[nb]);
+      for (int nb2 : grid_.Neighbours(nb)) {
+        if (nb2 >= 0) max_ln = std::max(max_ln, ln_d_[nb2]);
+      }
+    }
+    const double cosine = std::min(1.0, std::max(0.0, v.dot(grid_.CellCenter(c)) + half_diagonal));
+    // Face-plane area of the cell: (2/N)^2 on every face.
+    total += cosine > 0 ? std::exp(max_ln) * cosine : 0.0;
+    cumulative[c] = total;
+  }
+  // Rejection needs more than two random numbers: a stream seeded from u keeps the sampler a
+  // deterministic function of u, as the interface promises.
+  std::mt19937_64 rng(static_cast<uint64_t>(u.x() * 9007199254740992.0) ^
+                      (static_cast<uint64_t>(u.y() * 9007199254740992.0) << 1));
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  for (int attempt = 0; attempt < 100000; ++attempt) {
+    const double pick = uniform(rng) * total;
+    const int cell = static_cast<int>(std::upper_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin());
+    if (cell >= cells) continue;
+    const double bound = cumulative[cell] - (cell > 0 ? cumulative[cell - 1] : 0.0);
+    const Vec3 h = grid_.CellPoint(cell, uniform(rng), uniform(rng));
+    const double dominant = std::max({std::abs(h.x()), std::abs(h.y()), h.z()});
+    const double target = std::max(0.0, v.dot(h)) * D(h) * dominant * dominant * dominant;
+    if (uniform(rng) * bound <= target) {
+      const double pdf = VisibleNormalPdf(v, h);
+      const double weight = pdf > 0 ? G1(v, h) * std::max(0.0, v.dot(h)) * D(h) / (v.z() * pdf) : 0.0;
+      return {h, pdf, weight};
+    }
+  }
+  throw Error(ErrorKind::kNumerical, "tabulated NDF", "visible-normal sampling did not accept a sample");
+}
+
+}  // namespace svbtdf

@@ -1,0 +1,98 @@
+#pragma once
+// The rig's renderer (docs/simulator.md, "Rendering"): radiance images of every capture a real
+// session makes (dot images through the sample, the all-dots image and a flat white without it,
+// chessboard views, dark frames) and the camera's sensor chain that turns them into stored values.
+//
+// A dot image follows the measurement equation of the notes ("Measurement to BTDF"): a pixel that
+// sees sample point x records the radiance
+//     L(x) = sum over the dot's area elements of R(x, i, o) |i.z| dI(i) / |p - x|^2,
+// i = (p - x)/|p - x|, o toward the camera, dI the element's radiant intensity toward x (with the
+// monitor's angular profile). Quadrature: per pixel, n x n stratified sub-samples are grouped by
+// the texel they hit and each group is evaluated once at the centroid of its sub-samples with
+// weight (group size)/n^2; the dot is a point when it subtends less than a tenth of the texel's
+// smallest NDF roughness, else Radon's 7-point degree-5 rule on its disk.
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "svbtdf/simulate/rig.h"
+#include "svbtdf/common/image_io.h"
+#include "svbtdf/simulate/truth_material.h"
+
+namespace svbtdf {
+
+// Where a chessboard is: board point (bx, by, 0) maps to world rotation * b + translation.
+// Inner corner (i, j) is at board point (i * square, j * square).
+struct BoardPose {
+  Mat3 rotation = Mat3::Identity();
+  Vec3 translation = Vec3::Zero();
+  Vec3 ToWorld(const Vec2& b) const { return rotation * Vec3(b.x(), b.y(), 0.0) + translation; }
+};
+
+class RigRenderer {
+ public:
+  // `material` may be null when only captures without the sample are rendered. threads = 0: all.
+  RigRenderer(const Rig& rig, const TruthMaterial* material, int threads = 0);
+
+  const Rig& rig() const { return rig_; }
+
+  // Radiance of dot `dot` seen through the sample; 0 where the ray misses the sample (the holder
+  // is opaque). Includes the monitor's black-level glow when black_level > 0.
+  void RenderDot(const Dot& dot, FloatImage* radiance) const;
+
+  // The monitor seen directly (sample and holder removed): every dot lit, or a flat field of
+  // `level` over the whole active area. Anti-aliased with board_samples^2 sub-samples.
+  void RenderAllDots(FloatImage* radiance) const;
+  void RenderFlatField(double level, FloatImage* radiance) const;
+
+  // A chessboard lit uniformly (BoardConfig), seen through the lens with its distortion.
+  void RenderBoard(const BoardPose& board, FloatImage* radiance) const;
+  // Inner corners in world coordinates, row-major (i fastest), as OpenCV's finder orders them
+  // for a board that is not rotated by more than 90 degrees in the image.
+  std::vector<Vec3> BoardCorners(const BoardPose& board) const;
+  // `views` deterministic poses for Zhang calibration, tilted 20-40 degrees about varied axes,
+  // at about the sample's distance, fully in view. Throws when the board cannot fit.
+  std::vector<BoardPose> ZhangBoardPoses(int views, uint64_t seed) const;
+  // The board lying in the sample plane, centred on the sample.
+  BoardPose HolderBoardPose() const;
+
+  // The sensor chain: radiance x exposure x sensitivity x vignetting (+ dark current) electrons,
+  // Poisson shot noise, Gaussian read noise, full-well clipping, response curve, black offset,
+  // quantisation. Noise is a deterministic function of (seed, stream, pixel).
+  CameraImage Expose(const FloatImage& radiance, double exposure_s, uint64_t seed,
+                     uint64_t stream) const;
+  // The noise-free, unquantised, unclipped value on the stored scale (for tests and for the
+  // inversion of the chain): (electrons / full_well), before the response curve.
+  double MeanElectrons(double radiance, const Vec2& pixel, double exposure_s) const;
+  double Vignetting(const Vec2& pixel) const;
+
+  // Number of pixel groups shaded per dot image (pixels seeing the sample, split by texel).
+  size_t num_shaded_groups() const { return groups_.size(); }
+  // The largest radiance of dot images, estimated on the dot closest to straight-through.
+  double ProbePeakRadiance() const;
+
+ private:
+  struct Group {
+    uint32_t pixel;   // y * width + x
+    uint32_t texel;
+    float weight;     // fraction of the pixel's sub-samples in this texel
+    double x, y;      // centroid of those sub-samples on the sample plane
+  };
+  void PrecomputeGroups();
+  void PrecomputeBackground();
+  Vec3 DotRadianceAt(const Dot& dot, const Group& group) const;
+
+  const Rig& rig_;
+  const TruthMaterial* material_;
+  int threads_;
+  std::vector<Group> groups_;
+  std::vector<size_t> row_begin_;         // groups_ index of each image row's first group
+  std::vector<float> background_;         // black-level glow per group (RGB), when enabled
+};
+
+// Splits [0, n) into chunks run on `threads` threads (0: hardware concurrency); fn(begin, end).
+// Exceptions from fn propagate after all threads have stopped.
+void ParallelFor(int n, int threads, int chunk, const std::function<void(int, int)>& fn);
+
+}  // namespace svbtdf

@@ -1,0 +1,209 @@
+#pragma once
+// The virtual measurement rig of the simulator (docs/simulator.md): a calibrated pinhole camera
+// with Brown-Conrady lens distortion looking down at a thin sample, a monitor behind the sample
+// showing a grid of dots, and the camera's radiometric chain.
+//
+// World frame = the sample frame of docs/model.md: the sample lies in z = 0 centred on the origin,
+// z points toward the camera, the monitor is the plane z = -d. Lengths are in metres.
+// Camera conventions are OpenCV's: x_cam = R x_world + t, the camera looks along +z_cam with
+// x_cam to the right and y_cam down in the image, and pixel centres sit at integer coordinates
+// (pixel (u, v) covers [u - 0.5, u + 0.5] x [v - 0.5, v + 0.5]).
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "svbtdf/model/vec.h"
+
+namespace svbtdf {
+
+// Intrinsics and distortion exactly as cv::projectPoints uses them
+// (distortion = k1, k2, p1, p2, k3).
+struct CameraIntrinsics {
+  int width = 1024;
+  int height = 768;
+  double fx = 11000.0;
+  double fy = 11000.0;
+  double cx = 511.5;
+  double cy = 383.5;
+  std::array<double, 5> distortion = {0.0, 0.0, 0.0, 0.0, 0.0};
+};
+
+// World-to-camera rigid transform: x_cam = rotation * x_world + translation.
+struct CameraPose {
+  Mat3 rotation = Mat3::Identity();
+  Vec3 translation = Vec3::Zero();
+
+  Vec3 Centre() const { return -rotation.transpose() * translation; }
+  // A camera at `eye` looking at `target`; the image's right axis is the projection of
+  // (forward x up_hint) so that `up_hint` appears upward in the image.
+  static CameraPose LookAt(const Vec3& eye, const Vec3& target, const Vec3& up_hint);
+};
+
+class PinholeCamera {
+ public:
+  PinholeCamera(CameraIntrinsics intrinsics, CameraPose pose);
+
+  const CameraIntrinsics& intrinsics() const { return intrinsics_; }
+  const CameraPose& pose() const { return pose_; }
+  Vec3 Centre() const { return centre_; }
+
+  // Normalised undistorted image coordinates -> distorted ones (OpenCV's model).
+  Vec2 Distort(const Vec2& undistorted) const;
+  // Inverse of Distort by Newton's method; nullopt where it does not converge (far outside the
+  // region where the polynomial model is invertible).
+  std::optional<Vec2> Undistort(const Vec2& distorted) const;
+
+  // Pixel coordinates of a world point; nullopt when it is not in front of the camera.
+  std::optional<Vec2> Project(const Vec3& world) const;
+  // Unit world-frame direction of the ray through pixel coordinates `pixel`, nullopt where the
+  // distortion cannot be inverted.
+  std::optional<Vec3> PixelRay(const Vec2& pixel) const;
+
+ private:
+  CameraIntrinsics intrinsics_;
+  CameraPose pose_;
+  Vec3 centre_;
+};
+
+// How the radiant intensity of a small patch of the monitor depends on the angle theta_e between
+// the emitted direction and the monitor's normal. I(theta_e) = I_0 P(theta_e):
+//   isotropic   P = 1            the notes' isotropic point emitter (the paper's CRT assumption)
+//   lambertian  P = cos          a constant-radiance emitter
+//   lcd         P = cos^n        an LCD's fall-off, n = exponent
+struct EmissionProfile {
+  std::string kind = "isotropic";
+  double exponent = 1.0;
+
+  double operator()(double cos_theta_e) const;
+};
+
+struct MonitorConfig {
+  double distance = 0.04;        // d: the monitor plane is z = -d
+  double width = 0.30;           // active area (m)
+  double height = 0.20;
+  Vec2 centre = Vec2::Zero();    // centre of the active area in (x, y)
+  double pixel_pitch = 0.00025;  // m
+  double gamma = 2.2;            // displayed level v -> luminance black + (1 - black) v^gamma
+  double black_level = 0.0;      // luminance of level 0 as a fraction of white
+  // Radiant intensity per unit emitting area along the monitor normal at level 1, in the
+  // simulator's radiometric unit (the camera's `sensitivity` turns it into electrons).
+  double white_exitance = 1.0;
+  EmissionProfile emission;
+
+  double Luminance(double level) const;
+};
+
+// The grid of dots shown one at a time behind the sample.
+struct DotGridConfig {
+  int cols = 40;
+  int rows = 40;
+  double span_scale = 1.2;      // the grid spans this times the sample's extent
+  // Shift of the grid's centre away from the camera (along the camera's azimuth), in metres;
+  // negative: d cos(theta) with theta the camera's angle from vertical (the paper's choice).
+  double shift = -1.0;
+  double radius_px = 2.0;       // dot radius in monitor pixels
+  double level = 1.0;           // displayed level of a dot
+};
+
+struct SampleConfig {
+  double width = 0.08;          // extent in x (m)
+  int texels_x = 600;
+  int texels_y = 600;           // the extent in y is width * texels_y / texels_x (square texels)
+
+  double texel_pitch() const { return width / texels_x; }
+  double height() const { return texel_pitch() * texels_y; }
+};
+
+// The camera's radiometric chain: irradiance-weighted radiance -> electrons -> digital numbers.
+struct SensorConfig {
+  std::vector<double> exposures_s = {1.0};  // exposure bracket (seconds)
+  double sensitivity = 2.0e4;    // electrons per (radiance unit x second) at the image centre
+  double full_well = 40000.0;    // electrons at saturation
+  double read_noise = 3.0;       // electrons RMS (Gaussian)
+  bool shot_noise = true;        // Poisson photon noise
+  double dark_current = 0.0;     // electrons per second (mean level of the dark frames)
+  int bit_depth = 16;            // quantisation of the stored value
+  std::string response = "linear";  // linear | srgb: the curve between exposure and value
+  double vignetting = 0.0;       // cos^4-style fall-off strength: v(r) = 1 - vignetting r^2,
+                                 // r = distance from (cx, cy) over the half diagonal
+  double black_offset = 0.0;     // pedestal added to the digital value, as a fraction of full scale
+};
+
+// The chessboard used for Zhang calibration and for the sample plane's pose.
+struct BoardConfig {
+  int inner_cols = 9;    // inner corners
+  int inner_rows = 6;
+  double square = 0.008; // m
+  int views = 10;        // views at varied poses for the intrinsics
+  double reflectance_white = 0.85;
+  double reflectance_black = 0.04;
+  double illumination = 1.0;  // radiance of a perfect white board, in the simulator's unit
+};
+
+struct RigConfig {
+  CameraIntrinsics intrinsics;
+  CameraPose pose;
+  MonitorConfig monitor;
+  DotGridConfig dots;
+  SampleConfig sample;
+  SensorConfig sensor;
+  BoardConfig board;
+  int pixel_samples = 2;   // supersampling per pixel axis for dot images (n x n stratified)
+  int board_samples = 4;   // ... for board images (anti-aliasing of the squares)
+  int dark_frames = 4;
+
+  // The paper's geometry: camera `distance` from the sample centre at `theta` from vertical,
+  // on the -y side, looking at the centre.
+  static CameraPose PaperPose(double distance = 1.0, double theta = kPi / 4.0);
+};
+
+// One dot of the grid: where it is and how much it emits.
+struct Dot {
+  int col = 0;
+  int row = 0;
+  Vec3 position;        // on the monitor plane z = -d, at a monitor pixel centre
+  int monitor_x = 0;    // monitor pixel coordinates of its centre
+  int monitor_y = 0;
+  double intensity = 0; // L_q: radiant intensity along the monitor normal (P(0) = 1)
+  double radius = 0;    // m
+};
+
+// A validated rig with everything derived from the configuration.
+class Rig {
+ public:
+  // Throws svbtdf::Error(kInvalidInput) for impossible geometry (camera below the sample plane or
+  // looking away from it, the sample not fully in view, the monitor not behind the sample, dots
+  // off the monitor, bad intrinsics or sensor values), naming the offending setting.
+  explicit Rig(RigConfig config);
+
+  const RigConfig& config() const { return config_; }
+  const PinholeCamera& camera() const { return camera_; }
+  const std::vector<Dot>& dots() const { return dots_; }
+
+  // Angle of the camera from vertical, as seen from the sample centre.
+  double CameraTheta() const;
+
+  // Radiant intensity the dot sends toward world point x (the profile included), i.e. L_q(x)
+  // of the measurement equation I = R |i.z| L_q / |p - x|^2.
+  double DotIntensityToward(const Dot& dot, const Vec3& x) const;
+
+  // Where the ray through `pixel` meets the sample plane, when it does inside the sample.
+  std::optional<Vec3> SampleHit(const Vec2& pixel) const;
+  // Texel (col, row) containing a point of the sample plane, or nullopt outside the sample.
+  std::optional<std::array<int, 2>> TexelAt(const Vec3& x) const;
+  // Centre of texel (col, row): x grows with col, y decreases with row (row 0 at +y).
+  Vec3 TexelCentre(int col, int row) const;
+
+ private:
+  void Validate() const;
+  void LayOutDots();
+
+  RigConfig config_;
+  PinholeCamera camera_;
+  std::vector<Dot> dots_;
+};
+
+}  // namespace svbtdf

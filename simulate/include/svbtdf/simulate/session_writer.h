@@ -1,0 +1,38 @@
+#pragma once
+// Writing a simulated capture as a real capture session (docs/session-format.md) and its ground
+// truth (docs/truth-format.md): the glue behind `svbtdf simulate`.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "svbtdf/simulate/capture_simulator.h"
+#include "svbtdf/simulate/presets.h"
+
+namespace svbtdf {
+
+struct SimulationOptions {
+  std::string preset = "tiny";
+  uint64_t seed = 1;
+  double eta = 0.0;          // > 0 overrides the preset's eta
+  std::string truth = "model";  // model | montecarlo
+  int threads = 0;
+  bool progress = true;
+};
+
+struct SimulationOutput {
+  std::filesystem::path session;  // OUT/session
+  std::filesystem::path truth;    // OUT/truth
+  int64_t images = 0;             // images in the session
+  int64_t resumed = 0;            // of which were already there
+};
+
+// Simulates the preset into OUT/session and OUT/truth. A folder holding an unfinished simulation
+// of the same settings is resumed; any other non-empty OUT is refused (svbtdf::Error(kIo)), and a
+// complete session is never touched again.
+SimulationOutput SimulateSession(const std::filesystem::path& out, const SimulationOptions& options);
+
+// The session key of a simulated capture (e.g. "dot/q0012/e1/r0").
+std::string SessionKey(const CaptureId& id);
+
+}  // namespace svbtdf

@@ -1,0 +1,51 @@
+#pragma once
+// Reading and writing the simulator's ground truth, DIR/truth/ (docs/truth-format.md):
+//   rig.json       the true camera (keys camera.fx ... camera.rms_px as calibration writes them),
+//                  its pose, the monitor, the dots in 3-D, the board poses, the sensor
+//   material.json  the manifest of the ground-truth material (maps and their channels)
+// `svbtdf compare` and the calibration tests read these with the functions below.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "svbtdf/simulate/renderer.h"
+#include "svbtdf/simulate/rig.h"
+
+namespace svbtdf {
+
+inline constexpr int kTruthFormatVersion = 1;
+
+// What the capture did besides the rig itself: the exposures used and where the boards were.
+struct CaptureTruth {
+  std::vector<double> dot_exposures_s;
+  std::vector<BoardPose> zhang_boards;
+  BoardPose holder_board;
+  double all_dots_exposure_s = 0;
+  double flat_exposure_s = 0;
+  double board_exposure_s = 0;
+  uint64_t seed = 0;
+  std::string preset;
+  std::string truth_kind = "model";  // model | montecarlo
+};
+
+// The truth as read back.
+struct RigTruth {
+  int version = 0;
+  CameraIntrinsics camera;
+  double rms_px = 0.0;
+  CameraPose pose;
+  MonitorConfig monitor;
+  SampleConfig sample;
+  std::vector<Dot> dots;
+  CaptureTruth capture;
+};
+
+// Writes DIR/truth/rig.json atomically, never overwriting an existing file.
+void WriteRigTruth(const std::filesystem::path& path, const Rig& rig, const CaptureTruth& capture);
+
+// Throws svbtdf::Error(kFormat/kIo) naming the file for a missing file, a wrong version or a
+// missing key.
+RigTruth ReadRigTruth(const std::filesystem::path& path);
+
+}  // namespace svbtdf

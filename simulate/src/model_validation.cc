@@ -1,0 +1,310 @@
+#include "svbtdf/simulate/model_validation.h"
+
+#include "svbtdf/common/minimize.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "svbtdf/common/error.h"
+#include "svbtdf/model/dual_microfacet.h"
+#include "svbtdf/model/shadowing.h"
+
+namespace svbtdf {
+namespace {
+
+// Solid angle of the spherical triangle with unit corners a, b, c (Van Oosterom and Strackee 1983).
+double TriangleSolidAngle(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const double numerator = std::abs(a.dot(b.cross(c)));
+  const double denominator = 1.0 + a.dot(b) + b.dot(c) + c.dot(a);
+  return 2.0 * std::atan2(numerator, denominator);
+}
+
+// eta times the in-slab direction with the given tangential components (Snell at a flat interface).
+Vec3 ScaledSlabDirection(double tx, double ty, double eta) {
+  return {tx, ty, std::sqrt(std::max(0.0, eta * eta - tx * tx - ty * ty))};
+}
+
+// The model with its own shadowing term off: G is applied from the NDF instead.
+DualMicrofacetModel UnshadowedModel(double eta) { return DualMicrofacetModel(eta, SmithShadowing::None()); }
+
+// The blend weight alpha minimising the blend's error against MC, given rho_T and rho_B at the
+// averager's points; `scan_points` alphas are scanned before the golden-section refinement.
+double BestBlendAlpha(const std::vector<double>& rho_T_points, const std::vector<double>& rho_B_points,
+                      const CellAverager& averager, const std::vector<double>& mc,
+                      const std::vector<double>& solid_angles, int scan_points,
+                      std::vector<double>* blend) {
+  std::vector<double> points(rho_T_points.size());
+  const auto blend_for = [&](double alpha) {
+    for (size_t p = 0; p < points.size(); ++p) points[p] = LogBlend(rho_T_points[p], rho_B_points[p], alpha);
+    return averager.Average(points);
+  };
+  const double alpha = MinimiseOnInterval(
+      [&](double a) { return RelativeL2Error(blend_for(a), mc, solid_angles); }, 0.0, 1.0,
+      scan_points);
+  *blend = blend_for(alpha);
+  return alpha;
+}
+
+void EvaluateTerms(const Ndf& ndf, double eta, const std::vector<Vec3>& points, const Vec3& o,
+                   std::vector<double>* rho_T, std::vector<double>* rho_B) {
+  rho_T->resize(points.size());
+  rho_B->resize(points.size());
+  for (size_t p = 0; p < points.size(); ++p) {
+    (*rho_T)[p] = RhoTWithNdfShadowing(ndf, eta, points[p], o);
+    (*rho_B)[p] = RhoBWithNdfShadowing(ndf, eta, points[p], o);
+  }
+}
+
+}  // namespace
+
+double RhoTWithNdfShadowing(const Ndf& ndf, double eta, const Vec3& i, const Vec3& o) {
+  const VirtualConfiguration c = UnshadowedModel(eta).RoughEntry(i, o);
+  if (!c.valid) return 0.0;
+  const Vec3 t = ScaledSlabDirection(o.x(), o.y(), eta) / eta;
+  return c.factor * ndf.D(c.h) * ndf.G1(i, c.h) * ndf.G1(t, c.h);
+}
+
+double RhoBWithNdfShadowing(const Ndf& ndf, double eta, const Vec3& i, const Vec3& o) {
+  const VirtualConfiguration c = UnshadowedModel(eta).RoughExit(i, o);
+  if (!c.valid) return 0.0;
+  const Vec3 t_i = -ScaledSlabDirection(-i.x(), -i.y(), eta) / eta;  // in-slab, pointing down
+  return c.factor * ndf.D(c.h) * ndf.G1(t_i, c.h) * ndf.G1(o, c.h);
+}
+
+double SingleInterfaceBtdf(const Ndf& ndf, double eta, const Vec3& i, const Vec3& o) {
+  return WalterBtdf(ndf, i, o, 1.0, eta);
+}
+
+CellAverager::CellAverager(const Hemicube& grid, int subdivisions)
+    : grid_(grid), per_cell_(subdivisions * subdivisions) {
+  if (subdivisions < 1) ThrowInvalidInput("cell subdivisions", "must be >= 1");
+  const int cells = grid.num_cells();
+  directions_.reserve(static_cast<size_t>(cells) * per_cell_);
+  weights_.reserve(directions_.capacity());
+  const double step = 1.0 / subdivisions;
+  for (int cell = 0; cell < cells; ++cell) {
+    const size_t first = weights_.size();
+    double cell_solid_angle = 0.0;
+    for (int b = 0; b < subdivisions; ++b) {
+      for (int a = 0; a < subdivisions; ++a) {
+        // Hemicube cell edges are great-circle arcs, so two spherical triangles give the
+        // sub-cell's solid angle exactly.
+        const Vec3 c00 = grid.CellPoint(cell, a * step, b * step);
+        const Vec3 c10 = grid.CellPoint(cell, (a + 1) * step, b * step);
+        const Vec3 c11 = grid.CellPoint(cell, (a + 1) * step, (b + 1) * step);
+        const Vec3 c01 = grid.CellPoint(cell, a * step, (b + 1) * step);
+        const double solid_angle = TriangleSolidAngle(c00, c10, c11) + TriangleSolidAngle(c00, c11, c01);
+        directions_.push_back(FlipZ(grid.CellPoint(cell, (a + 0.5) * step, (b + 0.5) * step)));
+        weights_.push_back(solid_angle);
+        cell_solid_angle += solid_angle;
+      }
+    }
+    for (size_t k = first; k < weights_.size(); ++k) weights_[k] /= cell_solid_angle;
+  }
+}
+
+std::vector<double> CellAverager::Average(const std::vector<double>& point_values) const {
+  std::vector<double> averages(directions_.size() / per_cell_, 0.0);
+  for (size_t p = 0; p < point_values.size(); ++p) averages[p / per_cell_] += weights_[p] * point_values[p];
+  return averages;
+}
+
+std::vector<double> CellAverager::Average(const std::function<double(const Vec3& i)>& f) const {
+  std::vector<double> values(directions_.size());
+  for (size_t p = 0; p < directions_.size(); ++p) values[p] = f(directions_[p]);
+  return Average(values);
+}
+
+double RelativeL2Error(const std::vector<double>& model, const std::vector<double>& reference,
+                       const std::vector<double>& solid_angles) {
+  double difference = 0.0;
+  double norm = 0.0;
+  for (size_t c = 0; c < reference.size(); ++c) {
+    difference += solid_angles[c] * Square(model[c] - reference[c]);
+    norm += solid_angles[c] * Square(reference[c]);
+  }
+  return norm > 0 ? std::sqrt(difference / norm) : std::numeric_limits<double>::infinity();
+}
+
+double ScaleFreeRelativeL2Error(const std::vector<double>& model, const std::vector<double>& reference,
+                                const std::vector<double>& solid_angles) {
+  double cross = 0.0;
+  double model_norm = 0.0;
+  for (size_t c = 0; c < reference.size(); ++c) {
+    cross += solid_angles[c] * model[c] * reference[c];
+    model_norm += solid_angles[c] * Square(model[c]);
+  }
+  if (!(model_norm > 0) || !(cross > 0)) return RelativeL2Error(model, reference, solid_angles);
+  std::vector<double> scaled(model.size());
+  for (size_t c = 0; c < model.size(); ++c) scaled[c] = model[c] * cross / model_norm;
+  return RelativeL2Error(scaled, reference, solid_angles);
+}
+
+const char* ToString(RoughSides sides) {
+  switch (sides) {
+    case RoughSides::kEntry: return "entry";
+    case RoughSides::kExit: return "exit";
+    case RoughSides::kBoth: return "both";
+  }
+  return "?";
+}
+
+double MinimiseOnInterval(const std::function<double(double)>& f, double lo, double hi,
+                          int scan_points, double tolerance) {
+  if (!(hi > lo) || scan_points < 3) ThrowInvalidInput("interval", "needs lo < hi and >= 3 points");
+  int best = 0;
+  double best_value = std::numeric_limits<double>::infinity();
+  const double step = (hi - lo) / (scan_points - 1);
+  for (int k = 0; k < scan_points; ++k) {
+    const double value = f(lo + k * step);
+    if (value < best_value) {
+      best_value = value;
+      best = k;
+    }
+  }
+  // Golden-section search in the bracket of the best scan point.
+  const double a = lo + std::max(0, best - 1) * step;
+  const double b = lo + std::min(scan_points - 1, best + 1) * step;
+  const double x = GoldenSectionSearch(f, a, b, tolerance);
+  return f(x) <= best_value ? x : lo + best * step;
+}
+
+namespace {
+
+// What every case of one validation run shares.
+struct ValidationContext {
+  const ValidationOptions& options;
+  const Ndf& ndf;
+  const CellAverager& averager;
+  std::vector<double> solid_angles;
+};
+
+double RelativeNoise(const BtdfSlice& mc, const std::vector<double>& solid_angles) {
+  double noise = 0.0;
+  double norm = 0.0;
+  for (size_t c = 0; c < mc.rho.size(); ++c) {
+    noise += solid_angles[c] * Square(mc.standard_error[c]);
+    norm += solid_angles[c] * Square(mc.rho[c]);
+  }
+  return std::sqrt(noise / norm);
+}
+
+// Walter's BTDF with the NDF roughness that fits the MC slice best.
+void FitSingleInterface(const ValidationContext& context, ValidationCase* result) {
+  const ValidationOptions& options = context.options;
+  const auto single_with_roughness = [&](double log_roughness) {
+    const std::unique_ptr<Ndf> fitted = options.make_ndf(std::exp(log_roughness));
+    return context.averager.Average(
+        [&](const Vec3& i) { return SingleInterfaceBtdf(*fitted, options.eta, i, result->o); });
+  };
+  const double log_roughness = MinimiseOnInterval(
+      [&](double x) { return RelativeL2Error(single_with_roughness(x), result->mc.rho, context.solid_angles); },
+      std::log(options.min_fitted_roughness), std::log(options.max_fitted_roughness), 41, 1e-3);
+  result->fitted_roughness = std::exp(log_roughness);
+  result->single_fitted = single_with_roughness(log_roughness);
+}
+
+// The blend with both alpha and the NDF roughness fitted: for each trial roughness the best alpha
+// (a coarser alpha scan suffices inside the outer search).
+void FitBlendRoughness(const ValidationContext& context, ValidationCase* result) {
+  const ValidationOptions& options = context.options;
+  const std::vector<Vec3>& points = context.averager.light_directions();
+  const auto fitted_blend = [&](double log_roughness, std::vector<double>* blend) {
+    const std::unique_ptr<Ndf> trial = options.make_ndf(std::exp(log_roughness));
+    std::vector<double> trial_T, trial_B;
+    EvaluateTerms(*trial, options.eta, points, result->o, &trial_T, &trial_B);
+    return BestBlendAlpha(trial_T, trial_B, context.averager, result->mc.rho, context.solid_angles, 21,
+                          blend);
+  };
+  const double log_roughness = MinimiseOnInterval(
+      [&](double x) {
+        std::vector<double> blend;
+        fitted_blend(x, &blend);
+        return RelativeL2Error(blend, result->mc.rho, context.solid_angles);
+      },
+      std::log(options.min_fitted_roughness), std::log(options.max_fitted_roughness), 21, 1e-3);
+  result->blend_fitted_roughness = std::exp(log_roughness);
+  result->blend_fitted_alpha = fitted_blend(log_roughness, &result->blend_fitted);
+}
+
+void ComputeErrors(const std::vector<double>& solid_angles, ValidationCase* result) {
+  const std::vector<double>& mc = result->mc.rho;
+  const auto both = [&](const std::vector<double>& model, double* error, double* scale_free_error) {
+    if (model.empty()) return;  // a column that was not computed
+    *error = RelativeL2Error(model, mc, solid_angles);
+    *scale_free_error = ScaleFreeRelativeL2Error(model, mc, solid_angles);
+  };
+  ModelErrors& e = result->errors;
+  ModelErrors& f = result->scale_free_errors;
+  both(result->rho_T, &e.rho_T, &f.rho_T);
+  both(result->rho_B, &e.rho_B, &f.rho_B);
+  both(result->blend, &e.blend, &f.blend);
+  both(result->single_same_ndf, &e.single_same_ndf, &f.single_same_ndf);
+  both(result->single_fitted, &e.single_fitted, &f.single_fitted);
+  both(result->blend_fitted, &e.blend_fitted, &f.blend_fitted);
+}
+
+ValidationCase RunCase(const ValidationContext& context, const SlabTracer& tracer, RoughSides sides,
+                       double incidence_deg, uint64_t seed) {
+  const ValidationOptions& options = context.options;
+  ValidationCase result;
+  result.rough_sides = sides;
+  result.incidence_deg = incidence_deg;
+  result.o = SphericalDirection(incidence_deg * kPi / 180.0, 0.0);
+  SliceOptions slice_options = options.slice;
+  slice_options.seed = seed;
+  result.mc = tracer.SliceForView(result.o, context.averager.grid(), slice_options);
+  result.mc_noise = RelativeNoise(result.mc, context.solid_angles);
+
+  std::vector<double> rho_T_points, rho_B_points;
+  EvaluateTerms(context.ndf, options.eta, context.averager.light_directions(), result.o, &rho_T_points,
+                &rho_B_points);
+  result.rho_T = context.averager.Average(rho_T_points);
+  result.rho_B = context.averager.Average(rho_B_points);
+  result.best_alpha = BestBlendAlpha(rho_T_points, rho_B_points, context.averager, result.mc.rho,
+                                     context.solid_angles, 101, &result.blend);
+  result.single_same_ndf = context.averager.Average(
+      [&](const Vec3& i) { return SingleInterfaceBtdf(context.ndf, options.eta, i, result.o); });
+  FitSingleInterface(context, &result);
+  if (options.fit_blend_roughness) FitBlendRoughness(context, &result);
+  ComputeErrors(context.solid_angles, &result);
+  return result;
+}
+
+}  // namespace
+
+std::vector<ValidationCase> ValidateModel(const ValidationOptions& options, const Hemicube& grid,
+                                          const std::function<void(const ValidationCase&)>& on_case) {
+  if (!options.make_ndf) ThrowInvalidInput("ndf", "no NDF factory given");
+  if (!(options.eta > 1.0) || !std::isfinite(options.eta)) {
+    ThrowInvalidInput("--eta", "must be finite and > 1, got " + std::to_string(options.eta));
+  }
+  for (double angle : options.incidences_deg) {
+    if (!(angle >= 0.0 && angle < 90.0)) {
+      ThrowInvalidInput("--incidence", "must lie in [0, 90) degrees, got " + std::to_string(angle));
+    }
+  }
+  const std::unique_ptr<Ndf> ndf = options.make_ndf(options.roughness);
+  const CellAverager averager(grid, options.cell_subdivisions);
+  ValidationContext context{options, *ndf, averager, std::vector<double>(grid.num_cells())};
+  for (int c = 0; c < grid.num_cells(); ++c) context.solid_angles[c] = grid.CellSolidAngle(c);
+
+  std::vector<ValidationCase> cases;
+  for (RoughSides sides : options.configurations) {
+    Slab slab;
+    slab.eta = options.eta;
+    slab.entry = sides != RoughSides::kExit ? SlabInterface::Rough(*ndf) : SlabInterface::Flat();
+    slab.exit = sides != RoughSides::kEntry ? SlabInterface::Rough(*ndf) : SlabInterface::Flat();
+    const SlabTracer tracer(slab);
+    for (double angle : options.incidences_deg) {
+      // Each case gets its own seed so that the cases' MC errors are independent.
+      cases.push_back(RunCase(context, tracer, sides, angle, options.slice.seed + cases.size()));
+      if (on_case) on_case(cases.back());
+    }
+  }
+  return cases;
+}
+
+}  // namespace svbtdf

@@ -1,0 +1,114 @@
+#include "svbtdf/simulate/presets.h"
+
+#include "svbtdf/common/error.h"
+
+namespace svbtdf {
+namespace {
+
+// The paper's geometry (camera 1 m from the sample centre at 45 degrees, monitor 4 cm behind an
+// 8 cm sample) with a camera of `width` x `height` pixels and focal length `f` pixels.
+RigConfig PaperGeometry(int width, int height, double f) {
+  RigConfig rig;
+  rig.intrinsics.width = width;
+  rig.intrinsics.height = height;
+  rig.intrinsics.fx = f;
+  rig.intrinsics.fy = f * 1.0005;  // a hair of pixel aspect, as real calibrations find
+  rig.intrinsics.cx = (width - 1) / 2.0 + 0.013 * width;
+  rig.intrinsics.cy = (height - 1) / 2.0 - 0.009 * height;
+  // A long lens: mild barrel distortion and a little decentring.
+  rig.intrinsics.distortion = {-0.12, 0.4, 0.0004, -0.0003, 0.0};
+  rig.pose = RigConfig::PaperPose(1.0, kPi / 4.0);
+  // The grid is shifted away from the camera by d cos(theta); the monitor is centred on the
+  // straight-through point d tan(theta) behind the sample centre, so that the grid fits.
+  rig.monitor.centre = Vec2(0.0, 0.04);
+  return rig;
+}
+
+SimulationPreset Tiny() {
+  SimulationPreset p;
+  p.name = "tiny";
+  p.description = "unit tests: 240x200 image, 32x32 texels, 6x6 dots (seconds)";
+  p.rig = PaperGeometry(240, 200, 2200.0);
+  p.rig.sample.texels_x = p.rig.sample.texels_y = 32;
+  p.rig.dots.cols = p.rig.dots.rows = 6;
+  p.rig.dots.radius_px = 4.0;
+  p.rig.board = {6, 4, 0.007, 6, 0.85, 0.04, 1.0};
+  p.rig.sensor.bit_depth = 12;
+  p.rig.dark_frames = 2;
+  p.pattern = "smooth";
+  p.eta = 1.5;
+  return p;
+}
+
+SimulationPreset Demo() {
+  SimulationPreset p;
+  p.name = "demo";
+  p.description = "README demo: 640x512 image, 96x96 texels, 12x12 dots (about a minute)";
+  p.rig = PaperGeometry(640, 512, 6000.0);
+  p.rig.sample.texels_x = p.rig.sample.texels_y = 96;
+  p.rig.dots.cols = p.rig.dots.rows = 12;
+  p.rig.dots.radius_px = 3.0;
+  p.rig.board = {8, 6, 0.006, 10, 0.85, 0.04, 1.0};
+  p.rig.sensor.bit_depth = 12;
+  p.rig.sensor.vignetting = 0.05;
+  p.pattern = "smooth";
+  p.eta = 1.5;
+  return p;
+}
+
+SimulationPreset PaperScale(const std::string& name) {
+  SimulationPreset p;
+  p.name = name;
+  p.rig = PaperGeometry(1280, 1024, 12000.0);
+  p.rig.board = {9, 7, 0.006, 12, 0.85, 0.04, 1.0};
+  p.rig.sensor.bit_depth = 14;
+  p.rig.sensor.vignetting = 0.08;
+  p.rig.dots.radius_px = 2.0;
+  if (name == "grid-sheet") {
+    p.description = "paper Table 1: grid sheet, 600x600 texels, 40x40 dots, eta 1.4, anisotropic";
+    p.rig.sample.texels_x = p.rig.sample.texels_y = 600;
+    p.rig.dots.cols = p.rig.dots.rows = 40;
+    p.pattern = "grid-sheet";
+    p.eta = 1.4;
+  } else if (name == "leaf-glass") {
+    p.description = "paper Table 1: leaf glass, 400x420 texels, 40x40 dots, eta 1.5";
+    p.rig = PaperGeometry(1280, 1024, 11500.0);
+    p.rig.board = {9, 7, 0.006, 12, 0.85, 0.04, 1.0};
+    p.rig.sensor.bit_depth = 14;
+    p.rig.sensor.vignetting = 0.08;
+    p.rig.dots.radius_px = 2.0;
+    p.rig.sample.texels_x = 400;
+    p.rig.sample.texels_y = 420;
+    p.rig.dots.cols = p.rig.dots.rows = 40;
+    p.pattern = "leaf-glass";
+    p.eta = 1.5;
+  } else {
+    p.description = "paper Table 1: rice paper, 600x600 texels, 20x20 dots, eta 1.55, coloured, "
+                    "8-bit sRGB-like camera with 3 brackets";
+    p.rig.sample.texels_x = p.rig.sample.texels_y = 600;
+    p.rig.dots.cols = p.rig.dots.rows = 20;
+    p.rig.dots.radius_px = 3.0;
+    p.rig.sensor.bit_depth = 8;
+    p.rig.sensor.response = "srgb";
+    p.bracket = {1.0, 8.0, 64.0};
+    p.pattern = "rice-paper";
+    p.eta = 1.55;
+  }
+  return p;
+}
+
+}  // namespace
+
+std::vector<std::string> PresetNames() {
+  return {"tiny", "demo", "grid-sheet", "leaf-glass", "rice-paper"};
+}
+
+SimulationPreset MakePreset(const std::string& name) {
+  if (name == "tiny") return Tiny();
+  if (name == "demo") return Demo();
+  if (name == "grid-sheet" || name == "leaf-glass" || name == "rice-paper") return PaperScale(name);
+  ThrowInvalidInput("--preset", "unknown preset '" + name + "'",
+                    "use one of tiny, demo, grid-sheet, leaf-glass, rice-paper");
+}
+
+}  // namespace svbtdf

@@ -1,0 +1,498 @@
+#include "svbtdf/simulate/renderer.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <thread>
+
+#include "svbtdf/common/error.h"
+
+namespace svbtdf {
+namespace {
+
+// A counter-based random stream: SplitMix64 over a key made from (seed, stream, pixel), so that
+// the noise of a pixel does not depend on threading or on the order of rendering.
+class PixelRandom {
+ public:
+  PixelRandom(uint64_t seed, uint64_t stream, uint64_t pixel)
+      : state_(Mix(Mix(Mix(seed) ^ stream) ^ pixel)) {}
+
+  double Uniform() {
+    state_ += 0x9e3779b97f4a7c15ULL;
+    return static_cast<double>(Mix(state_) >> 11) * 0x1.0p-53;
+  }
+  double Gaussian() {
+    const double u1 = 1.0 - Uniform();  // (0, 1]
+    const double u2 = Uniform();
+    return std::sqrt(-2.0 * std::log(u1)) * std::cos(kTwoPi * u2);
+  }
+  // Poisson(mean): exact multiplication method for small means, the normal approximation with
+  // the exact variance above 64 electrons (its error is far below the read noise there).
+  double Poisson(double mean) {
+    if (mean <= 0.0) return 0.0;
+    if (mean > 64.0) return std::max(0.0, std::round(mean + std::sqrt(mean) * Gaussian()));
+    const double limit = std::exp(-mean);
+    double product = Uniform();
+    int count = 0;
+    while (product > limit) {
+      product *= Uniform();
+      ++count;
+    }
+    return count;
+  }
+
+ private:
+  static uint64_t Mix(uint64_t x) {
+    x += 0x9e3779b97f4a7c15ULL;
+    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+    return x ^ (x >> 31);
+  }
+  uint64_t state_;
+};
+
+double SrgbEncode(double v) {
+  return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
+}
+
+// Radon's 7-point rule on the unit disk (degree 5): the centre with weight 1/4 and six points at
+// radius sqrt(2/3) with weight 1/8 each (weights sum to 1: they average over the disk).
+constexpr int kRadonPoints = 7;
+const std::array<Vec2, kRadonPoints>& RadonNodes() {
+  static const std::array<Vec2, kRadonPoints> nodes = [] {
+    std::array<Vec2, kRadonPoints> n;
+    n[0] = Vec2::Zero();
+    const double r = std::sqrt(2.0 / 3.0);
+    for (int k = 0; k < 6; ++k) n[k + 1] = r * Vec2(std::cos(k * kPi / 3), std::sin(k * kPi / 3));
+    return n;
+  }();
+  return nodes;
+}
+constexpr std::array<double, kRadonPoints> kRadonWeights = {0.25,  0.125, 0.125, 0.125,
+                                                            0.125, 0.125, 0.125};
+
+// Stratified sub-sample offsets in a pixel, in (-0.5, 0.5).
+double SubSample(int k, int n) { return (k + 0.5) / n - 0.5; }
+
+}  // namespace
+
+void ParallelFor(int n, int threads, int chunk, const std::function<void(int, int)>& fn) {
+  if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  threads = std::min(threads, std::max(1, (n + chunk - 1) / chunk));
+  std::atomic<int> next{0};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  auto work = [&] {
+    try {
+      for (;;) {
+        const int begin = next.fetch_add(chunk);
+        if (begin >= n) return;
+        fn(begin, std::min(n, begin + chunk));
+      }
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(error_mutex);
+      if (!error) error = std::current_exception();
+      next = n;  // stop the others at their next chunk
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (std::thread& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+}
+
+RigRenderer::RigRenderer(const Rig& rig, const TruthMaterial* material, int threads)
+    : rig_(rig), material_(material), threads_(threads) {
+  if (material_) {
+    const SampleConfig& s = rig_.config().sample;
+    if (material_->texels_x() != s.texels_x || material_->texels_y() != s.texels_y) {
+      ThrowInvalidInput("truth material", "has " + std::to_string(material_->texels_x()) + " x " +
+                        std::to_string(material_->texels_y()) + " texels, the rig's sample " +
+                        std::to_string(s.texels_x) + " x " + std::to_string(s.texels_y));
+    }
+    PrecomputeGroups();
+    if (rig_.config().monitor.black_level > 0.0) PrecomputeBackground();
+  }
+}
+
+void RigRenderer::PrecomputeGroups() {
+  const CameraIntrinsics& k = rig_.config().intrinsics;
+  const int n = rig_.config().pixel_samples;
+  std::vector<std::vector<Group>> rows(k.height);
+  ParallelFor(k.height, threads_, 4, [&](int begin, int end) {
+    for (int y = begin; y < end; ++y) {
+      std::vector<Group>& out = rows[y];
+      for (int x = 0; x < k.width; ++x) {
+        // Few texels per pixel: a small linear map keeps the groups in first-hit order.
+        std::vector<std::pair<int, std::array<double, 3>>> found;  // texel -> (count, sx, sy)
+        for (int sy = 0; sy < n; ++sy) {
+          for (int sx = 0; sx < n; ++sx) {
+            const Vec2 pixel(x + SubSample(sx, n), y + SubSample(sy, n));
+            const std::optional<Vec3> hit = rig_.SampleHit(pixel);
+            if (!hit) continue;
+            const auto texel = rig_.TexelAt(*hit);
+            const int index = material_->Index((*texel)[0], (*texel)[1]);
+            auto it = std::find_if(found.begin(), found.end(),
+                                   [&](const auto& f) { return f.first == index; });
+            if (it == found.end()) {
+              found.push_back({index, {0.0, 0.0, 0.0}});
+              it = found.end() - 1;
+            }
+            it->second[0] += 1.0;
+            it->second[1] += hit->x();
+            it->second[2] += hit->y();
+          }
+        }
+        for (const auto& [texel, acc] : found) {
+          out.push_back(Group{static_cast<uint32_t>(y * k.width + x), static_cast<uint32_t>(texel),
+                              static_cast<float>(acc[0] / (n * n)), acc[1] / acc[0],
+                              acc[2] / acc[0]});
+        }
+      }
+    }
+  });
+  row_begin_.assign(k.height + 1, 0);
+  size_t total = 0;
+  for (int y = 0; y < k.height; ++y) {
+    row_begin_[y] = total;
+    total += rows[y].size();
+  }
+  row_begin_[k.height] = total;
+  groups_.reserve(total);
+  for (auto& row : rows) groups_.insert(groups_.end(), row.begin(), row.end());
+}
+
+void RigRenderer::PrecomputeBackground() {
+  // The whole active area glows at the black level: integrate it as a grid of patches, each a
+  // point emitter at its centre (the monitor is 4+ cm away, patches are a few mm).
+  const MonitorConfig& m = rig_.config().monitor;
+  constexpr int kPatchesX = 48, kPatchesY = 32;
+  const double patch_w = m.width / kPatchesX, patch_h = m.height / kPatchesY;
+  const double patch_intensity = m.white_exitance * m.Luminance(0.0) * patch_w * patch_h;
+  const Vec3 camera = rig_.camera().Centre();
+  background_.assign(groups_.size() * 3, 0.f);
+  ParallelFor(static_cast<int>(groups_.size()), threads_, 256, [&](int begin, int end) {
+    for (int g = begin; g < end; ++g) {
+      const Group& group = groups_[g];
+      const Vec3 x(group.x, group.y, 0.0);
+      const Vec3 o = (camera - x).normalized();
+      Vec3 sum = Vec3::Zero();
+      for (int py = 0; py < kPatchesY; ++py) {
+        for (int px = 0; px < kPatchesX; ++px) {
+          const Vec3 p(m.centre.x() - m.width / 2 + (px + 0.5) * patch_w,
+                       m.centre.y() - m.height / 2 + (py + 0.5) * patch_h, -m.distance);
+          const Vec3 to_light = p - x;
+          const double r2 = to_light.squaredNorm();
+          const Vec3 i = to_light / std::sqrt(r2);
+          const double intensity = patch_intensity * m.emission(-i.z());
+          const Rgb rgb = material_->Evaluate(group.texel, i, o);
+          sum += Vec3(rgb[0], rgb[1], rgb[2]) * (std::abs(i.z()) * intensity / r2);
+        }
+      }
+      for (int c = 0; c < 3; ++c) background_[3 * g + c] = static_cast<float>(sum[c]);
+    }
+  });
+}
+
+Vec3 RigRenderer::DotRadianceAt(const Dot& dot, const Group& group) const {
+  const Vec3 x(group.x, group.y, 0.0);
+  const Vec3 o = (rig_.camera().Centre() - x).normalized();
+  const EmissionProfile& profile = rig_.config().monitor.emission;
+  const double angular_radius = dot.radius / (dot.position - x).norm();
+  const bool point = angular_radius < 0.1 * material_->MinRoughness(group.texel);
+  Vec3 sum = Vec3::Zero();
+  const int points = point ? 1 : kRadonPoints;
+  for (int k = 0; k < points; ++k) {
+    const Vec3 p = dot.position + dot.radius * Vec3(RadonNodes()[k].x(), RadonNodes()[k].y(), 0.0);
+    const Vec3 to_light = p - x;
+    const double r2 = to_light.squaredNorm();
+    const Vec3 i = to_light / std::sqrt(r2);
+    const double intensity = dot.intensity * (point ? 1.0 : kRadonWeights[k]) * profile(-i.z());
+    const Rgb rgb = material_->Evaluate(group.texel, i, o);
+    sum += Vec3(rgb[0], rgb[1], rgb[2]) * (std::abs(i.z()) * intensity / r2);
+  }
+  return sum;
+}
+
+void RigRenderer::RenderDot(const Dot& dot, FloatImage* radiance) const {
+  if (!material_) ThrowInvalidInput("renderer", "dot images need a truth material");
+  const CameraIntrinsics& k = rig_.config().intrinsics;
+  *radiance = FloatImage(k.width, k.height, 3);
+  ParallelFor(k.height, threads_, 8, [&](int begin, int end) {
+    for (size_t g = row_begin_[begin]; g < row_begin_[end]; ++g) {
+      const Group& group = groups_[g];
+      const Vec3 value = group.weight * DotRadianceAt(dot, group);
+      float* out = &radiance->pixels[size_t(group.pixel) * 3];
+      for (int c = 0; c < 3; ++c) {
+        out[c] += static_cast<float>(value[c]) +
+                  (background_.empty() ? 0.f : group.weight * background_[3 * g + c]);
+      }
+    }
+  });
+}
+
+void RigRenderer::RenderAllDots(FloatImage* radiance) const {
+  const MonitorConfig& m = rig_.config().monitor;
+  const Vec2 origin = m.centre - Vec2(m.width, m.height) / 2.0;
+  const double radius_px = rig_.config().dots.radius_px;
+  // Dot centres by monitor pixel, to test a point against the few nearby dots only.
+  std::map<std::pair<int, int>, int> by_pixel;
+  for (size_t q = 0; q < rig_.dots().size(); ++q) {
+    by_pixel[{rig_.dots()[q].monitor_x, rig_.dots()[q].monitor_y}] = static_cast<int>(q);
+  }
+  const double on = m.white_exitance * m.Luminance(rig_.config().dots.level);
+  const double off = m.white_exitance * m.Luminance(0.0);
+  const int reach = static_cast<int>(std::ceil(radius_px)) + 1;
+  // Nearby lookups scan a small window of monitor pixels around the hit.
+  auto exitance = [&](const Vec2& xy) -> double {
+    const Vec2 u = (xy - origin) / m.pixel_pitch;
+    if (u.x() < 0 || u.y() < 0 || u.x() >= m.width / m.pixel_pitch ||
+        u.y() >= m.height / m.pixel_pitch) {
+      return 0.0;
+    }
+    const int ux = static_cast<int>(u.x()), uy = static_cast<int>(u.y());
+    for (int dy = -reach; dy <= reach; ++dy) {
+      for (int dx = -reach; dx <= reach; ++dx) {
+        const auto it = by_pixel.find({ux + dx, uy + dy});
+        if (it == by_pixel.end()) continue;
+        const Dot& dot = rig_.dots()[it->second];
+        const Vec2 centre(dot.position.x(), dot.position.y());
+        if ((xy - centre).norm() <= dot.radius) return on;
+      }
+    }
+    return off;
+  };
+  const CameraIntrinsics& k = rig_.config().intrinsics;
+  const int n = rig_.config().board_samples;
+  const Vec3 camera = rig_.camera().Centre();
+  *radiance = FloatImage(k.width, k.height, 3);
+  ParallelFor(k.height, threads_, 4, [&](int begin, int end) {
+    for (int y = begin; y < end; ++y) {
+      for (int x = 0; x < k.width; ++x) {
+        double sum = 0.0;
+        for (int sy = 0; sy < n; ++sy) {
+          for (int sx = 0; sx < n; ++sx) {
+            const auto ray = rig_.camera().PixelRay(Vec2(x + SubSample(sx, n), y + SubSample(sy, n)));
+            if (!ray || !(ray->z() < 0.0)) continue;
+            const Vec3 p = camera + ((-m.distance - camera.z()) / ray->z()) * (*ray);
+            const double cos_e = -ray->z();
+            sum += exitance(p.head<2>()) * m.emission(cos_e) / cos_e;
+          }
+        }
+        for (int c = 0; c < 3; ++c) radiance->at(x, y, c) = static_cast<float>(sum / (n * n));
+      }
+    }
+  });
+}
+
+void RigRenderer::RenderFlatField(double level, FloatImage* radiance) const {
+  const MonitorConfig& m = rig_.config().monitor;
+  const CameraIntrinsics& k = rig_.config().intrinsics;
+  const int n = rig_.config().board_samples;
+  const Vec3 camera = rig_.camera().Centre();
+  const double exitance = m.white_exitance * m.Luminance(level);
+  *radiance = FloatImage(k.width, k.height, 3);
+  ParallelFor(k.height, threads_, 4, [&](int begin, int end) {
+    for (int y = begin; y < end; ++y) {
+      for (int x = 0; x < k.width; ++x) {
+        double sum = 0.0;
+        for (int sy = 0; sy < n; ++sy) {
+          for (int sx = 0; sx < n; ++sx) {
+            const auto ray = rig_.camera().PixelRay(Vec2(x + SubSample(sx, n), y + SubSample(sy, n)));
+            if (!ray || !(ray->z() < 0.0)) continue;
+            const Vec3 p = camera + ((-m.distance - camera.z()) / ray->z()) * (*ray);
+            if (std::abs(p.x() - m.centre.x()) > m.width / 2 ||
+                std::abs(p.y() - m.centre.y()) > m.height / 2) {
+              continue;
+            }
+            const double cos_e = -ray->z();
+            sum += exitance * m.emission(cos_e) / cos_e;
+          }
+        }
+        for (int c = 0; c < 3; ++c) radiance->at(x, y, c) = static_cast<float>(sum / (n * n));
+      }
+    }
+  });
+}
+
+void RigRenderer::RenderBoard(const BoardPose& board, FloatImage* radiance) const {
+  const BoardConfig& b = rig_.config().board;
+  const CameraIntrinsics& k = rig_.config().intrinsics;
+  const int n = rig_.config().board_samples;
+  const Vec3 camera = rig_.camera().Centre();
+  const Vec3 normal = board.rotation.col(2);
+  constexpr double kBackground = 0.12;  // reflectance of the table around the board
+  auto reflectance = [&](const Vec2& p) {
+    // Squares from -1 to inner_cols along x (inner corners where four squares meet), plus a
+    // white margin of one square; outside it the table.
+    const double u = p.x() / b.square, v = p.y() / b.square;
+    if (u < -2.0 || v < -2.0 || u > b.inner_cols + 1.0 || v > b.inner_rows + 1.0) return kBackground;
+    if (u < -1.0 || v < -1.0 || u > b.inner_cols || v > b.inner_rows) return b.reflectance_white;
+    const int a = static_cast<int>(std::floor(u)) + static_cast<int>(std::floor(v));
+    return (a % 2 == 0) ? b.reflectance_black : b.reflectance_white;
+  };
+  *radiance = FloatImage(k.width, k.height, 3);
+  ParallelFor(k.height, threads_, 4, [&](int begin, int end) {
+    for (int y = begin; y < end; ++y) {
+      for (int x = 0; x < k.width; ++x) {
+        double sum = 0.0;
+        for (int sy = 0; sy < n; ++sy) {
+          for (int sx = 0; sx < n; ++sx) {
+            const auto ray = rig_.camera().PixelRay(Vec2(x + SubSample(sx, n), y + SubSample(sy, n)));
+            const double denominator = ray ? normal.dot(*ray) : 0.0;
+            if (std::abs(denominator) < 1e-12) {
+              sum += kBackground;
+              continue;
+            }
+            const double t = normal.dot(board.translation - camera) / denominator;
+            if (t <= 0.0) {
+              sum += kBackground;
+              continue;
+            }
+            const Vec3 local = board.rotation.transpose() * (camera + t * (*ray) - board.translation);
+            sum += reflectance(local.head<2>());
+          }
+        }
+        const float value = static_cast<float>(b.illumination * sum / (n * n));
+        for (int c = 0; c < 3; ++c) radiance->at(x, y, c) = value;
+      }
+    }
+  });
+}
+
+std::vector<Vec3> RigRenderer::BoardCorners(const BoardPose& board) const {
+  const BoardConfig& b = rig_.config().board;
+  std::vector<Vec3> corners;
+  for (int j = 0; j < b.inner_rows; ++j) {
+    for (int i = 0; i < b.inner_cols; ++i) corners.push_back(board.ToWorld(Vec2(i, j) * b.square));
+  }
+  return corners;
+}
+
+BoardPose RigRenderer::HolderBoardPose() const {
+  const BoardConfig& b = rig_.config().board;
+  BoardPose pose;
+  // Board x along world x, board y along world -y, so that the board faces the camera (+z) with
+  // a right-handed frame whose z points down into the plane: rotation = diag(1, -1, -1).
+  pose.rotation = Vec3(1.0, -1.0, -1.0).asDiagonal();
+  pose.translation = Vec3(-(b.inner_cols - 1) * b.square / 2, (b.inner_rows - 1) * b.square / 2, 0.0);
+  return pose;
+}
+
+std::vector<BoardPose> RigRenderer::ZhangBoardPoses(int views, uint64_t seed) const {
+  const BoardConfig& b = rig_.config().board;
+  const CameraIntrinsics& k = rig_.config().intrinsics;
+  const CameraPose& camera_pose = rig_.camera().pose();
+  const double distance = rig_.camera().Centre().norm();
+  // The board's outline including its white margin: this much must be in view.
+  const std::array<Vec2, 4> outline = {Vec2(-2, -2) * b.square,
+                                       Vec2(b.inner_cols + 1, -2) * b.square,
+                                       Vec2(b.inner_cols + 1, b.inner_rows + 1) * b.square,
+                                       Vec2(-2, b.inner_rows + 1) * b.square};
+  const Vec2 board_centre = Vec2(b.inner_cols - 1, b.inner_rows - 1) * b.square / 2.0;
+  std::vector<BoardPose> poses;
+  PixelRandom random(seed, 0x626f617264ULL, 0);
+  for (int view = 0; view < views; ++view) {
+    bool placed = false;
+    for (int attempt = 0; attempt < 200 && !placed; ++attempt) {
+      const double shrink = 1.0 - attempt / 200.0;  // fall back toward fronto-parallel, centred
+      const double tilt = shrink * (20.0 + 20.0 * random.Uniform()) * kPi / 180.0;
+      const double axis_angle = kTwoPi * (view + 0.3 * random.Uniform()) / views;
+      const double spin = shrink * (random.Uniform() - 0.5) * 40.0 * kPi / 180.0;
+      const Vec3 axis(std::cos(axis_angle), std::sin(axis_angle), 0.0);
+      // In camera coordinates: the board faces the camera (board z along the optical axis),
+      // tilted about an in-plane axis and spun about its normal.
+      const Mat3 in_camera = Eigen::AngleAxisd(tilt, axis).toRotationMatrix() *
+                             Eigen::AngleAxisd(spin, Vec3::UnitZ()).toRotationMatrix();
+      const Vec2 offset_px((random.Uniform() - 0.5) * 0.3 * shrink * k.width,
+                           (random.Uniform() - 0.5) * 0.3 * shrink * k.height);
+      const double depth = distance * (0.9 + 0.2 * random.Uniform());
+      const Vec3 centre_cam((k.cx + offset_px.x() - k.cx) / k.fx * depth,
+                            (k.cy + offset_px.y() - k.cy) / k.fy * depth, depth);
+      BoardPose pose;
+      pose.rotation = camera_pose.rotation.transpose() * in_camera;
+      const Vec3 centre_world = camera_pose.rotation.transpose() * (centre_cam - camera_pose.translation);
+      pose.translation = centre_world - pose.rotation * Vec3(board_centre.x(), board_centre.y(), 0.0);
+      placed = true;
+      for (const Vec2& corner : outline) {
+        const std::optional<Vec2> px = rig_.camera().Project(pose.ToWorld(corner));
+        if (!px || px->x() < 2 || px->y() < 2 || px->x() > k.width - 3 || px->y() > k.height - 3) {
+          placed = false;
+          break;
+        }
+      }
+      if (placed) poses.push_back(pose);
+    }
+    if (!placed) {
+      ThrowInvalidInput("board", "a " + std::to_string(b.inner_cols) + " x " +
+                        std::to_string(b.inner_rows) + " board of " +
+                        std::to_string(b.square * 1000) + " mm squares does not fit in the camera's view",
+                        "use smaller squares (board.square) or a wider field of view");
+    }
+  }
+  return poses;
+}
+
+double RigRenderer::Vignetting(const Vec2& pixel) const {
+  const CameraIntrinsics& k = rig_.config().intrinsics;
+  const double half_diagonal = 0.5 * std::hypot(k.width, k.height);
+  const double r2 = (Square(pixel.x() - k.cx) + Square(pixel.y() - k.cy)) / Square(half_diagonal);
+  return 1.0 - rig_.config().sensor.vignetting * r2;
+}
+
+double RigRenderer::MeanElectrons(double radiance, const Vec2& pixel, double exposure_s) const {
+  const SensorConfig& s = rig_.config().sensor;
+  return radiance * exposure_s * s.sensitivity * Vignetting(pixel) + s.dark_current * exposure_s;
+}
+
+CameraImage RigRenderer::Expose(const FloatImage& radiance, double exposure_s, uint64_t seed,
+                                uint64_t stream) const {
+  const SensorConfig& s = rig_.config().sensor;
+  CameraImage out;
+  out.width = radiance.width;
+  out.height = radiance.height;
+  out.channels = radiance.channels;
+  out.bits_per_sample = s.bit_depth;
+  out.pixels.assign(radiance.pixels.size(), 0);
+  const double max_value = std::ldexp(1.0, s.bit_depth) - 1.0;
+  const bool srgb = s.response == "srgb";
+  ParallelFor(radiance.height, threads_, 16, [&](int begin, int end) {
+    for (int y = begin; y < end; ++y) {
+      for (int x = 0; x < radiance.width; ++x) {
+        const uint64_t pixel = uint64_t(y) * radiance.width + x;
+        PixelRandom random(seed, stream, pixel);
+        for (int c = 0; c < radiance.channels; ++c) {
+          const double mean = MeanElectrons(radiance.at(x, y, c), Vec2(x, y), exposure_s);
+          double electrons = s.shot_noise ? random.Poisson(mean) : mean;
+          electrons += s.read_noise * random.Gaussian();
+          const double linear = std::clamp(electrons / s.full_well, 0.0, 1.0);
+          const double encoded = (srgb ? SrgbEncode(linear) : linear) + s.black_offset;
+          out.pixels[pixel * radiance.channels + c] =
+              static_cast<uint16_t>(std::lround(std::min(encoded, 1.0) * max_value));
+        }
+      }
+    }
+  });
+  return out;
+}
+
+double RigRenderer::ProbePeakRadiance() const {
+  if (!material_) ThrowInvalidInput("renderer", "the probe needs a truth material");
+  const Vec3 camera = rig_.camera().Centre();
+  const double d = rig_.config().monitor.distance;
+  const Vec3 straight = camera + ((camera.z() + d) / camera.z()) * (-camera);
+  const Dot* best = &rig_.dots().front();
+  for (const Dot& dot : rig_.dots()) {
+    if ((dot.position - straight).norm() < (best->position - straight).norm()) best = &dot;
+  }
+  FloatImage image;
+  RenderDot(*best, &image);
+  return *std::max_element(image.pixels.begin(), image.pixels.end());
+}
+
+}  // namespace svbtdf

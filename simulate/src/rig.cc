@@ -1,0 +1,301 @@
+#include "svbtdf/simulate/rig.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "svbtdf/common/error.h"
+
+namespace svbtdf {
+namespace {
+
+std::string Fmt(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.6g", value);
+  return buffer;
+}
+
+void RequirePositive(double value, const std::string& name) {
+  if (!(value > 0.0) || !std::isfinite(value)) {
+    ThrowInvalidInput(name, "must be a positive finite number, got " + Fmt(value));
+  }
+}
+
+}  // namespace
+
+CameraPose CameraPose::LookAt(const Vec3& eye, const Vec3& target, const Vec3& up_hint) {
+  const Vec3 forward = (target - eye).normalized();
+  const Vec3 right = forward.cross(up_hint);
+  if (right.norm() < 1e-9) {
+    ThrowInvalidInput("camera pose", "the up hint is parallel to the viewing direction");
+  }
+  const Vec3 x = right.normalized();
+  const Vec3 y = forward.cross(x);  // image down
+  CameraPose pose;
+  pose.rotation.row(0) = x;
+  pose.rotation.row(1) = y;
+  pose.rotation.row(2) = forward;
+  pose.translation = -pose.rotation * eye;
+  return pose;
+}
+
+PinholeCamera::PinholeCamera(CameraIntrinsics intrinsics, CameraPose pose)
+    : intrinsics_(intrinsics), pose_(pose), centre_(pose.Centre()) {}
+
+Vec2 PinholeCamera::Distort(const Vec2& p) const {
+  const auto& d = intrinsics_.distortion;
+  const double x = p.x(), y = p.y();
+  const double r2 = x * x + y * y;
+  const double radial = 1.0 + r2 * (d[0] + r2 * (d[1] + r2 * d[4]));
+  return {x * radial + 2.0 * d[2] * x * y + d[3] * (r2 + 2.0 * x * x),
+          y * radial + d[2] * (r2 + 2.0 * y * y) + 2.0 * d[3] * x * y};
+}
+
+std::optional<Vec2> PinholeCamera::Undistort(const Vec2& distorted) const {
+  const auto& d = intrinsics_.distortion;
+  Vec2 p = distorted;
+  for (int iteration = 0; iteration < 50; ++iteration) {
+    const double x = p.x(), y = p.y();
+    const double r2 = x * x + y * y;
+    const double radial = 1.0 + r2 * (d[0] + r2 * (d[1] + r2 * d[4]));
+    const double dradial = d[0] + r2 * (2.0 * d[1] + 3.0 * r2 * d[4]);  // d radial / d r2
+    Eigen::Matrix2d jacobian;
+    jacobian(0, 0) = radial + 2.0 * x * x * dradial + 2.0 * d[2] * y + 6.0 * d[3] * x;
+    jacobian(0, 1) = 2.0 * x * y * dradial + 2.0 * d[2] * x + 2.0 * d[3] * y;
+    jacobian(1, 0) = 2.0 * x * y * dradial + 2.0 * d[2] * x + 2.0 * d[3] * y;
+    jacobian(1, 1) = radial + 2.0 * y * y * dradial + 6.0 * d[2] * y + 2.0 * d[3] * x;
+    const Vec2 residual = Distort(p) - distorted;
+    if (residual.norm() < 1e-14) return p;
+    const double det = jacobian.determinant();
+    if (!(std::abs(det) > 1e-12)) return std::nullopt;
+    p -= jacobian.inverse() * residual;
+    if (!p.allFinite()) return std::nullopt;
+  }
+  if ((Distort(p) - distorted).norm() < 1e-10) return p;
+  return std::nullopt;
+}
+
+std::optional<Vec2> PinholeCamera::Project(const Vec3& world) const {
+  const Vec3 c = pose_.rotation * world + pose_.translation;
+  if (!(c.z() > 0.0)) return std::nullopt;
+  const Vec2 q = Distort(Vec2(c.x() / c.z(), c.y() / c.z()));
+  return Vec2(intrinsics_.fx * q.x() + intrinsics_.cx, intrinsics_.fy * q.y() + intrinsics_.cy);
+}
+
+std::optional<Vec3> PinholeCamera::PixelRay(const Vec2& pixel) const {
+  const Vec2 distorted((pixel.x() - intrinsics_.cx) / intrinsics_.fx,
+                       (pixel.y() - intrinsics_.cy) / intrinsics_.fy);
+  const std::optional<Vec2> p = Undistort(distorted);
+  if (!p) return std::nullopt;
+  return (pose_.rotation.transpose() * Vec3(p->x(), p->y(), 1.0)).normalized();
+}
+
+double EmissionProfile::operator()(double cos_theta_e) const {
+  const double c = std::clamp(cos_theta_e, 0.0, 1.0);
+  if (kind == "isotropic") return c > 0.0 ? 1.0 : 0.0;
+  if (kind == "lambertian") return c;
+  return std::pow(c, exponent);  // lcd
+}
+
+double MonitorConfig::Luminance(double level) const {
+  return black_level + (1.0 - black_level) * std::pow(std::clamp(level, 0.0, 1.0), gamma);
+}
+
+CameraPose RigConfig::PaperPose(double distance, double theta) {
+  const Vec3 eye(0.0, -distance * std::sin(theta), distance * std::cos(theta));
+  return CameraPose::LookAt(eye, Vec3::Zero(), Vec3::UnitZ());
+}
+
+Rig::Rig(RigConfig config)
+    : config_(std::move(config)), camera_(config_.intrinsics, config_.pose) {
+  Validate();
+  LayOutDots();
+}
+
+double Rig::CameraTheta() const {
+  const Vec3 c = camera_.Centre();
+  return std::atan2(c.head<2>().norm(), c.z());
+}
+
+void Rig::Validate() const {
+  const CameraIntrinsics& k = config_.intrinsics;
+  if (k.width < 8 || k.height < 8) {
+    ThrowInvalidInput("camera.width/height", "the image must be at least 8 x 8 pixels");
+  }
+  RequirePositive(k.fx, "camera.fx");
+  RequirePositive(k.fy, "camera.fy");
+  for (double v : k.distortion) {
+    if (!std::isfinite(v)) ThrowInvalidInput("camera.distortion", "must be finite");
+  }
+  if (!config_.pose.rotation.allFinite() || !config_.pose.translation.allFinite() ||
+      std::abs(config_.pose.rotation.determinant() - 1.0) > 1e-6) {
+    ThrowInvalidInput("camera pose", "the rotation must be a proper rotation matrix");
+  }
+  const Vec3 centre = camera_.Centre();
+  if (!(centre.z() > 0.0)) {
+    ThrowInvalidInput("camera pose", "the camera is at z = " + Fmt(centre.z()) +
+                      " m, on or below the sample plane",
+                      "the camera must look down at the sample from z > 0 (the monitor is below)");
+  }
+  const SampleConfig& s = config_.sample;
+  RequirePositive(s.width, "sample.width");
+  if (s.texels_x < 1 || s.texels_y < 1) ThrowInvalidInput("sample.texels", "must be >= 1");
+  // Every corner of the sample must project inside the image (with a half-pixel margin).
+  for (double sx : {-0.5, 0.5}) {
+    for (double sy : {-0.5, 0.5}) {
+      const Vec3 corner(sx * s.width, sy * s.height(), 0.0);
+      const std::optional<Vec2> px = camera_.Project(corner);
+      if (!px || px->x() < 0.0 || px->y() < 0.0 || px->x() > k.width - 1.0 ||
+          px->y() > k.height - 1.0) {
+        ThrowInvalidInput("camera", "the sample corner (" + Fmt(corner.x()) + ", " +
+                          Fmt(corner.y()) + ") m is not in view",
+                          "move the camera back, lower fx/fy or enlarge the image");
+      }
+      const std::optional<Vec3> ray = camera_.PixelRay(*px);
+      if (!ray || ((*ray) - (corner - centre).normalized()).norm() > 1e-6) {
+        ThrowInvalidInput("camera.distortion", "the lens distortion is not invertible over the "
+                          "sample's image", "use smaller distortion coefficients");
+      }
+    }
+  }
+  const MonitorConfig& m = config_.monitor;
+  if (!(m.distance > 0.0) || !std::isfinite(m.distance)) {
+    ThrowInvalidInput("monitor.distance", "the monitor must lie behind the sample (d > 0), got d = " +
+                      Fmt(m.distance) + " m", "the monitor plane is z = -d, on the far side from the camera");
+  }
+  RequirePositive(m.width, "monitor.width");
+  RequirePositive(m.height, "monitor.height");
+  RequirePositive(m.pixel_pitch, "monitor.pixel_pitch");
+  RequirePositive(m.gamma, "monitor.gamma");
+  RequirePositive(m.white_exitance, "monitor.white_exitance");
+  if (!(m.black_level >= 0.0 && m.black_level < 1.0)) {
+    ThrowInvalidInput("monitor.black_level", "must lie in [0, 1)");
+  }
+  const std::string& kind = m.emission.kind;
+  if (kind != "isotropic" && kind != "lambertian" && kind != "lcd") {
+    ThrowInvalidInput("monitor.emission", "unknown profile '" + kind + "'",
+                      "use isotropic, lambertian or lcd");
+  }
+  if (kind == "lcd") RequirePositive(m.emission.exponent, "monitor.emission.exponent");
+  const DotGridConfig& g = config_.dots;
+  if (g.cols < 1 || g.rows < 1) ThrowInvalidInput("dots", "the grid needs at least 1 x 1 dots");
+  RequirePositive(g.span_scale, "dots.span_scale");
+  RequirePositive(g.radius_px, "dots.radius_px");
+  if (!(g.level > 0.0 && g.level <= 1.0)) ThrowInvalidInput("dots.level", "must lie in (0, 1]");
+  const SensorConfig& sensor = config_.sensor;
+  if (sensor.exposures_s.empty()) ThrowInvalidInput("sensor.exposures", "at least one exposure");
+  for (double t : sensor.exposures_s) RequirePositive(t, "sensor.exposures");
+  RequirePositive(sensor.sensitivity, "sensor.sensitivity");
+  RequirePositive(sensor.full_well, "sensor.full_well");
+  if (!(sensor.read_noise >= 0.0)) ThrowInvalidInput("sensor.read_noise", "must be >= 0");
+  if (!(sensor.dark_current >= 0.0)) ThrowInvalidInput("sensor.dark_current", "must be >= 0");
+  if (sensor.bit_depth < 8 || sensor.bit_depth > 16) {
+    ThrowInvalidInput("sensor.bit_depth", "must lie in [8, 16]");
+  }
+  if (sensor.response != "linear" && sensor.response != "srgb") {
+    ThrowInvalidInput("sensor.response", "unknown response '" + sensor.response + "'",
+                      "use linear or srgb");
+  }
+  if (!(sensor.vignetting >= 0.0 && sensor.vignetting < 1.0)) {
+    ThrowInvalidInput("sensor.vignetting", "must lie in [0, 1)");
+  }
+  if (!(sensor.black_offset >= 0.0 && sensor.black_offset < 0.5)) {
+    ThrowInvalidInput("sensor.black_offset", "must lie in [0, 0.5)");
+  }
+  if (config_.pixel_samples < 1 || config_.board_samples < 1) {
+    ThrowInvalidInput("pixel_samples", "supersampling must be >= 1");
+  }
+  const BoardConfig& b = config_.board;
+  if (b.inner_cols < 3 || b.inner_rows < 3) ThrowInvalidInput("board", "needs >= 3 x 3 inner corners");
+  RequirePositive(b.square, "board.square");
+  if (b.views < 3) ThrowInvalidInput("board.views", "Zhang calibration needs at least 3 views");
+}
+
+void Rig::LayOutDots() {
+  const SampleConfig& s = config_.sample;
+  const MonitorConfig& m = config_.monitor;
+  const DotGridConfig& g = config_.dots;
+  const Vec3 camera = camera_.Centre();
+  // Away from the camera along its azimuth (the camera sits above some point of the plane).
+  Vec2 away = -camera.head<2>();
+  away = away.norm() > 1e-12 ? away.normalized() : Vec2::Zero();
+  const double shift = g.shift >= 0.0 ? g.shift : m.distance * std::cos(CameraTheta());
+  const Vec2 grid_centre = shift * away;
+  const double span_x = g.span_scale * s.width;
+  const double span_y = g.span_scale * s.height();
+  const Vec2 monitor_origin = m.centre - Vec2(m.width, m.height) / 2.0;  // corner of pixel (0, 0)
+  const int monitor_px_x = static_cast<int>(std::floor(m.width / m.pixel_pitch));
+  const int monitor_px_y = static_cast<int>(std::floor(m.height / m.pixel_pitch));
+  const double radius = g.radius_px * m.pixel_pitch;
+  dots_.clear();
+  dots_.reserve(static_cast<size_t>(g.cols) * g.rows);
+  for (int row = 0; row < g.rows; ++row) {
+    for (int col = 0; col < g.cols; ++col) {
+      // Row 0 at +y like the texels; a 1 x N grid sits on the centre line.
+      const double fx = g.cols > 1 ? static_cast<double>(col) / (g.cols - 1) - 0.5 : 0.0;
+      const double fy = g.rows > 1 ? 0.5 - static_cast<double>(row) / (g.rows - 1) : 0.0;
+      const Vec2 nominal = grid_centre + Vec2(fx * span_x, fy * span_y);
+      // Dots are drawn centred on a monitor pixel.
+      const Vec2 in_monitor = (nominal - monitor_origin) / m.pixel_pitch;
+      Dot dot;
+      dot.col = col;
+      dot.row = row;
+      dot.monitor_x = static_cast<int>(std::floor(in_monitor.x()));
+      dot.monitor_y = static_cast<int>(std::floor(in_monitor.y()));
+      if (in_monitor.x() - g.radius_px < 0.0 || in_monitor.y() - g.radius_px < 0.0 ||
+          in_monitor.x() + g.radius_px > monitor_px_x || in_monitor.y() + g.radius_px > monitor_px_y) {
+        ThrowInvalidInput("monitor", "dot (" + std::to_string(col) + ", " + std::to_string(row) +
+                          ") at (" + Fmt(nominal.x()) + ", " + Fmt(nominal.y()) +
+                          ") m is off the monitor's active area",
+                          "use a larger monitor, move its centre or shrink dots.span_scale");
+      }
+      const Vec2 xy = monitor_origin + (Vec2(dot.monitor_x, dot.monitor_y) + Vec2(0.5, 0.5)) *
+                                           m.pixel_pitch;
+      dot.position = Vec3(xy.x(), xy.y(), -m.distance);
+      dot.radius = radius;
+      dot.intensity = m.white_exitance * m.Luminance(g.level) * kPi * radius * radius;
+      // The all-dots image (sample removed) must show every dot to locate it.
+      const std::optional<Vec2> px = camera_.Project(dot.position);
+      const CameraIntrinsics& k = config_.intrinsics;
+      if (!px || px->x() < 2.0 || px->y() < 2.0 || px->x() > k.width - 3.0 ||
+          px->y() > k.height - 3.0) {
+        ThrowInvalidInput("dots", "dot (" + std::to_string(col) + ", " + std::to_string(row) +
+                          ") at (" + Fmt(dot.position.x()) + ", " + Fmt(dot.position.y()) +
+                          ") m is outside the camera's view of the monitor",
+                          "shrink dots.span_scale, or widen the view (image size, fx/fy)");
+      }
+      dots_.push_back(dot);
+    }
+  }
+}
+
+double Rig::DotIntensityToward(const Dot& dot, const Vec3& x) const {
+  const Vec3 d = x - dot.position;
+  const double cos_e = d.z() / d.norm();
+  return dot.intensity * config_.monitor.emission(cos_e);
+}
+
+std::optional<Vec3> Rig::SampleHit(const Vec2& pixel) const {
+  const std::optional<Vec3> ray = camera_.PixelRay(pixel);
+  if (!ray || !(ray->z() < 0.0)) return std::nullopt;
+  const Vec3 c = camera_.Centre();
+  const Vec3 x = c + (-c.z() / ray->z()) * (*ray);
+  if (!TexelAt(x)) return std::nullopt;
+  return Vec3(x.x(), x.y(), 0.0);
+}
+
+std::optional<std::array<int, 2>> Rig::TexelAt(const Vec3& x) const {
+  const SampleConfig& s = config_.sample;
+  const double u = (x.x() + 0.5 * s.width) / s.texel_pitch();
+  const double v = (0.5 * s.height() - x.y()) / s.texel_pitch();
+  if (!(u >= 0.0 && v >= 0.0 && u < s.texels_x && v < s.texels_y)) return std::nullopt;
+  return std::array<int, 2>{static_cast<int>(u), static_cast<int>(v)};
+}
+
+Vec3 Rig::TexelCentre(int col, int row) const {
+  const SampleConfig& s = config_.sample;
+  return {-0.5 * s.width + (col + 0.5) * s.texel_pitch(),
+          0.5 * s.height() - (row + 0.5) * s.texel_pitch(), 0.0};
+}
+
+}  // namespace svbtdf

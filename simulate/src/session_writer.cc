@@ -1,0 +1,174 @@
+#include "svbtdf/simulate/session_writer.h"
+
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/image_io.h"
+#include "svbtdf/common/session.h"
+#include "svbtdf/simulate/capture_simulator.h"
+#include "svbtdf/simulate/truth_io.h"
+
+namespace svbtdf {
+namespace fs = std::filesystem;
+namespace {
+
+std::string Padded(int value, int width) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%0*d", width, value);
+  return buffer;
+}
+
+// The sink that stores each rendered capture in the session, journalled.
+class SessionSink final : public CaptureSink {
+ public:
+  explicit SessionSink(Session* session) : session_(session) {}
+  bool Contains(const CaptureId& id) const override { return session_->Contains(SessionKey(id)); }
+  void Write(const CaptureId& id, const CameraImage& image) override {
+    session_->AddImage(SessionKey(id), image, id.exposure_s, 1.0);
+  }
+
+ private:
+  Session* session_;
+};
+
+// What the capture knew about its set-up: nominal values a lab would write down.
+nlohmann::json NominalRig(const Rig& rig, const SimulationPreset& preset, const CaptureTruth& capture) {
+  const RigConfig& c = rig.config();
+  nlohmann::json dots = nlohmann::json::array();
+  for (const Dot& dot : rig.dots()) dots.push_back({dot.monitor_x, dot.monitor_y});
+  return {
+      {"camera", {{"model", "svbtdf simulated camera"},
+                  {"width", c.intrinsics.width},
+                  {"height", c.intrinsics.height},
+                  {"channels", 3},
+                  {"bit_depth", c.sensor.bit_depth},
+                  {"response", c.sensor.response}}},
+      {"monitor", {{"width_px", static_cast<int>(std::lround(c.monitor.width / c.monitor.pixel_pitch))},
+                   {"height_px", static_cast<int>(std::lround(c.monitor.height / c.monitor.pixel_pitch))},
+                   {"pixel_pitch_m", c.monitor.pixel_pitch},
+                   {"gamma", c.monitor.gamma},
+                   {"black_level", c.monitor.black_level},
+                   {"distance_m", c.monitor.distance},
+                   {"emission", c.monitor.emission.kind}}},
+      {"dots", {{"cols", c.dots.cols}, {"rows", c.dots.rows}, {"radius_px", c.dots.radius_px},
+                {"positions_px", dots}}},
+      {"sample", {{"width_m", c.sample.width}, {"height_m", c.sample.height()}}},
+      {"board", {{"spec", "chessboard:" + std::to_string(c.board.inner_cols) + "x" + std::to_string(c.board.inner_rows) +
+                              ":" + std::to_string(c.board.square * 1000.0)},
+                 {"views", c.board.views}}},
+      {"exposures_s", capture.dot_exposures_s},
+      {"simulated", {{"preset", preset.name}, {"seed", capture.seed}, {"truth", capture.truth_kind}}},
+  };
+}
+
+// The ground-truth material as EXR maps plus a manifest (docs/truth-format.md).
+void WriteMaterialTruth(const fs::path& folder, const TruthMaterial& material) {
+  const int w = material.texels_x(), h = material.texels_y();
+  FloatImage ndf(w, h, 5), alpha(w, h, 1), shadowing(w, h, 1), k_s(w, h, 3), rho_d(w, h, 3);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const TruthTexel& t = material.texel(x, y);
+      const double ndf_params[5] = {t.ndf.alpha_x, t.ndf.alpha_y, t.ndf.theta_x, t.ndf.theta_y, t.ndf.theta_z};
+      for (int c = 0; c < 5; ++c) ndf.at(x, y, c) = static_cast<float>(ndf_params[c]);
+      alpha.at(x, y) = static_cast<float>(t.alpha);
+      shadowing.at(x, y) = static_cast<float>(t.shadowing_roughness);
+      for (int c = 0; c < 3; ++c) {
+        k_s.at(x, y, c) = static_cast<float>(t.k_s[c]);
+        rho_d.at(x, y, c) = static_cast<float>(t.rho_d[c]);
+      }
+    }
+  }
+  WriteFloatImage(folder / "ndf_params.exr", ndf, /*half_precision=*/false, false);
+  WriteFloatImage(folder / "alpha.exr", alpha, false, false);
+  WriteFloatImage(folder / "shadowing_roughness.exr", shadowing, false, false);
+  WriteFloatImage(folder / "k_s.exr", k_s, false, false);
+  WriteFloatImage(folder / "rho_d.exr", rho_d, false, false);
+  const nlohmann::json manifest = {
+      {"format", "svbtdf-truth-material"},
+      {"version", kTruthFormatVersion},
+      {"eta", material.eta()},
+      {"width", w},
+      {"height", h},
+      {"ndf", {{"kind", "analytic"}, {"name", material.ndf_name()}, {"map", "ndf_params.exr"},
+               {"channels", {"alpha_x", "alpha_y", "theta_x", "theta_y", "theta_z"}}}},
+      {"maps", {{"alpha", "alpha.exr"}, {"shadowing_roughness", "shadowing_roughness.exr"},
+                {"k_s", "k_s.exr"}, {"rho_d", "rho_d.exr"}}},
+      {"shadowing", "smith-ggx; 0 = none"},
+  };
+  WriteTextAtomically(folder / "material.json", manifest.dump(2) + "\n", false);
+}
+
+}  // namespace
+
+std::string SessionKey(const CaptureId& id) {
+  if (id.kind == "dark") return "dark/e" + std::to_string(id.exposure_index) + "/r" + std::to_string(id.index);
+  if (id.kind == "board") return "board/v" + Padded(id.index, 2);
+  if (id.kind == "holder_board") return "sample_plane/v" + Padded(id.index, 2);
+  if (id.kind == "all_dots") return "all_dots/e" + std::to_string(id.exposure_index);
+  if (id.kind == "flat") return "flat_white/e" + std::to_string(id.exposure_index);
+  if (id.kind == "dots") return "dot/q" + Padded(id.index, 4) + "/e" + std::to_string(id.exposure_index) + "/r0";
+  ThrowInvalidInput("capture", "unknown simulated capture kind '" + id.kind + "'");
+}
+
+SimulationOutput SimulateSession(const fs::path& out, const SimulationOptions& options) {
+  if (options.truth != "model" && options.truth != "montecarlo") {
+    ThrowInvalidInput("--truth", "must be model or montecarlo, got '" + options.truth + "'");
+  }
+  if (options.truth == "montecarlo") {
+    ThrowInvalidInput("--truth montecarlo", "is not available in this version of svbtdf",
+                      "use --truth model; the Monte Carlo ground truth is compared by 'svbtdf validate-model'");
+  }
+  SimulationPreset preset = MakePreset(options.preset);
+  if (options.eta != 0.0) {
+    if (!(options.eta > 1.0) || !std::isfinite(options.eta)) {
+      ThrowInvalidInput("--eta", "must be > 1, got " + std::to_string(options.eta));
+    }
+    preset.eta = options.eta;
+  }
+  SimulationOutput output{out / "session", out / "truth"};
+  // OUT must be new, empty, or an unfinished simulation (session/ and truth/ only).
+  if (fs::exists(out)) {
+    if (!fs::is_directory(out)) ThrowIoError(out.string(), "exists and is not a folder");
+    for (const auto& entry : fs::directory_iterator(out)) {
+      const std::string name = entry.path().filename().string();
+      if (name != "session" && name != "truth") {
+        ThrowInvalidInput(out.string(), "is not empty (it holds '" + name + "')", "choose a new output folder");
+      }
+    }
+  }
+  std::error_code error;
+  fs::create_directories(output.truth, error);
+  if (error) ThrowIoError(output.truth.string(), "cannot create: " + error.message(), "is the folder writable?");
+
+  const Rig rig(preset.rig);
+  const TruthMaterial material = TruthMaterial::FromPattern(preset.pattern, preset.rig.sample.texels_x,
+                                                            preset.rig.sample.texels_y, preset.eta, options.seed);
+  const RigRenderer renderer(rig, &material, options.threads);
+  CaptureTruth plan = PlanCapture(preset, renderer, options.seed);
+  plan.truth_kind = options.truth;
+  std::vector<std::string> keys;
+  for (const CaptureId& id : CaptureList(rig, plan)) keys.push_back(SessionKey(id));
+
+  const bool resuming = fs::exists(output.session / "session.json");
+  Session session = Session::CreateOrResume(output.session, NominalRig(rig, preset, plan), keys);
+  if (resuming && session.Verify(/*check_crc=*/false).complete()) {
+    ThrowInvalidInput(output.session.string(), "holds a complete simulated session already; it is never overwritten",
+                 "choose a new output folder");
+  }
+  if (!fs::exists(output.truth / "rig.json")) WriteRigTruth(output.truth / "rig.json", rig, plan);
+  if (!fs::exists(output.truth / "material.json")) WriteMaterialTruth(output.truth, material);
+
+  output.resumed = static_cast<int64_t>(session.entries().size());
+  SessionSink sink(&session);
+  CaptureOptions capture_options;
+  capture_options.seed = options.seed;
+  capture_options.threads = options.threads;
+  capture_options.progress = options.progress;
+  RunCapture(renderer, plan, sink, capture_options);
+  output.images = static_cast<int64_t>(session.entries().size());
+  return output;
+}
+
+}  // namespace svbtdf

@@ -1,0 +1,63 @@
+// `svbtdf eval MATERIAL --texel U V --wi .. --wo .. --json` against the library's evaluation of
+// the same texel (issue 5's command-line contract).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "run_command.h"
+#include "svbtdf/fit/material.h"
+#include "svbtdf/model/ggx.h"
+
+namespace svbtdf {
+namespace {
+namespace fs = std::filesystem;
+using testing::RunSvbtdf;
+
+// A 3x2 material with one representative (a GGX table) and constant maps.
+fit::Material SmallMaterial() {
+  fit::Material m;
+  m.width = 3;
+  m.height = 2;
+  m.eta = 1.45;
+  m.ndf_resolution = 16;
+  TabulatedNdf ndf(Hemicube(16), GgxNdf(0.25, 0.18));
+  ndf.Normalize();
+  m.representative_texels = {4};
+  m.representative_ln_d = {ndf.ln_d()};
+  m.alpha = FloatImage(3, 2, 1, 0.6f);
+  m.shadowing_roughness = FloatImage(3, 2, 1, 0.2f);
+  m.k_s = FloatImage(3, 2, 3, 0.8f);
+  m.rho_d = FloatImage(3, 2, 3, 0.02f);
+  m.residual = FloatImage(3, 2, 1, -1.0f);
+  m.cluster = FloatImage(3, 2, 1, 0.0f);
+  m.weight_index = FloatImage(3, 2, 1, 0.0f);
+  m.weight_value = FloatImage(3, 2, 1, 1.0f);
+  return m;
+}
+
+TEST(EvalCommand, PrintsTheMaterialsValueAtATexel) {
+  const fs::path dir = fs::temp_directory_path() / ("svbtdf-eval-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const fit::Material material = SmallMaterial();
+  fit::WriteMaterial(dir, material);
+  const auto result = RunSvbtdf("eval " + dir.string() + " --texel 2 1 --wi 0.2 0.1 -1 --wo -0.3 0 1 --json");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const nlohmann::json json = nlohmann::json::parse(result.output);
+  const Rgb expected = fit::MaterialEvaluator(material).Evaluate(2, 1, Vec3(0.2, 0.1, -1).normalized(),
+                                                                 Vec3(-0.3, 0, 1).normalized());
+  ASSERT_GT(expected[0], 0.02);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(json["rgb"][c].get<double>(), expected[c], 1e-6 * expected[c]);
+  // Outside the material, or a missing material: one clear line, exit 2 or 1.
+  const auto outside = RunSvbtdf("eval " + dir.string() + " --texel 3 0 --wi 0 0 -1 --wo 0 0 1");
+  EXPECT_EQ(outside.exit_code, 2) << outside.output;
+  EXPECT_NE(outside.output.find("--texel"), std::string::npos);
+  const auto missing = RunSvbtdf("eval " + (dir / "nope").string() + " --texel 0 0 --wi 0 0 -1 --wo 0 0 1");
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.output.find("material.json"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace svbtdf

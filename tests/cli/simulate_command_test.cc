@@ -1,0 +1,113 @@
+// `svbtdf simulate` end to end: the tiny and demo presets write a complete session and the
+// truth; an interrupted run resumes to the same images; bad output folders are refused.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "run_command.h"
+#include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/session.h"
+
+namespace svbtdf {
+namespace {
+namespace fs = std::filesystem;
+using testing::RunSvbtdf;
+
+class SimulateCommand : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root_ = fs::temp_directory_path() / ("svbtdf-simulate-" + std::to_string(::getpid()));
+    fs::remove_all(root_);
+    fs::create_directories(root_);
+  }
+  void TearDown() override { fs::remove_all(root_); }
+  fs::path root_;
+};
+
+void ExpectCompleteSimulation(const fs::path& out) {
+  const Session session = Session::Open(out / "session");
+  const SessionVerification verification = session.Verify();
+  EXPECT_TRUE(verification.complete()) << verification.Summary();
+  const nlohmann::json rig = nlohmann::json::parse(ReadTextFile(out / "truth" / "rig.json"));
+  for (const char* key : {"fx", "fy", "cx", "cy", "distortion", "rms_px"}) {
+    EXPECT_TRUE(rig["camera"].contains(key)) << key;
+  }
+  EXPECT_TRUE(fs::exists(out / "truth" / "material.json"));
+  EXPECT_TRUE(fs::exists(out / "truth" / "alpha.exr"));
+}
+
+TEST_F(SimulateCommand, TinyPresetWritesACompleteSessionAndRefusesToOverwriteIt) {
+  const fs::path out = root_ / "tiny";
+  const auto first = RunSvbtdf("-q simulate --preset tiny --out " + out.string());
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  ExpectCompleteSimulation(out);
+  const auto again = RunSvbtdf("-q simulate --preset tiny --out " + out.string());
+  EXPECT_EQ(again.exit_code, 2) << again.output;
+  EXPECT_NE(again.output.find("never overwritten"), std::string::npos) << again.output;
+  // `session verify` accepts the session, then names a damaged image and exits 3.
+  EXPECT_EQ(RunSvbtdf("session verify " + (out / "session").string()).exit_code, 0);
+  fs::remove(out / "session" / Session::FileForKey("dot/q0003/e0/r0"));
+  const auto verify = RunSvbtdf("session verify " + (out / "session").string());
+  EXPECT_EQ(verify.exit_code, 3) << verify.output;
+  EXPECT_NE(verify.output.find("dot/q0003/e0/r0"), std::string::npos) << verify.output;
+}
+
+TEST_F(SimulateCommand, AnInterruptedRunResumesToTheSameImages) {
+  const fs::path whole = root_ / "whole", resumed = root_ / "resumed";
+  ASSERT_EQ(RunSvbtdf("-q simulate --preset tiny --seed 5 --out " + whole.string()).exit_code, 0);
+  // Start the same simulation, interrupt it once some images are journalled, then resume.
+  const pid_t child = ::fork();
+  if (child == 0) {
+    ::execl(SVBTDF_CLI_PATH, SVBTDF_CLI_PATH, "-q", "simulate", "--preset", "tiny", "--seed", "5", "--out",
+            resumed.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  const fs::path journal = resumed / "session" / "journal.jsonl";
+  for (int wait = 0; wait < 2000; ++wait) {
+    if (fs::exists(journal) && fs::file_size(journal) > 2000) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ::kill(child, SIGINT);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  const size_t journalled = Session::Open(resumed / "session").entries().size();
+  EXPECT_GT(journalled, 0u);
+  const auto resume = RunSvbtdf("-q simulate --preset tiny --seed 5 --out " + resumed.string());
+  ASSERT_EQ(resume.exit_code, 0) << resume.output;
+  ExpectCompleteSimulation(resumed);
+  const Session a = Session::Open(whole / "session"), b = Session::Open(resumed / "session");
+  ASSERT_EQ(a.entries().size(), b.entries().size());
+  for (const SessionEntry& entry : a.entries()) {
+    EXPECT_EQ(entry.crc32, b.Entry(entry.key).crc32) << entry.key;
+  }
+}
+
+TEST_F(SimulateCommand, BadArgumentsAndFoldersAreClearErrors) {
+  fs::create_directories(root_ / "busy");
+  WriteTextAtomically(root_ / "busy" / "notes.txt", "mine");
+  for (const std::string& arguments :
+       {"simulate --preset nope --out " + (root_ / "x").string(), "simulate --preset tiny --out " + (root_ / "busy").string(),
+        "simulate --preset tiny --eta 0.9 --out " + (root_ / "y").string(), std::string("simulate --preset tiny")}) {
+    const auto result = RunSvbtdf(arguments);
+    EXPECT_EQ(result.exit_code, 2) << arguments << "\n" << result.output;
+    EXPECT_NE(result.output.find("svbtdf: error: "), std::string::npos) << result.output;
+  }
+  EXPECT_EQ(ReadTextFile(root_ / "busy" / "notes.txt"), "mine");
+}
+
+TEST_F(SimulateCommand, DemoPresetRunsToACompleteSession) {
+  const fs::path out = root_ / "demo";
+  const auto result = RunSvbtdf("-q simulate --preset demo --out " + out.string());
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  ExpectCompleteSimulation(out);
+}
+
+}  // namespace
+}  // namespace svbtdf

@@ -1,0 +1,149 @@
+// The fitted material end to end without images: slices synthesised from known texels are
+// clustered, the representatives fitted, the material assembled, written, read back and
+// evaluated on held-out light directions (issue 5's acceptance, on a small synthetic material).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+
+#include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/error.h"
+#include "svbtdf/fit/clustering.h"
+#include "svbtdf/fit/material.h"
+#include "svbtdf/model/beckmann.h"
+#include "svbtdf/model/ggx.h"
+#include "synthetic_slices.h"
+
+namespace svbtdf::fit {
+namespace {
+namespace fs = std::filesystem;
+
+constexpr int kWidth = 8, kHeight = 6;
+constexpr int kDots = 32;  // per side of the dot grid
+
+// Three kinds of texel in vertical bands, with a gentle gradient of k_s across each band.
+struct SyntheticMaterial {
+  std::vector<Truth> truths;
+  std::vector<TexelSlice> slices;
+  FloatImage rho_d{kWidth, kHeight, 3};
+};
+
+SyntheticMaterial MakeMaterial(const Vec3& view, const RigSamples& rig) {
+  const Hemicube grid(32);
+  SyntheticMaterial m;
+  for (int y = 0; y < kHeight; ++y) {
+    for (int x = 0; x < kWidth; ++x) {
+      const int band = x * 3 / kWidth;
+      Truth truth = band == 0   ? MakeTruth(grid, GgxNdf(0.25, 0.15), 0.3)
+                    : band == 1 ? MakeTruth(grid, GgxNdf(0.15, 0.15), 0.7)
+                                : MakeTruth(grid, BeckmannNdf(0.3, 0.2), 0.5);
+      truth.k_s = 0.7 + 0.02 * y;
+      m.slices.push_back(Synthesize(truth, view, rig, 0.01, 100 + y * kWidth + x));
+      m.truths.push_back(std::move(truth));
+      for (int c = 0; c < 3; ++c) m.rho_d.at(x, y, c) = 0.01f * c;
+    }
+  }
+  return m;
+}
+
+Material FitMaterial(const SyntheticMaterial& synthetic, double representative_fraction) {
+  const int dots = static_cast<int>(synthetic.slices.front().rho.size());
+  SliceSource source;
+  source.num_texels = kWidth * kHeight;
+  source.dimension = dots;
+  source.read = [&](int64_t t, float* out) {
+    for (int k = 0; k < dots; ++k) out[k] = static_cast<float>(synthetic.slices[t].rho[k]);
+  };
+  ClusteringOptions options;
+  options.representative_fraction = representative_fraction;
+  options.neighbours = 4;
+  const Clustering clustering = ClusterSlices(source, options);
+  const TexelFitter fitter(1.5);
+  FitWorkspace workspace;
+  std::vector<TexelFitResult> fits;
+  for (int64_t t : clustering.representatives) fits.push_back(fitter.Fit(synthetic.slices[t], &workspace));
+  return AssembleMaterial(kWidth, kHeight, 1.5, 32, clustering, fits, synthetic.rho_d);
+}
+
+double HeldOutRelativeRmse(const Material& material, const SyntheticMaterial& synthetic, const Vec3& view) {
+  const MaterialEvaluator evaluator(material);
+  const RigSamples held_out = DotGrid(view, kDots, 0.5);
+  double error = 0, norm = 0;
+  for (int y = 0; y < kHeight; ++y) {
+    for (int x = 0; x < kWidth; ++x) {
+      const Truth& truth = synthetic.truths[y * kWidth + x];
+      const TexelBtdf texel = evaluator.Texel(x, y);
+      for (const Vec3& i : held_out.light) {
+        const double expected = truth.Rho(i, view);
+        error += Square(texel.Evaluate(i, view)[0] - material.rho_d.at(x, y, 0) - expected);
+        norm += Square(expected);
+      }
+    }
+  }
+  return std::sqrt(error / norm);
+}
+
+class MaterialTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("svbtdf-material-" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TEST_F(MaterialTest, RepresentativesPredictHeldOutLightsAlmostAsWellAsFittingEveryTexel) {
+  const Vec3 view = SphericalDirection(kPi / 4, 0.0);
+  const SyntheticMaterial synthetic = MakeMaterial(view, DotGrid(view, kDots, 0.0));
+  const Material every_texel = FitMaterial(synthetic, 1.0);
+  const Material representatives = FitMaterial(synthetic, 0.125);  // 6 of 48 texels
+  ASSERT_EQ(representatives.representative_texels.size(), 6u);
+  const double error_all = HeldOutRelativeRmse(every_texel, synthetic, view);
+  const double error_reps = HeldOutRelativeRmse(representatives, synthetic, view);
+  RecordProperty("heldout_all", std::to_string(error_all));
+  RecordProperty("heldout_representatives", std::to_string(error_reps));
+  EXPECT_LT(error_all, 0.05);
+  EXPECT_LT(error_reps, 1.2 * error_all + 0.005) << "all " << error_all << " representatives " << error_reps;
+}
+
+TEST_F(MaterialTest, RoundTripsThroughDiskAndNeverOverwrites) {
+  const Vec3 view = SphericalDirection(kPi / 4, 0.0);
+  const SyntheticMaterial synthetic = MakeMaterial(view, DotGrid(view, 16, 0.0));
+  Material material = FitMaterial(synthetic, 0.125);
+  material.provenance = {{"test", true}};
+  WriteMaterial(dir_, material);
+  EXPECT_THROW(WriteMaterial(dir_, material), Error);
+  const Material read = ReadMaterial(dir_);
+  EXPECT_EQ(read.representative_texels, material.representative_texels);
+  EXPECT_EQ(read.alpha.pixels, material.alpha.pixels);
+  EXPECT_EQ(read.weight_index.pixels, material.weight_index.pixels);
+  EXPECT_EQ(read.provenance["test"], true);
+  const MaterialEvaluator a(material), b(read);
+  const Vec3 i = FlipZ(SphericalDirection(0.6, kPi));
+  EXPECT_NEAR(a.Evaluate(3, 2, i, view)[1], b.Evaluate(3, 2, i, view)[1], 1e-5 * a.Evaluate(3, 2, i, view)[1]);
+  EXPECT_THROW(b.Evaluate(kWidth, 0, i, view), Error);
+}
+
+TEST_F(MaterialTest, DamagedMaterialsAreErrorsNamingTheFile) {
+  const Vec3 view = SphericalDirection(kPi / 4, 0.0);
+  const SyntheticMaterial synthetic = MakeMaterial(view, DotGrid(view, 16, 0.0));
+  WriteMaterial(dir_, FitMaterial(synthetic, 0.125));
+  fs::remove(dir_ / "k_s.exr");
+  try {
+    ReadMaterial(dir_);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("k_s.exr"), std::string::npos) << e.what();
+  }
+  WriteTextAtomically(dir_ / "material.json", "{\"format\": \"svbtdf-material\", \"version\": 99}");
+  try {
+    ReadMaterial(dir_);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("version 99"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace svbtdf::fit

@@ -1,0 +1,105 @@
+// Round trips and error reporting of the image files users hand in and get back.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
+#include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/image_io.h"
+
+namespace svbtdf {
+namespace {
+namespace fs = std::filesystem;
+
+class ImageIo : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("svbtdf-image-io-" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+void ExpectErrorNaming(const std::function<void()>& f, const fs::path& file) {
+  try {
+    f();
+    FAIL() << "expected an error naming " << file;
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(ImageIo, SixteenBitCameraImagesRoundTripExactly) {
+  CameraImage image;
+  image.width = 7;
+  image.height = 5;
+  image.channels = 3;
+  image.bits_per_sample = 12;
+  for (int k = 0; k < 7 * 5 * 3; ++k) image.pixels.push_back(static_cast<uint16_t>((k * 977) % 4096));
+  const fs::path png = dir_ / "frame.png";
+  WriteCameraImage(png, image);
+  const CameraImage read = ReadCameraImage(png);
+  EXPECT_EQ(read.width, 7);
+  EXPECT_EQ(read.height, 5);
+  EXPECT_EQ(read.channels, 3);
+  EXPECT_EQ(read.pixels, image.pixels);
+  // Never overwrites a capture by default.
+  EXPECT_THROW(WriteCameraImage(png, image), Error);
+}
+
+TEST_F(ImageIo, ExrMapsRoundTripWithinHalfPrecision) {
+  FloatImage map(4, 3, 3);
+  for (size_t k = 0; k < map.pixels.size(); ++k) map.pixels[k] = 0.001f * static_cast<float>(k * k) + 0.5f;
+  WriteFloatImage(dir_ / "k_s.exr", map);
+  WriteFloatImage(dir_ / "alpha.exr", map, /*half_precision=*/false);
+  const FloatImage half = ReadFloatImage(dir_ / "k_s.exr");
+  const FloatImage full = ReadFloatImage(dir_ / "alpha.exr");
+  ASSERT_EQ(half.pixels.size(), map.pixels.size());
+  for (size_t k = 0; k < map.pixels.size(); ++k) {
+    EXPECT_NEAR(half.pixels[k], map.pixels[k], 1e-3 * map.pixels[k]);
+    EXPECT_EQ(full.pixels[k], map.pixels[k]);
+  }
+}
+
+TEST_F(ImageIo, BrokenFilesGetErrorsNamingThem) {
+  const fs::path missing = dir_ / "missing.png";
+  ExpectErrorNaming([&] { ReadCameraImage(missing); }, missing);
+  const fs::path garbage = dir_ / "garbage.png";
+  WriteTextAtomically(garbage, "this is not a PNG at all");
+  ExpectErrorNaming([&] { ReadCameraImage(garbage); }, garbage);
+  // A truncated PNG: a valid file cut in half.
+  CameraImage image;
+  image.width = image.height = 64;
+  image.pixels.assign(64 * 64, 1234);
+  for (size_t k = 0; k < image.pixels.size(); ++k) image.pixels[k] = static_cast<uint16_t>(k * 31);
+  const fs::path whole = dir_ / "whole.png", cut = dir_ / "cut.png";
+  WriteCameraImage(whole, image);
+  const std::string bytes = ReadTextFile(whole);
+  WriteTextAtomically(cut, bytes.substr(0, bytes.size() / 2));
+  ExpectErrorNaming([&] { ReadCameraImage(cut); }, cut);
+  // A float map where camera values are expected.
+  WriteFloatImage(dir_ / "map.exr", FloatImage(2, 2, 1, 0.5f));
+  ExpectErrorNaming([&] { ReadCameraImage(dir_ / "map.exr"); }, dir_ / "map.exr");
+}
+
+TEST_F(ImageIo, NonFiniteValuesAreReportedWithTheirPixel) {
+  FloatImage map(3, 2, 1, 1.0f);
+  EXPECT_NO_THROW(RequireFinite(map, "rho_d.exr"));
+  map.at(2, 1) = std::numeric_limits<float>::quiet_NaN();
+  try {
+    RequireFinite(map, "rho_d.exr");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("rho_d.exr"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("(2, 1)"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace svbtdf

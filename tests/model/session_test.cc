@@ -1,0 +1,132 @@
+// The capture session format: durability, verification and robustness against broken files.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/session.h"
+
+namespace svbtdf {
+namespace {
+namespace fs = std::filesystem;
+
+class SessionTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root_ = fs::temp_directory_path() / ("svbtdf-session-" + std::to_string(::getpid()));
+    fs::remove_all(root_);
+    fs::create_directories(root_);
+    folder_ = root_ / "session";
+  }
+  void TearDown() override { fs::remove_all(root_); }
+
+  static CameraImage Frame(uint16_t value) {
+    CameraImage image;
+    image.width = 8;
+    image.height = 4;
+    image.pixels.assign(32, value);
+    return image;
+  }
+
+  fs::path root_, folder_;
+  const std::vector<std::string> plan_ = {"dark/e0", "board/v00", "dot/q0000/e0/r0", "dot/q0001/e0/r0"};
+  const nlohmann::json rig_ = {{"camera", {{"model", "test"}}}};
+};
+
+TEST_F(SessionTest, ImagesAreJournalledAndSurviveReopening) {
+  Session session = Session::Create(folder_, rig_, plan_);
+  session.AddImage("dark/e0", Frame(3), 0.1, 1.0);
+  session.AddImage("board/v00", Frame(400), 0.01, 2.0);
+  EXPECT_FALSE(session.Verify().complete());
+  EXPECT_EQ(session.Verify().missing.size(), 2u);
+
+  Session reopened = Session::Open(folder_);
+  EXPECT_TRUE(reopened.Contains("board/v00"));
+  EXPECT_EQ(reopened.Entry("board/v00").gain, 2.0);
+  EXPECT_EQ(reopened.ReadImage("board/v00", /*check_crc=*/true).pixels, Frame(400).pixels);
+  EXPECT_EQ(reopened.rig()["camera"]["model"], "test");
+  reopened.AddImage("dot/q0000/e0/r0", Frame(10), 1.0, 1.0);
+  reopened.AddImage("dot/q0001/e0/r0", Frame(11), 1.0, 1.0);
+  EXPECT_TRUE(reopened.Verify().complete()) << reopened.Verify().Summary();
+  EXPECT_EQ(reopened.Verify().Summary(), "complete and intact");
+}
+
+TEST_F(SessionTest, NothingIsOverwritten) {
+  Session session = Session::Create(folder_, rig_, plan_);
+  session.AddImage("dark/e0", Frame(3), 0.1, 1.0);
+  EXPECT_THROW(session.AddImage("dark/e0", Frame(4), 0.1, 1.0), Error);
+  EXPECT_THROW(Session::Create(folder_, rig_, plan_), Error);  // the folder is not empty
+  EXPECT_THROW(Session::CreateOrResume(folder_, rig_, {"dark/e0"}), Error);  // a different plan
+  EXPECT_THROW(session.AddImage("dot/q9999/e0/r0", Frame(1), 1.0, 1.0), Error);  // not planned
+  EXPECT_EQ(Session::Open(folder_).ReadImage("dark/e0").pixels, Frame(3).pixels);
+}
+
+TEST_F(SessionTest, VerifyFindsCorruptAndMissingFiles) {
+  Session session = Session::Create(folder_, rig_, plan_);
+  for (const std::string& key : plan_) session.AddImage(key, Frame(7), 1.0, 1.0);
+  // Flip one byte of one image (same size): only the CRC can tell.
+  const fs::path file = folder_ / Session::FileForKey("board/v00");
+  std::string bytes = ReadTextFile(file);
+  bytes[bytes.size() / 2] ^= 0x5a;
+  std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
+  fs::remove(folder_ / Session::FileForKey("dark/e0"));
+  const SessionVerification report = Session::Open(folder_).Verify();
+  EXPECT_FALSE(report.complete());
+  EXPECT_EQ(report.corrupt, (std::vector<std::string>{"dark/e0", "board/v00"}));
+  EXPECT_THROW(Session::Open(folder_).ReadImage("board/v00", true), Error);
+}
+
+TEST_F(SessionTest, ACrashMidAppendLeavesAReadableJournal) {
+  Session session = Session::Create(folder_, rig_, plan_);
+  session.AddImage("dark/e0", Frame(3), 0.1, 1.0);
+  std::ofstream(folder_ / "journal.jsonl", std::ios::app) << R"({"key": "board/v00", "fi)";  // cut short
+  Session reopened = Session::Open(folder_);
+  EXPECT_EQ(reopened.entries().size(), 1u);
+  EXPECT_FALSE(reopened.Contains("board/v00"));
+}
+
+TEST_F(SessionTest, BrokenJournalLinesAreErrorsNamingFileAndLine) {
+  Session session = Session::Create(folder_, rig_, plan_);
+  session.AddImage("dark/e0", Frame(3), 0.1, 1.0);
+  std::ofstream(folder_ / "journal.jsonl", std::ios::app) << "garbage\n" << R"({"key":"x"})" << "\n";
+  try {
+    Session::Open(folder_);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("journal.jsonl:2"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(SessionTest, RandomlyDamagedFilesNeverCrashTheReader) {
+  // A small fuzz: truncate or scramble the manifest, plan and journal in many ways; Open must
+  // either succeed or throw svbtdf::Error, never crash or throw anything else.
+  Session session = Session::Create(folder_, rig_, plan_);
+  for (const std::string& key : plan_) session.AddImage(key, Frame(5), 1.0, 1.0);
+  std::mt19937_64 rng(1);
+  for (const char* name : {"session.json", "plan.json", "journal.jsonl"}) {
+    const fs::path path = folder_ / name;
+    const std::string original = ReadTextFile(path);
+    for (int trial = 0; trial < 200; ++trial) {
+      std::string damaged = original;
+      const int mode = trial % 3;
+      if (mode == 0) damaged.resize(rng() % (damaged.size() + 1));
+      if (mode == 1) damaged[rng() % damaged.size()] = static_cast<char>(rng() % 256);
+      if (mode == 2) damaged.insert(rng() % damaged.size(), std::string(1 + rng() % 5, "{}[]\",:0e9-x\n"[rng() % 13]));
+      WriteTextAtomically(path, damaged);
+      try {
+        Session::Open(folder_).Verify();
+      } catch (const Error&) {
+      } catch (const std::exception& e) {
+        FAIL() << name << " trial " << trial << ": " << e.what();
+      }
+    }
+    WriteTextAtomically(path, original);
+  }
+}
+
+}  // namespace
+}  // namespace svbtdf

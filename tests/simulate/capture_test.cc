@@ -1,0 +1,161 @@
+// Tests of a whole synthetic capture: completeness, determinism, resumption after an interrupt,
+// chessboard images that OpenCV finds at the true corners, and the rig truth file.
+
+#include <gtest/gtest.h>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <filesystem>
+#include <map>
+#include <unistd.h>
+
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/interrupt.h"
+#include "svbtdf/simulate/capture_simulator.h"
+#include "svbtdf/simulate/truth_io.h"
+
+namespace svbtdf {
+namespace {
+
+std::string Key(const CaptureId& id) {
+  return id.kind + "/" + std::to_string(id.index) + "/" + std::to_string(id.exposure_index);
+}
+
+class MemorySink : public CaptureSink {
+ public:
+  bool Contains(const CaptureId& id) const override { return images.count(Key(id)) > 0; }
+  void Write(const CaptureId& id, const CameraImage& image) override {
+    images[Key(id)] = image.pixels;
+    if (interrupt_after > 0 && static_cast<int>(images.size()) == interrupt_after) {
+      SetInterruptRequested(true);
+    }
+  }
+  std::map<std::string, std::vector<uint16_t>> images;
+  int interrupt_after = 0;
+};
+
+struct TinyCapture {
+  SimulationPreset preset = MakePreset("tiny");
+  Rig rig{preset.rig};
+  TruthMaterial material = TruthMaterial::FromPattern(preset.pattern, 32, 32, preset.eta, 5);
+  RigRenderer renderer{rig, &material, 2};
+  CaptureTruth plan = PlanCapture(preset, renderer, 5);
+};
+
+TEST(Capture, TinyIsCompleteDeterministicAndResumable) {
+  TinyCapture tiny;
+  CaptureOptions options;
+  options.seed = 5;
+  options.progress = false;
+  MemorySink first;
+  RunCapture(tiny.renderer, tiny.plan, first, options);
+  const size_t expected = 2 * 2 + 6 + 1 + 1 + 1 + 36 * 2;  // darks, boards, holder, all, flat, dots
+  EXPECT_EQ(first.images.size(), expected);
+  EXPECT_EQ(CaptureList(tiny.rig, tiny.plan).size(), expected);
+
+  // Interrupted after 20 images, then resumed: the same bytes as the uninterrupted run.
+  MemorySink resumed;
+  resumed.interrupt_after = 20;
+  try {
+    RunCapture(tiny.renderer, tiny.plan, resumed, options);
+    ADD_FAILURE() << "the interrupt was not noticed";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kInterrupted);
+  }
+  SetInterruptRequested(false);
+  EXPECT_EQ(resumed.images.size(), 20u);
+  resumed.interrupt_after = 0;
+  RunCapture(tiny.renderer, tiny.plan, resumed, options);
+  EXPECT_EQ(resumed.images, first.images);
+
+  // Another seed changes the noise.
+  MemorySink other;
+  options.seed = 6;
+  RunCapture(tiny.renderer, tiny.plan, other, options);
+  EXPECT_NE(other.images.at("dots/10/0"), first.images.at("dots/10/0"));
+}
+
+TEST(Capture, BrightestDotImageIsExposedAsPlanned) {
+  TinyCapture tiny;
+  // The probe dot's shortest exposure peaks at peak_fill of the well (noise aside).
+  const double peak = tiny.renderer.ProbePeakRadiance();
+  const double electrons = tiny.renderer.MeanElectrons(peak, Vec2(tiny.rig.config().intrinsics.cx,
+                                                                  tiny.rig.config().intrinsics.cy),
+                                                       tiny.plan.dot_exposures_s[0]);
+  EXPECT_NEAR(electrons / tiny.rig.config().sensor.full_well, tiny.preset.peak_fill, 1e-9);
+  EXPECT_NEAR(tiny.plan.dot_exposures_s[1] / tiny.plan.dot_exposures_s[0], 16.0, 1e-12);
+}
+
+// OpenCV finds every rendered chessboard, and its corners lie on the true projections.
+TEST(Capture, BoardImagesAreFoundAtTheTrueCorners) {
+  TinyCapture tiny;
+  const BoardConfig& b = tiny.rig.config().board;
+  std::vector<BoardPose> poses = tiny.plan.zhang_boards;
+  poses.push_back(tiny.plan.holder_board);
+  double worst = 0.0;
+  for (const BoardPose& pose : poses) {
+    FloatImage radiance;
+    tiny.renderer.RenderBoard(pose, &radiance);
+    const CameraImage stored = tiny.renderer.Expose(radiance, tiny.plan.board_exposure_s, 1, 1);
+    cv::Mat gray(stored.height, stored.width, CV_8U);
+    for (int y = 0; y < stored.height; ++y) {
+      for (int x = 0; x < stored.width; ++x) {
+        gray.at<uint8_t>(y, x) = static_cast<uint8_t>(stored.pixels[(size_t(y) * stored.width + x) * 3] >>
+                                                      (stored.bits_per_sample - 8));
+      }
+    }
+    std::vector<cv::Point2f> found;
+    ASSERT_TRUE(cv::findChessboardCorners(gray, cv::Size(b.inner_cols, b.inner_rows), found));
+    cv::cornerSubPix(gray, found, cv::Size(3, 3), cv::Size(-1, -1),
+                     cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-4));
+    const std::vector<Vec3> corners = tiny.renderer.BoardCorners(pose);
+    // OpenCV may list the corners in reverse; compare with the nearer ordering.
+    double forward = 0.0, backward = 0.0;
+    for (size_t n = 0; n < corners.size(); ++n) {
+      const Vec2 truth = *tiny.rig.camera().Project(corners[n]);
+      const cv::Point2f& f = found[n];
+      const cv::Point2f& r = found[corners.size() - 1 - n];
+      forward = std::max(forward, std::hypot(f.x - truth.x(), f.y - truth.y()));
+      backward = std::max(backward, std::hypot(r.x - truth.x(), r.y - truth.y()));
+    }
+    worst = std::max(worst, std::min(forward, backward));
+    Vec2 mean = Vec2::Zero();
+    for (size_t n = 0; n < corners.size(); ++n) {
+      const Vec2 truth = *tiny.rig.camera().Project(corners[n]);
+      const cv::Point2f& f = forward < backward ? found[n] : found[corners.size() - 1 - n];
+      mean += (Vec2(f.x, f.y) - truth) / corners.size();
+    }
+    // No systematic shift (a half-pixel convention error would show here); the oblique holder
+    // view (small foreshortened squares) is allowed more.
+    const bool holder = &pose == &poses.back();
+    EXPECT_LT(mean.norm(), holder ? 0.15 : 0.03) << "mean corner offset, px";
+  }
+  EXPECT_LT(worst, 0.35) << "largest corner error, px (measured 0.16 Zhang views, 0.28 holder)";
+}
+
+TEST(Capture, RigTruthRoundTrip) {
+  TinyCapture tiny;
+  const auto dir = std::filesystem::temp_directory_path() / ("svbtdf_rig_truth_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto path = dir / "rig.json";
+  std::filesystem::remove(path);
+  WriteRigTruth(path, tiny.rig, tiny.plan);
+  EXPECT_THROW(WriteRigTruth(path, tiny.rig, tiny.plan), Error);  // never overwritten
+  const RigTruth truth = ReadRigTruth(path);
+  EXPECT_EQ(truth.camera.fx, tiny.rig.config().intrinsics.fx);
+  EXPECT_EQ(truth.camera.cy, tiny.rig.config().intrinsics.cy);
+  EXPECT_EQ(truth.camera.distortion, tiny.rig.config().intrinsics.distortion);
+  EXPECT_EQ(truth.rms_px, 0.0);
+  EXPECT_LT((truth.pose.rotation - tiny.rig.config().pose.rotation).norm(), 1e-15);
+  ASSERT_EQ(truth.dots.size(), tiny.rig.dots().size());
+  EXPECT_EQ(truth.dots[7].position, tiny.rig.dots()[7].position);
+  EXPECT_EQ(truth.capture.dot_exposures_s, tiny.plan.dot_exposures_s);
+  EXPECT_EQ(truth.capture.zhang_boards.size(), tiny.plan.zhang_boards.size());
+  std::filesystem::remove_all(dir);
+  EXPECT_THROW(ReadRigTruth(dir / "missing.json"), Error);
+}
+
+}  // namespace
+}  // namespace svbtdf

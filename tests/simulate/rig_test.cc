@@ -1,0 +1,329 @@
+// Tests of the virtual rig and its renderer (docs/simulator.md): the camera model against OpenCV,
+// the measurement equation against its inversion, photometry against closed forms, the sensor's
+// noise statistics, determinism and the geometry errors.
+
+#include <gtest/gtest.h>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+
+#include <cmath>
+#include <vector>
+
+#include "svbtdf/common/error.h"
+#include "svbtdf/simulate/presets.h"
+#include "svbtdf/simulate/renderer.h"
+#include "svbtdf/simulate/rig.h"
+#include "svbtdf/simulate/truth_material.h"
+
+namespace svbtdf {
+namespace {
+
+// A noise-free copy of the tiny preset's rig.
+RigConfig NoiseFreeTiny() {
+  RigConfig rig = MakePreset("tiny").rig;
+  rig.sensor.shot_noise = false;
+  rig.sensor.read_noise = 0.0;
+  return rig;
+}
+
+TEST(PinholeCamera, ProjectionMatchesOpenCv) {
+  CameraIntrinsics k;
+  k.width = 1600;
+  k.height = 1200;
+  k.fx = 1450.0;
+  k.fy = 1462.5;
+  k.cx = 812.25;
+  k.cy = 590.75;
+  k.distortion = {-0.21, 0.09, 0.0012, -0.0007, -0.015};
+  const CameraPose pose = RigConfig::PaperPose(1.0, 0.7);
+  const PinholeCamera camera(k, pose);
+
+  std::vector<cv::Point3d> points;
+  for (int a = -4; a <= 4; ++a) {
+    for (int b = -4; b <= 4; ++b) {
+      points.emplace_back(0.05 * a, 0.04 * b, 0.01 * ((a * b) % 5) - 0.02);
+    }
+  }
+  cv::Mat rotation(3, 3, CV_64F), rvec, tvec(3, 1, CV_64F);
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) rotation.at<double>(r, c) = pose.rotation(r, c);
+    tvec.at<double>(r) = pose.translation(r);
+  }
+  cv::Rodrigues(rotation, rvec);
+  const cv::Matx33d camera_matrix(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
+  const std::vector<double> distortion(k.distortion.begin(), k.distortion.end());
+  std::vector<cv::Point2d> expected;
+  cv::projectPoints(points, rvec, tvec, camera_matrix, distortion, expected);
+
+  double worst = 0.0;
+  for (size_t n = 0; n < points.size(); ++n) {
+    const auto px = camera.Project(Vec3(points[n].x, points[n].y, points[n].z));
+    ASSERT_TRUE(px.has_value());
+    worst = std::max(worst, std::hypot(px->x() - expected[n].x, px->y() - expected[n].y));
+    // The pixel ray is the inverse of the projection.
+    const auto ray = camera.PixelRay(*px);
+    ASSERT_TRUE(ray.has_value());
+    const Vec3 direction = (Vec3(points[n].x, points[n].y, points[n].z) - camera.Centre()).normalized();
+    EXPECT_LT((*ray - direction).norm(), 1e-9);
+  }
+  EXPECT_LT(worst, 1e-6) << "largest difference from cv::projectPoints, px";
+}
+
+TEST(Rig, PaperGeometryByDefault) {
+  const Rig rig(MakePreset("tiny").rig);
+  const Vec3 c = rig.camera().Centre();
+  EXPECT_NEAR(c.norm(), 1.0, 1e-9);
+  EXPECT_NEAR(rig.CameraTheta(), kPi / 4, 1e-9);
+  // The sample centre is on the optical axis.
+  const auto px = rig.camera().Project(Vec3::Zero());
+  EXPECT_NEAR(px->x(), rig.config().intrinsics.cx, 1e-6);
+  EXPECT_NEAR(px->y(), rig.config().intrinsics.cy, 1e-6);
+  // The grid is centred d cos(theta) away from the camera (+y) and spans 1.2 sample widths.
+  double x_min = 1, x_max = -1, y_mean = 0;
+  for (const Dot& dot : rig.dots()) {
+    x_min = std::min(x_min, dot.position.x());
+    x_max = std::max(x_max, dot.position.x());
+    y_mean += dot.position.y() / rig.dots().size();
+    EXPECT_DOUBLE_EQ(dot.position.z(), -0.04);
+  }
+  const double pitch = rig.config().monitor.pixel_pitch;
+  EXPECT_NEAR(x_max - x_min, 1.2 * 0.08, 2 * pitch);
+  EXPECT_NEAR(y_mean, 0.04 * std::cos(kPi / 4), pitch);
+}
+
+TEST(Rig, ImpossibleGeometryIsRejected) {
+  auto expect_error = [](RigConfig config, const std::string& subject) {
+    try {
+      Rig rig(config);
+      ADD_FAILURE() << "no error for " << subject;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::kInvalidInput);
+      EXPECT_NE(e.subject().find(subject), std::string::npos) << e.what();
+    }
+  };
+  RigConfig below = NoiseFreeTiny();
+  below.pose = CameraPose::LookAt(Vec3(0, -0.7, -0.7), Vec3::Zero(), Vec3::UnitZ());
+  expect_error(below, "camera pose");
+  RigConfig away = NoiseFreeTiny();
+  away.pose = CameraPose::LookAt(Vec3(0, -0.7, 0.7), Vec3(0, -1.4, 1.4), Vec3::UnitZ());
+  expect_error(away, "camera");
+  RigConfig narrow = NoiseFreeTiny();
+  narrow.intrinsics.fx = narrow.intrinsics.fy = 9000.0;
+  expect_error(narrow, "camera");
+  RigConfig in_front = NoiseFreeTiny();
+  in_front.monitor.distance = -0.04;
+  expect_error(in_front, "monitor.distance");
+  RigConfig small_monitor = NoiseFreeTiny();
+  small_monitor.monitor.width = 0.05;
+  expect_error(small_monitor, "monitor");
+  RigConfig bad_profile = NoiseFreeTiny();
+  bad_profile.monitor.emission.kind = "oled";
+  expect_error(bad_profile, "monitor.emission");
+  EXPECT_THROW(MakePreset("huge"), Error);
+}
+
+// The measurement equation inverted at pixels that see one texel gives back the truth:
+//   R = I |p - x|^2 / (|i.z| L_q(x)),
+// from the stored, noise-free 12-bit values through the inverse of the sensor chain.
+TEST(RigRenderer, DotImageInvertsToTruth) {
+  RigConfig config = NoiseFreeTiny();
+  config.dots.radius_px = 0.5;  // a point emitter, as the equation assumes
+  config.sensor.bit_depth = 16;
+  const Rig rig(config);
+  const TruthMaterial material = TruthMaterial::FromPattern("smooth", 32, 32, 1.5, 7);
+  const RigRenderer renderer(rig, &material, 2);
+  const Vec3 camera = rig.camera().Centre();
+  const int n = config.pixel_samples;
+  int checked = 0;
+  double worst = 0.0;
+  for (int q : {0, 14, 21, 35}) {
+    const Dot& dot = rig.dots()[q];
+    FloatImage radiance;
+    renderer.RenderDot(dot, &radiance);
+    const float peak = *std::max_element(radiance.pixels.begin(), radiance.pixels.end());
+    const double exposure = 0.8 * config.sensor.full_well / (peak * config.sensor.sensitivity);
+    const CameraImage image = renderer.Expose(radiance, exposure, 1, q);
+    const double max_value = std::ldexp(1.0, image.bits_per_sample) - 1.0;
+    for (int y = 0; y < radiance.height; ++y) {
+      for (int x = 0; x < radiance.width; ++x) {
+        // Pixels whose every sub-sample falls in one texel.
+        std::optional<std::array<int, 2>> texel;
+        bool single = true;
+        for (int s = 0; s < n * n && single; ++s) {
+          const auto hit = rig.SampleHit(Vec2(x + (s % n + 0.5) / n - 0.5, y + (s / n + 0.5) / n - 0.5));
+          const auto t = hit ? rig.TexelAt(*hit) : std::nullopt;
+          single = t.has_value() && (!texel || *t == *texel);
+          texel = t;
+        }
+        if (!single) continue;
+        const Vec3 x_hit = *rig.SampleHit(Vec2(x, y));
+        const Vec3 to_light = dot.position - x_hit;
+        const Vec3 i = to_light.normalized();
+        const Vec3 o = (camera - x_hit).normalized();
+        const Rgb truth = material.Evaluate(material.Index((*texel)[0], (*texel)[1]), i, o);
+        for (int c = 0; c < 3; ++c) {
+          const uint16_t stored = image.pixels[(size_t(y) * image.width + x) * 3 + c];
+          if (stored < 0.02 * max_value) continue;  // quantisation dominates below
+          const double electrons = stored / max_value * config.sensor.full_well;
+          const double pixel_radiance = electrons / (exposure * config.sensor.sensitivity *
+                                                     renderer.Vignetting(Vec2(x, y)));
+          const double measured = pixel_radiance * to_light.squaredNorm() /
+                                  (std::abs(i.z()) * rig.DotIntensityToward(dot, x_hit));
+          worst = std::max(worst, std::abs(measured / truth[c] - 1.0));
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_GT(checked, 500);
+  EXPECT_LT(worst, 1e-3) << "over " << checked << " pixel channels";
+}
+
+// Form factor from a point to an axis-aligned rectangle [0, a] x [0, b] in a parallel plane at
+// distance 1, one corner above the point (Howell's catalogue, B-8).
+double CornerFormFactor(double a, double b) {
+  const double sa = std::sqrt(1 + a * a), sb = std::sqrt(1 + b * b);
+  return (a / sa * std::atan(b / sa) + b / sb * std::atan(a / sb)) / kTwoPi;
+}
+// Signed extension to any rectangle [x0, x1] x [y0, y1] by inclusion-exclusion.
+double RectangleFormFactor(double x0, double x1, double y0, double y1, double d) {
+  auto f = [&](double x, double y) {
+    return std::copysign(1.0, x) * std::copysign(1.0, y) * CornerFormFactor(std::abs(x) / d, std::abs(y) / d);
+  };
+  return f(x1, y1) - f(x0, y1) - f(x1, y0) + f(x0, y0);
+}
+
+// Photometry: a diffuse transmitter (R = rho_d) lit by a constant-radiance (Lambertian) monitor.
+// Summing the dot images of a grid that tiles the monitor, each scaled by cell area / dot area,
+// must give rho_d times the monitor's irradiance pi L0 F (closed-form form factor).
+TEST(RigRenderer, DotsTilingTheMonitorGiveItsIrradiance) {
+  RigConfig config = NoiseFreeTiny();
+  config.monitor.emission.kind = "lambertian";
+  config.monitor.pixel_pitch = 0.00005;
+  config.dots.cols = config.dots.rows = 24;
+  config.dots.shift = 0.0;
+  config.dots.radius_px = 4.0;
+  config.intrinsics.width = 240;
+  config.intrinsics.height = 220;
+  config.intrinsics.cy = 109.5;
+  config.intrinsics.fx = config.intrinsics.fy = 1900.0;
+  config.pose = RigConfig::PaperPose(1.0, 0.1);  // nearly overhead: the whole grid is in view
+  const double spacing = 1.2 * 0.08 / 23;
+  config.monitor.width = config.monitor.height = 24 * spacing;
+  config.monitor.centre = Vec2::Zero();
+  const Rig rig(config);
+  std::vector<TruthTexel> texels(32 * 32);
+  for (TruthTexel& t : texels) {
+    t.k_s = {0, 0, 0};
+    t.rho_d = {0.25, 0.5, 0.75};
+  }
+  const TruthMaterial material(32, 32, 1.5, "ggx", texels);
+  const RigRenderer renderer(rig, &material, 2);
+  FloatImage sum(config.intrinsics.width, config.intrinsics.height, 3), one;
+  for (const Dot& dot : rig.dots()) {
+    renderer.RenderDot(dot, &one);
+    for (size_t k = 0; k < one.pixels.size(); ++k) sum.pixels[k] += one.pixels[k];
+  }
+  const double dot_area = kPi * Square(rig.dots()[0].radius);
+  const double half = config.monitor.width / 2;
+  int checked = 0;
+  double worst = 0;
+  for (int y = 0; y < sum.height; y += 7) {
+    for (int x = 0; x < sum.width; x += 7) {
+      const auto hit = rig.SampleHit(Vec2(x, y));
+      if (!hit || !rig.SampleHit(Vec2(x - 1, y - 1)) || !rig.SampleHit(Vec2(x + 1, y + 1))) continue;
+      const double irradiance =
+          kPi * config.monitor.white_exitance *
+          RectangleFormFactor(-half - hit->x(), half - hit->x(), -half - hit->y(), half - hit->y(), 0.04);
+      for (int c = 0; c < 3; ++c) {
+        const double measured = sum.at(x, y, c) * Square(spacing) / dot_area;
+        worst = std::max(worst, std::abs(measured / (texels[0].rho_d[c] * irradiance) - 1));
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 100);
+  EXPECT_LT(worst, 3e-3);  // measured 7.6e-4: the midpoint rule over 4 mm cells at 4 cm
+}
+
+// A flat white field of an isotropic monitor seen directly: the radiance of a surface whose
+// intensity per area is constant is exitance / cos(theta_e).
+TEST(RigRenderer, FlatFieldOfIsotropicMonitor) {
+  const Rig rig(NoiseFreeTiny());
+  const RigRenderer renderer(rig, nullptr, 2);
+  FloatImage image;
+  renderer.RenderFlatField(1.0, &image);
+  const double exitance = rig.config().monitor.white_exitance;
+  for (int y = 5; y < image.height; y += 20) {
+    for (int x = 5; x < image.width; x += 20) {
+      const Vec3 ray = *rig.camera().PixelRay(Vec2(x, y));
+      EXPECT_NEAR(image.at(x, y, 1), exitance / -ray.z(), 1e-4 * exitance / -ray.z());
+    }
+  }
+}
+
+// The sensor's noise: mean and variance of a constant field match Poisson + read noise, and the
+// stored values are a deterministic function of the seed.
+TEST(RigRenderer, SensorNoiseStatisticsAndDeterminism) {
+  RigConfig config = MakePreset("tiny").rig;
+  config.sensor.bit_depth = 16;
+  const Rig rig(config);
+  const RigRenderer renderer(rig, nullptr, 2);
+  FloatImage flat(200, 200, 1);
+  std::fill(flat.pixels.begin(), flat.pixels.end(), 1.0f);
+  const double exposure = 0.25 * config.sensor.full_well / config.sensor.sensitivity;
+  const CameraImage a = renderer.Expose(flat, exposure, 42, 3);
+  const CameraImage b = renderer.Expose(flat, exposure, 42, 3);
+  const CameraImage c = renderer.Expose(flat, exposure, 43, 3);
+  EXPECT_EQ(a.pixels, b.pixels);
+  EXPECT_NE(a.pixels, c.pixels);
+  const double scale = (std::ldexp(1.0, 16) - 1) / config.sensor.full_well;  // DN per electron
+  double mean = 0, mean_expected = 0;
+  int count = 0;
+  // Vignetting is zero in the tiny preset; use the centre region anyway.
+  for (int y = 50; y < 150; ++y) {
+    for (int x = 50; x < 150; ++x) {
+      mean += a.pixels[y * 200 + x];
+      mean_expected += renderer.MeanElectrons(1.0, Vec2(x, y), exposure) * scale;
+      ++count;
+    }
+  }
+  mean /= count;
+  mean_expected /= count;
+  double variance = 0;
+  for (int y = 50; y < 150; ++y) {
+    for (int x = 50; x < 150; ++x) variance += Square(a.pixels[y * 200 + x] - mean);
+  }
+  variance /= count - 1;
+  const double electrons = mean_expected / scale;
+  const double variance_expected =
+      (electrons + Square(config.sensor.read_noise)) * scale * scale + 1.0 / 12.0;
+  EXPECT_NEAR(mean, mean_expected, 4 * std::sqrt(variance_expected / count));
+  // Standard error of a variance estimate ~ sqrt(2 / n).
+  EXPECT_NEAR(variance / variance_expected, 1.0, 4 * std::sqrt(2.0 / count));
+}
+
+TEST(RigRenderer, ZhangPosesAreVariedAndInView) {
+  const Rig rig(MakePreset("tiny").rig);
+  const RigRenderer renderer(rig, nullptr, 2);
+  const auto poses = renderer.ZhangBoardPoses(6, 1);
+  ASSERT_EQ(poses.size(), 6u);
+  double min_tilt = 10, max_tilt = 0;
+  for (const BoardPose& pose : poses) {
+    const double tilt = std::acos(std::abs(pose.rotation.col(2).dot(rig.camera().pose().rotation.row(2))));
+    min_tilt = std::min(min_tilt, tilt);
+    max_tilt = std::max(max_tilt, tilt);
+    for (const Vec3& corner : renderer.BoardCorners(pose)) {
+      const auto px = rig.camera().Project(corner);
+      ASSERT_TRUE(px.has_value());
+      EXPECT_GT(px->x(), 0);
+      EXPECT_LT(px->x(), rig.config().intrinsics.width);
+    }
+  }
+  EXPECT_GT(min_tilt, 10 * kPi / 180);
+  EXPECT_LT(max_tilt, 45 * kPi / 180);
+}
+
+}  // namespace
+}  // namespace svbtdf

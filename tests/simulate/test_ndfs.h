@@ -1,0 +1,33 @@
+#pragma once
+// NDFs shared by the simulate tests.
+#include <memory>
+
+#include "svbtdf/model/ndf_factory.h"
+
+namespace svbtdf {
+
+inline std::unique_ptr<Ndf> RoughNdf(double roughness) {
+  AnalyticNdfParams p;
+  p.alpha_x = p.alpha_y = roughness;
+  return MakeAnalyticNdf("ggx", p);
+}
+
+// A skewed, rotated, anisotropic Ellipsoid NDF: no symmetry for a sign error to hide behind.
+inline std::unique_ptr<Ndf> SkewedNdf() {
+  AnalyticNdfParams p;
+  p.alpha_x = 0.3;
+  p.alpha_y = 0.18;
+  p.theta_x = 0.2;
+  p.theta_y = -0.15;
+  p.theta_z = 0.5;
+  return MakeAnalyticNdf("ellipsoid", p);
+}
+
+// The paper's Fig. 5 uses a Gaussian (Beckmann) NDF.
+inline std::unique_ptr<Ndf> PaperNdf(double roughness) {
+  AnalyticNdfParams p;
+  p.alpha_x = p.alpha_y = roughness;
+  return MakeAnalyticNdf("beckmann", p);
+}
+
+}  // namespace svbtdf
