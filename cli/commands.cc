@@ -4,6 +4,7 @@ namespace svbtdf::cli {
 
 void AddAllCommands(CLI::App& app) {
   AddBtdfCommand(app);
+  AddCalibrateCommand(app);
   AddCompareCommand(app);
   AddDevicesCommand(app);
   AddEvalCommand(app);

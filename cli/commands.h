@@ -11,6 +11,7 @@ namespace svbtdf::cli {
 void AddAllCommands(CLI::App& app);
 
 void AddBtdfCommand(CLI::App& app);           // svbtdf btdf eval
+void AddCalibrateCommand(CLI::App& app);      // svbtdf calibrate
 void AddCompareCommand(CLI::App& app);        // svbtdf compare
 void AddDevicesCommand(CLI::App& app);         // svbtdf devices
 void AddEvalCommand(CLI::App& app);            // svbtdf eval

@@ -1,0 +1,109 @@
+// svbtdf calibrate: Zhang calibration of the rig camera from a capture session, or of any camera
+// from a folder of board photos (--images).
+
+#include <glob.h>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+#include "svbtdf/calib/camera_calibration.h"
+#include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/progress.h"
+
+namespace svbtdf::cli {
+namespace {
+
+struct CalibrateOptions {
+  std::string images_glob;
+  std::string board = "chessboard:9x6:25";
+  std::string json_path;
+  bool fix_k3 = false;
+};
+
+std::vector<std::string> ExpandGlob(const std::string& pattern) {
+  glob_t matches{};
+  const int rc = ::glob(pattern.c_str(), GLOB_TILDE | GLOB_BRACE, nullptr, &matches);
+  std::vector<std::string> files;
+  if (rc == 0) {
+    for (size_t k = 0; k < matches.gl_pathc; ++k) files.emplace_back(matches.gl_pathv[k]);
+  }
+  ::globfree(&matches);
+  if (files.empty()) {
+    ThrowInvalidInput("--images", "no file matches '" + pattern + "'",
+                      "quote the pattern so the shell does not expand it, e.g. --images 'boards/*.png'");
+  }
+  return files;
+}
+
+void PrintSummary(const calib::CalibrationReport& report) {
+  const calib::CameraModel& c = report.camera;
+  std::printf("camera %dx%d: fx %.2f (+-%.2f)  fy %.2f (+-%.2f)  cx %.2f (+-%.2f)  cy %.2f (+-%.2f)\n", c.width,
+              c.height, c.fx, report.intrinsics_std[0], c.fy, report.intrinsics_std[1], c.cx,
+              report.intrinsics_std[2], c.cy, report.intrinsics_std[3]);
+  std::printf("distortion k1 %.5f k2 %.5f p1 %.6f p2 %.6f k3 %.5f\n", c.distortion[0], c.distortion[1],
+              c.distortion[2], c.distortion[3], c.distortion[4]);
+  std::printf("reprojection RMS %.3f px over %d of %zu views\n", report.rms_px, report.used_views(),
+              report.views.size());
+  for (const calib::ViewReport& view : report.views) {
+    if (!view.used) std::printf("  dropped %s: %s\n", view.source.c_str(), view.dropped_because.c_str());
+  }
+}
+
+void RunCalibrateImages(const CalibrateOptions& options) {
+  const calib::BoardSpec board = calib::BoardSpec::Parse(options.board);
+  const std::vector<std::string> files = ExpandGlob(options.images_glob);
+  std::vector<calib::BoardDetection> detections;
+  cv::Size image_size;
+  ProgressBar progress("detecting board", static_cast<int64_t>(files.size()), "images");
+  for (const std::string& file : files) {
+    const cv::Mat image = cv::imread(file, cv::IMREAD_GRAYSCALE);
+    if (image.empty()) ThrowFormatError(file, "cannot be read as an image", "is it a PNG, JPEG or TIFF file?");
+    if (image_size.empty()) image_size = image.size();
+    if (image.size() != image_size) {
+      ThrowInvalidInput(file, "is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                                  " but the first image is " + std::to_string(image_size.width) + "x" +
+                                  std::to_string(image_size.height),
+                        "all views must come from one camera at one resolution");
+    }
+    detections.push_back(calib::DetectBoard(image, board, file));
+    progress.Advance();
+  }
+  progress.Finish();
+  calib::CalibrationOptions calibration_options;
+  calibration_options.fix_k3 = options.fix_k3;
+  const calib::CalibrationReport report = calib::CalibrateCamera(detections, image_size, calibration_options);
+  PrintSummary(report);
+  if (!options.json_path.empty()) {
+    nlohmann::json out;
+    out["format"] = "svbtdf-camera-calibration";
+    out["version"] = 1;
+    out["board"] = board.ToString();
+    out["camera"] = calib::ToJson(report);
+    WriteTextAtomically(options.json_path, out.dump(2) + "\n");
+    std::printf("wrote %s\n", options.json_path.c_str());
+  }
+}
+
+}  // namespace
+
+void AddCalibrateCommand(CLI::App& app) {
+  auto options = std::make_shared<CalibrateOptions>();
+  CLI::App* calibrate = app.add_subcommand("calibrate", "Zhang camera calibration from board images");
+  calibrate->add_option("--images", options->images_glob, "glob of board photos, e.g. 'boards/*.png'")->required();
+  calibrate->add_option("--board", options->board, "chessboard:COLSxROWS:SQUARE_MM or charuco:COLSxROWS:SQUARE_MM:MARKER_MM[:DICT]")
+      ->capture_default_str();
+  calibrate->add_option("--json", options->json_path, "write the calibration to this JSON file");
+  calibrate->add_flag("--fix-k3", options->fix_k3, "hold the k3 distortion coefficient at zero");
+  calibrate->callback([options] { RunCalibrateImages(*options); });
+}
+
+}  // namespace svbtdf::cli

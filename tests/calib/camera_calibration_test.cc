@@ -1,0 +1,119 @@
+// Zhang calibration against a known camera: rendered chessboard views must give back the
+// intrinsics within the tolerances of issue 4 (focal lengths 0.5%, principal point 2 px).
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <cstdio>
+#include <random>
+
+#include "board_renderer.h"
+#include "svbtdf/calib/camera_calibration.h"
+#include "svbtdf/common/error.h"
+
+namespace svbtdf::calib {
+namespace {
+
+CameraModel TrueCamera() {
+  CameraModel camera;
+  camera.width = 800;
+  camera.height = 600;
+  camera.fx = 1020.0;
+  camera.fy = 1017.0;
+  camera.cx = 407.0;
+  camera.cy = 296.0;
+  camera.distortion = {-0.12, 0.05, 0.0008, -0.0005, 0.0};
+  return camera;
+}
+
+// Board poses that tilt the board by up to ~35 degrees and move it around the frame.
+std::vector<std::pair<cv::Vec3d, cv::Vec3d>> Poses(int count, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> tilt(-0.6, 0.6), shift(-40, 40);
+  std::vector<std::pair<cv::Vec3d, cv::Vec3d>> poses;
+  for (int k = 0; k < count; ++k) {
+    poses.push_back({cv::Vec3d(tilt(rng), tilt(rng), 0.3 * tilt(rng)), cv::Vec3d(-100 + shift(rng), -70 + shift(rng), 520 + 2 * shift(rng))});
+  }
+  return poses;
+}
+
+std::vector<BoardDetection> DetectRenderedViews(const BoardSpec& board, const CameraModel& camera, int count) {
+  std::vector<BoardDetection> detections;
+  int k = 0;
+  for (const auto& [rvec, tvec] : Poses(count, 17)) {
+    const cv::Mat image = testing::RenderChessboard(board, camera, rvec, tvec, 0.01, k);
+    detections.push_back(DetectBoard(image, board, "view" + std::to_string(k++)));
+  }
+  return detections;
+}
+
+TEST(BoardSpec, ParsesAndRejects) {
+  const BoardSpec chess = BoardSpec::Parse("chessboard:9x6:25");
+  EXPECT_EQ(chess.cols, 9);
+  EXPECT_EQ(chess.rows, 6);
+  EXPECT_DOUBLE_EQ(chess.square_mm, 25.0);
+  EXPECT_EQ(chess.CornerPositions().size(), 54u);
+  const BoardSpec charuco = BoardSpec::Parse("charuco:8x6:30:22:DICT_4X4_50");
+  EXPECT_EQ(charuco.kind, BoardSpec::Kind::kCharuco);
+  EXPECT_EQ(charuco.CornerPositions().size(), 35u);
+  for (const char* bad : {"chess:9x6:25", "chessboard:9x6", "chessboard:1x6:25", "chessboard:9x6:0",
+                          "charuco:8x6:30:40", "charuco:8x6:30:20:NOPE", "chessboard:99999999999x6:25"}) {
+    EXPECT_THROW(BoardSpec::Parse(bad), Error) << bad;
+  }
+}
+
+TEST(CameraCalibration, RecoversKnownIntrinsicsFromRenderedViews) {
+  const BoardSpec board = BoardSpec::Parse("chessboard:9x6:20");
+  const CameraModel truth = TrueCamera();
+  const std::vector<BoardDetection> detections = DetectRenderedViews(board, truth, 12);
+  const CalibrationReport report = CalibrateCamera(detections, cv::Size(truth.width, truth.height));
+  RecordProperty("fx_relative_error", std::to_string(report.camera.fx / truth.fx - 1));
+  std::printf("rms %.4f px, fx %.3f (truth %.1f), fy %.3f, cx %.3f, cy %.3f, k1 %.4f\n", report.rms_px,
+              report.camera.fx, truth.fx, report.camera.fy, report.camera.cx, report.camera.cy,
+              report.camera.distortion[0]);
+  EXPECT_GE(report.used_views(), 10);
+  EXPECT_LT(report.rms_px, 0.2);
+  EXPECT_NEAR(report.camera.fx / truth.fx, 1.0, 0.005);
+  EXPECT_NEAR(report.camera.fy / truth.fy, 1.0, 0.005);
+  EXPECT_NEAR(report.camera.cx, truth.cx, 2.0);
+  EXPECT_NEAR(report.camera.cy, truth.cy, 2.0);
+  EXPECT_NEAR(report.camera.distortion[0], truth.distortion[0], 0.03);
+  EXPECT_GT(report.intrinsics_std[0], 0.0);
+  const nlohmann::json json = ToJson(report);
+  EXPECT_DOUBLE_EQ(json["fx"].get<double>(), report.camera.fx);
+  EXPECT_EQ(json["distortion"].size(), 5u);
+}
+
+TEST(CameraCalibration, DropsAndReportsViewsWithoutABoardAndOutliers) {
+  const BoardSpec board = BoardSpec::Parse("chessboard:9x6:20");
+  const CameraModel truth = TrueCamera();
+  std::vector<BoardDetection> detections = DetectRenderedViews(board, truth, 8);
+  // A blank image: the board is not found.
+  detections.push_back(DetectBoard(cv::Mat(600, 800, CV_8U, cv::Scalar(128)), board, "blank.png"));
+  // A view whose corners were mislabelled (rows reversed): a gross outlier.
+  BoardDetection corrupt = detections.front();
+  corrupt.source = "shuffled.png";
+  std::reverse(corrupt.image_points.begin(), corrupt.image_points.begin() + 9);
+  detections.push_back(corrupt);
+  const CalibrationReport report = CalibrateCamera(detections, cv::Size(truth.width, truth.height));
+  ASSERT_EQ(report.views.size(), detections.size());
+  EXPECT_FALSE(report.views[8].used);
+  EXPECT_NE(report.views[8].dropped_because.find("not found"), std::string::npos);
+  EXPECT_FALSE(report.views[9].used);
+  EXPECT_NE(report.views[9].dropped_because.find("outlier"), std::string::npos);
+  EXPECT_NEAR(report.camera.fx / truth.fx, 1.0, 0.005);
+}
+
+TEST(CameraCalibration, TooFewViewsIsAClearError) {
+  const BoardSpec board = BoardSpec::Parse("chessboard:9x6:20");
+  const CameraModel truth = TrueCamera();
+  std::vector<BoardDetection> detections = DetectRenderedViews(board, truth, 2);
+  try {
+    CalibrateCamera(detections, cv::Size(truth.width, truth.height));
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("2 usable board views"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace svbtdf::calib
