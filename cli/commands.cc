@@ -8,6 +8,7 @@ void AddAllCommands(CLI::App& app) {
   AddCompareCommand(app);
   AddDevicesCommand(app);
   AddEvalCommand(app);
+  AddProcessCommand(app);
   AddSessionCommand(app);
   AddSimulateCommand(app);
   AddValidateModelCommand(app);
