@@ -6,7 +6,7 @@
 // true calibration. Reports both times, their ratio, and the process's peak resident memory.
 //
 //   svbtdf simulate --preset rice-paper --out SIM
-//   bench_process SIM [THREADS]
+//   bench_process SIM [THREADS] [TEXELS_X TEXELS_Y]
 
 #include <sys/resource.h>
 
@@ -36,7 +36,7 @@ double PeakResidentMegabytes() {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: bench_process SIMULATION_FOLDER [THREADS]\n");
+    std::fprintf(stderr, "usage: bench_process SIMULATION_FOLDER [THREADS] [TEXELS_X TEXELS_Y]\n");
     return 2;
   }
   namespace fs = std::filesystem;
@@ -52,6 +52,10 @@ int main(int argc, char** argv) {
     const fs::path out = simulation / ("bench-processed-" + std::to_string(::getpid()));
     svbtdf::fit::ProcessOptions options;
     options.threads = argc > 2 ? std::atoi(argv[2]) : 0;
+    if (argc > 4) {
+      options.texels_x = std::atoi(argv[3]);
+      options.texels_y = std::atoi(argv[4]);
+    }
     start = std::chrono::steady_clock::now();
     const svbtdf::fit::ProcessReport report = svbtdf::fit::ProcessSession(session, calibration, out, options);
     const double measured = Seconds(start);
