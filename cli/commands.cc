@@ -9,6 +9,7 @@ void AddAllCommands(CLI::App& app) {
   AddDevicesCommand(app);
   AddEvalCommand(app);
   AddProcessCommand(app);
+  AddReportCommand(app);
   AddSessionCommand(app);
   AddSimulateCommand(app);
   AddValidateModelCommand(app);

@@ -16,6 +16,7 @@ void AddCompareCommand(CLI::App& app);        // svbtdf compare
 void AddDevicesCommand(CLI::App& app);         // svbtdf devices
 void AddEvalCommand(CLI::App& app);            // svbtdf eval
 void AddProcessCommand(CLI::App& app);         // svbtdf process
+void AddReportCommand(CLI::App& app);          // svbtdf report
 void AddSessionCommand(CLI::App& app);         // svbtdf session verify
 void AddSimulateCommand(CLI::App& app);        // svbtdf simulate
 void AddValidateModelCommand(CLI::App& app);  // svbtdf validate-model
