@@ -1,7 +1,9 @@
 #include "svbtdf/fit/process_session.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <future>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -211,7 +213,38 @@ class ImageReader {
   const Session& session_;
   const calib::SessionCalibration& calibration_;
   std::vector<float> table_;
-  int64_t images_read_ = 0;
+  std::atomic<int64_t> images_read_{0};
+};
+
+// Reads the dot images in plan order one image ahead of their use, so that decoding the next
+// PNG overlaps the rectification of the current one. Read errors surface from Next().
+class ReadAhead {
+ public:
+  ReadAhead(ImageReader& reader, const std::map<int, std::vector<float>>& darks,
+            std::vector<std::pair<int, std::string>> order)
+      : reader_(reader), darks_(darks), order_(std::move(order)) {}
+
+  ImageReader::Linear Next() {
+    if (!pending_.valid()) Start(next_);
+    ImageReader::Linear image = pending_.get();
+    if (++next_ < order_.size()) Start(next_);
+    return image;
+  }
+
+ private:
+  void Start(size_t k) {
+    pending_ = std::async(std::launch::async, [this, k] {
+      const auto& [bracket, key] = order_[k];
+      const auto dark = darks_.find(bracket);
+      return reader_.Read(key, dark == darks_.end() ? nullptr : &dark->second);
+    });
+  }
+
+  ImageReader& reader_;
+  const std::map<int, std::vector<float>>& darks_;
+  std::vector<std::pair<int, std::string>> order_;  // (bracket, key)
+  size_t next_ = 0;
+  std::future<ImageReader::Linear> pending_;
 };
 
 void ResolveTexelGrid(const Session& session, const calib::SessionCalibration& calibration, ProcessOptions* options) {
@@ -254,16 +287,13 @@ std::vector<float> WhiteExitance(ImageReader& reader, const std::string& flat_ke
 
 // One dot's HDR values per texel: for each channel, the sum of the unsaturated brackets' values
 // over the sum of their exposures (the maximum-likelihood rate under shot noise).
-std::vector<float> MergeBrackets(ImageReader& reader, const std::vector<std::pair<int, std::string>>& keys,
-                                 const std::map<int, std::vector<float>>& darks, const Rectifier& rectifier,
-                                 int threads) {
+std::vector<float> MergeBrackets(ReadAhead& images, int brackets, const Rectifier& rectifier, int threads) {
   const int64_t texels = rectifier.texels();
   std::vector<double> sum(3 * texels, 0.0), time(texels, 0.0);
   std::vector<float> rectified;
   std::vector<uint8_t> saturated;
-  for (const auto& [bracket, key] : keys) {
-    const auto dark = darks.find(bracket);
-    const ImageReader::Linear image = reader.Read(key, dark == darks.end() ? nullptr : &dark->second);
+  for (int b = 0; b < brackets; ++b) {
+    const ImageReader::Linear image = images.Next();
     rectifier.Apply(image.values, image.saturated, image.channels, threads, &rectified, &saturated);
     for (int64_t t = 0; t < texels; ++t) {
       if (saturated[t] || !std::isfinite(rectified[3 * t])) continue;
@@ -327,6 +357,11 @@ ProcessReport ProcessSession(const Session& session, const calib::SessionCalibra
   const std::vector<float> exitance =
       WhiteExitance(reader, plan.flat_key, rectifier, geometry, calibration.monitor, options.threads);
 
+  std::vector<std::pair<int, std::string>> order;
+  for (int q = 0; q < num_dots; ++q) {
+    if (!writer.HasDot(q)) order.insert(order.end(), plan.dot_keys[q].begin(), plan.dot_keys[q].end());
+  }
+  ReadAhead images(reader, darks, std::move(order));
   ProcessReport report;
   std::unique_ptr<ProgressBar> progress;
   if (options.progress) progress = std::make_unique<ProgressBar>("process", num_dots, "dots");
@@ -337,7 +372,8 @@ ProcessReport ProcessSession(const Session& session, const calib::SessionCalibra
       continue;
     }
     ThrowIfInterrupted("processing");
-    std::vector<float> values = MergeBrackets(reader, plan.dot_keys[q], darks, rectifier, options.threads);
+    std::vector<float> values =
+        MergeBrackets(images, static_cast<int>(plan.dot_keys[q].size()), rectifier, options.threads);
     ToBtdf(geometry, calibration.monitor, q, exitance, &values);
     writer.WriteDot(q, values);
     if (progress) progress->Advance();
