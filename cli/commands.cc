@@ -8,6 +8,7 @@ void AddAllCommands(CLI::App& app) {
   AddCompareCommand(app);
   AddDevicesCommand(app);
   AddEvalCommand(app);
+  AddFitCommand(app);
   AddProcessCommand(app);
   AddReportCommand(app);
   AddSessionCommand(app);
