@@ -106,7 +106,7 @@ void ParallelFor(int n, int threads, int chunk, const std::function<void(int, in
   if (error) std::rethrow_exception(error);
 }
 
-RigRenderer::RigRenderer(const Rig& rig, const TruthMaterial* material, int threads)
+RigRenderer::RigRenderer(const Rig& rig, const SpatialBtdf* material, int threads)
     : rig_(rig), material_(material), threads_(threads) {
   if (material_) {
     const SampleConfig& s = rig_.config().sample;
