@@ -193,6 +193,7 @@ MonteCarloTruth MonteCarloTruth::Trace(int texels_x, int texels_y, double eta, s
   std::vector<float> values(size), errors(size);
   std::optional<ProgressBar> bar;
   if (progress) bar.emplace("tracing the Monte Carlo truth", static_cast<int64_t>(materials.size()) * nodes, "slices");
+  double worst_error = 0.0;
   for (size_t m = 0; m < materials.size(); ++m) {
     const SlabTracer tracer(materials[m].ToSlab(eta));
     for (int v = 0; v < nodes; ++v) {
@@ -202,6 +203,7 @@ MonteCarloTruth MonteCarloTruth::Trace(int texels_x, int texels_y, double eta, s
       options.threads = threads;
       options.max_interactions = precision.max_interactions;
       const BtdfSlice slice = tracer.SliceForView(views.Node(v), grid, options);
+      worst_error = std::max(worst_error, slice.DominantRelativeError(0.9));
       for (int cell = 0; cell < cells; ++cell) {
         const size_t at = ((m * nodes + v) * cells + cell) * 3;
         for (int c = 0; c < 3; ++c) {
@@ -219,6 +221,7 @@ MonteCarloTruth MonteCarloTruth::Trace(int texels_x, int texels_y, double eta, s
                         views, precision.hemicube_resolution, std::move(values), std::move(errors));
   truth.precision = precision;
   truth.seed = seed;
+  truth.dominant_relative_error = worst_error;
   return truth;
 }
 

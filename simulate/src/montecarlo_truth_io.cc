@@ -73,7 +73,10 @@ nlohmann::json Manifest(const MonteCarloTruth& truth) {
       {"hemicube_resolution", truth.hemicube().resolution()},
       {"monte_carlo", {{"paths_per_slice", truth.precision.paths},
                        {"max_interactions", truth.precision.max_interactions},
-                       {"seed", truth.seed}}},
+                       {"seed", truth.seed},
+                       {"dominant_relative_error_max", std::isfinite(truth.dominant_relative_error)
+                                                           ? nlohmann::json(truth.dominant_relative_error)
+                                                           : nlohmann::json(nullptr)}}},
       {"maps", {{"index", "index.exr"}, {"rho_d", "rho_d.exr"}, {"slices", "slices.exr"}}},
       {"btdf", "R(x,i,o)[c] = sum_v w_v(o) sum_cell w_cell(FlipZ(i)) slices[m(x)][v][cell][c] + rho_d(x)[c]"},
   };
@@ -214,6 +217,8 @@ MonteCarloTruth ReadMonteCarloTruth(const fs::path& folder) {
       const nlohmann::json& mc = manifest.at("monte_carlo");
       truth.precision = {resolution, mc.at("paths_per_slice").get<int64_t>(), mc.at("max_interactions").get<int>()};
       truth.seed = mc.at("seed").get<uint64_t>();
+      const nlohmann::json& error = mc.at("dominant_relative_error_max");
+      truth.dominant_relative_error = error.is_null() ? std::nan("") : error.get<double>();
       return truth;
     } catch (const Error& e) {
       if (e.kind() != ErrorKind::kInvalidInput) throw;

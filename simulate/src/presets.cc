@@ -58,7 +58,7 @@ SimulationPreset Demo() {
   p.eta = 1.5;
   // 27 slices of 2^21 paths on a 24-resolution hemicube (1728 cells): well under a minute on
   // 2 cores, about 2-3% relative standard error where the energy is.
-  p.montecarlo = {24, int64_t{1} << 21, 100};
+  p.montecarlo = {24, int64_t{1} << 20, 100};
   return p;
 }
 

@@ -112,7 +112,7 @@ MaterialTruth ReadMaterialTruth(const fs::path& folder) {
     const nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(manifest_path));
     if (manifest.at("format") != "svbtdf-truth-material") ThrowFormatError(manifest_path.string(), "is not a truth material");
     if (manifest.at("ndf").at("kind") != "analytic") {
-      ThrowFormatError(manifest_path.string(), "holds a non-analytic truth, which compare cannot read yet");
+      ThrowFormatError(manifest_path.string(), "is not an analytic truth (see its ndf.kind)");
     }
     truth.eta = manifest.at("eta").get<double>();
     truth.ndf_name = manifest.at("ndf").at("name").get<std::string>();

@@ -10,6 +10,7 @@
 // (`svbtdf compare`) evaluate this same function from the same float values.
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -104,6 +105,9 @@ class MonteCarloTruth final : public SpatialBtdf {
   // How it was traced (written to the manifest; 0 when unknown).
   MonteCarloPrecision precision;
   uint64_t seed = 0;
+  // The worst, over all slices, of BtdfSlice::DominantRelativeError(0.9): the relative standard
+  // error of the cells that hold 90% of a slice's energy (NaN when unknown).
+  double dominant_relative_error = std::nan("");
 
  private:
   size_t Offset(int material, int node, int cell) const {
