@@ -56,35 +56,37 @@ double NdfRelativeL2(const Hemicube& grid, const Ndf& fitted, const Ndf& truth) 
   return norm > 0 ? std::sqrt(error / norm) : std::nan("");
 }
 
-// The ground truth either kind of simulation wrote: the analytic dual-microfacet material (with
-// a true alpha and NDF per texel) or the Monte Carlo slab truth (a BTDF and rho_d only).
+// The ground truth either kind of simulation wrote, evaluated through the renderer's SpatialBtdf:
+// the analytic dual-microfacet material (with a true alpha and NDF per texel) or the Monte Carlo
+// slab truth (a BTDF and rho_d only).
 class CompareTruth {
  public:
   explicit CompareTruth(const fs::path& folder) : kind_(ReadTruthKind(folder)) {
     if (kind_ == "montecarlo") {
-      montecarlo_.emplace(ReadMonteCarloTruth(folder));
+      auto truth = std::make_unique<MonteCarloTruth>(ReadMonteCarloTruth(folder));
+      montecarlo_ = truth.get();
+      btdf_ = std::move(truth);
     } else {
       analytic_.emplace(ReadMaterialTruth(folder));
+      btdf_ = std::make_unique<TruthMaterial>(analytic_->ToTruthMaterial());
     }
   }
   const std::string& kind() const { return kind_; }
   bool has_parameters() const { return analytic_.has_value(); }
-  int width() const { return analytic_ ? analytic_->width() : montecarlo_->texels_x(); }
-  int height() const { return analytic_ ? analytic_->height() : montecarlo_->texels_y(); }
+  int width() const { return btdf_->texels_x(); }
+  int height() const { return btdf_->texels_y(); }
   const MaterialTruth& analytic() const { return *analytic_; }
 
   Rgb RhoD(int x, int y) const {
     return analytic_ ? analytic_->Params(x, y).rho_d : montecarlo_->rho_d(montecarlo_->Index(x, y));
   }
-  Rgb Evaluate(int x, int y, const Vec3& i, const Vec3& o) const {
-    if (montecarlo_) return montecarlo_->Evaluate(montecarlo_->Index(x, y), i, o);
-    return EvaluateMaterial(*analytic_->TexelNdf(x, y), analytic_->Params(x, y), i, o);
-  }
+  Rgb Evaluate(int x, int y, const Vec3& i, const Vec3& o) const { return btdf_->Evaluate(btdf_->Index(x, y), i, o); }
 
  private:
   std::string kind_;
   std::optional<MaterialTruth> analytic_;
-  std::optional<MonteCarloTruth> montecarlo_;
+  const MonteCarloTruth* montecarlo_ = nullptr;
+  std::unique_ptr<SpatialBtdf> btdf_;
 };
 
 // Sums of squared errors and of squared truths of the luminance over (texel, dot) pairs.

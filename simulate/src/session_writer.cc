@@ -161,6 +161,25 @@ std::unique_ptr<Ndf> MaterialTruth::TexelNdf(int x, int y) const {
   return MakeAnalyticNdf(ndf_name, p);
 }
 
+TruthMaterial MaterialTruth::ToTruthMaterial() const {
+  std::vector<TruthTexel> texels;
+  texels.reserve(static_cast<size_t>(width()) * height());
+  for (int y = 0; y < height(); ++y) {
+    for (int x = 0; x < width(); ++x) {
+      const DualMicrofacetParams p = Params(x, y);
+      TruthTexel t;
+      t.ndf = {ndf_params.at(x, y, 0), ndf_params.at(x, y, 1), ndf_params.at(x, y, 2), ndf_params.at(x, y, 3),
+               ndf_params.at(x, y, 4)};
+      t.alpha = p.alpha;
+      t.shadowing_roughness = shadowing_roughness.at(x, y);
+      t.k_s = p.k_s;
+      t.rho_d = p.rho_d;
+      texels.push_back(t);
+    }
+  }
+  return TruthMaterial(width(), height(), eta, ndf_name, std::move(texels));
+}
+
 std::string SessionKey(const CaptureId& id) {
   if (id.kind == "dark") return "dark/e" + std::to_string(id.exposure_index) + "/r" + std::to_string(id.index);
   if (id.kind == "board") return "board/v" + Padded(id.index, 2);
