@@ -21,7 +21,7 @@ void AddSimulateCommand(CLI::App& app) {
   simulate->add_option("--out", *out, "output folder (new, or an unfinished simulation to resume)")->required();
   simulate->add_option("--seed", options->seed, "seed of the material pattern and the noise")->capture_default_str();
   simulate->add_option("--eta", options->eta, "override the preset's relative index of refraction (> 1)");
-  simulate->add_option("--truth", options->truth, "model: render with the dual-microfacet model")
+  simulate->add_option("--truth", options->truth, "model: a dual-microfacet material; montecarlo: traced two-interface slab materials")
       ->check(CLI::IsMember({"model", "montecarlo"}))
       ->capture_default_str();
   simulate->add_flag("!--no-noise", options->noise, "no shot or read noise (quantisation stays): for accuracy checks");

@@ -37,6 +37,9 @@ SimulationPreset Tiny() {
   p.rig.dark_frames = 2;
   p.pattern = "smooth";
   p.eta = 1.5;
+  // 27 slices of 2^18 paths on a 16-resolution hemicube (768 cells): about 4 s on 2 busy cores;
+  // the cells holding 90% of each slice's energy have at most 5.9% relative standard error.
+  p.montecarlo = {16, int64_t{1} << 18, 100};
   return p;
 }
 
@@ -71,6 +74,9 @@ SimulationPreset Demo() {
   p.rig.sensor.vignetting = 0.05;
   p.pattern = "smooth";
   p.eta = 1.5;
+  // 27 slices of 2^20 paths on a 24-resolution hemicube (1728 cells): about 20 s on 2 busy
+  // cores; at most 4.3% relative standard error in the cells holding 90% of a slice's energy.
+  p.montecarlo = {24, int64_t{1} << 20, 100};
   return p;
 }
 
@@ -82,6 +88,7 @@ SimulationPreset PaperScale(const std::string& name) {
   p.rig.sensor.bit_depth = 14;
   p.rig.sensor.vignetting = 0.08;
   p.rig.dots.radius_px = 2.0;
+  p.montecarlo = {32, int64_t{1} << 23, 100};  // the paper's hemicube; minutes of tracing
   if (name == "grid-sheet") {
     p.description = "paper Table 1: grid sheet, 600x600 texels, 40x40 dots, eta 1.4, anisotropic";
     p.rig.sample.texels_x = p.rig.sample.texels_y = 600;

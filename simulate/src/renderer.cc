@@ -83,7 +83,7 @@ double SubSample(int k, int n) { return (k + 0.5) / n - 0.5; }
 }  // namespace
 
 
-RigRenderer::RigRenderer(const Rig& rig, const TruthMaterial* material, int threads)
+RigRenderer::RigRenderer(const Rig& rig, const SpatialBtdf* material, int threads)
     : rig_(rig), material_(material), threads_(threads) {
   if (material_) {
     const SampleConfig& s = rig_.config().sample;

@@ -9,6 +9,8 @@
 #include "svbtdf/common/session.h"
 #include "svbtdf/model/ndf_factory.h"
 #include "svbtdf/simulate/capture_simulator.h"
+#include "svbtdf/simulate/montecarlo_truth.h"
+#include "svbtdf/simulate/truth_material.h"
 #include "svbtdf/simulate/truth_io.h"
 
 namespace svbtdf {
@@ -112,7 +114,7 @@ MaterialTruth ReadMaterialTruth(const fs::path& folder) {
     const nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(manifest_path));
     if (manifest.at("format") != "svbtdf-truth-material") ThrowFormatError(manifest_path.string(), "is not a truth material");
     if (manifest.at("ndf").at("kind") != "analytic") {
-      ThrowFormatError(manifest_path.string(), "holds a non-analytic truth, which compare cannot read yet");
+      ThrowFormatError(manifest_path.string(), "is not an analytic truth (see its ndf.kind)");
     }
     truth.eta = manifest.at("eta").get<double>();
     truth.ndf_name = manifest.at("ndf").at("name").get<std::string>();
@@ -161,6 +163,25 @@ std::unique_ptr<Ndf> MaterialTruth::TexelNdf(int x, int y) const {
   return MakeAnalyticNdf(ndf_name, p);
 }
 
+TruthMaterial MaterialTruth::ToTruthMaterial() const {
+  std::vector<TruthTexel> texels;
+  texels.reserve(static_cast<size_t>(width()) * height());
+  for (int y = 0; y < height(); ++y) {
+    for (int x = 0; x < width(); ++x) {
+      const DualMicrofacetParams p = Params(x, y);
+      TruthTexel t;
+      t.ndf = {ndf_params.at(x, y, 0), ndf_params.at(x, y, 1), ndf_params.at(x, y, 2), ndf_params.at(x, y, 3),
+               ndf_params.at(x, y, 4)};
+      t.alpha = p.alpha;
+      t.shadowing_roughness = shadowing_roughness.at(x, y);
+      t.k_s = p.k_s;
+      t.rho_d = p.rho_d;
+      texels.push_back(t);
+    }
+  }
+  return TruthMaterial(width(), height(), eta, ndf_name, std::move(texels));
+}
+
 std::string SessionKey(const CaptureId& id) {
   if (id.kind == "dark") return "dark/e" + std::to_string(id.exposure_index) + "/r" + std::to_string(id.index);
   if (id.kind == "board") return "board/v" + Padded(id.index, 2);
@@ -171,13 +192,43 @@ std::string SessionKey(const CaptureId& id) {
   ThrowInvalidInput("capture", "unknown simulated capture kind '" + id.kind + "'");
 }
 
-SimulationOutput SimulateSession(const fs::path& out, const SimulationOptions& options) {
+namespace {
+
+// The truth the renderer shows the camera. The analytic material is cheap to regenerate; the
+// Monte Carlo one is traced once, written to OUT/truth at once (so that an interrupted capture
+// keeps it), and read back when a simulation is resumed: the file's float values are exactly the
+// ones the first run rendered, so resumed images are byte-identical.
+std::unique_ptr<SpatialBtdf> MakeTruth(const SimulationPreset& preset, const Rig& rig, const SimulationOptions& options,
+                                       const fs::path& truth_folder) {
+  const SampleConfig& sample = preset.rig.sample;
+  if (options.truth == "model") {
+    auto material = std::make_unique<TruthMaterial>(
+        TruthMaterial::FromPattern(preset.pattern, sample.texels_x, sample.texels_y, preset.eta, options.seed));
+    if (!fs::exists(truth_folder / "material.json")) WriteMaterialTruth(truth_folder, *material);
+    return material;
+  }
+  if (fs::exists(truth_folder / "material.json")) {
+    auto truth = std::make_unique<MonteCarloTruth>(ReadMonteCarloTruth(truth_folder));
+    if (truth->texels_x() != sample.texels_x || truth->texels_y() != sample.texels_y || truth->eta() != preset.eta ||
+        truth->seed != options.seed) {
+      ThrowInvalidInput(truth_folder.string(), "holds the truth of other settings", "choose a new output folder");
+    }
+    return truth;
+  }
+  std::vector<SlabMaterial> materials = DefaultSlabMaterials();
+  std::vector<int> index = SlabIndexMap(sample.texels_x, sample.texels_y, static_cast<int>(materials.size()), options.seed);
+  const ViewGrid views = ViewGrid::Spanning(rig.camera().Centre(), sample, preset.view_nodes_per_axis);
+  auto truth = std::make_unique<MonteCarloTruth>(MonteCarloTruth::Trace(sample.texels_x, sample.texels_y, preset.eta,
+                                                                        std::move(materials), std::move(index), views,
+                                                                        preset.montecarlo, options.seed,
+                                                                        options.threads, options.progress));
+  WriteMonteCarloTruth(truth_folder, *truth);
+  return truth;
+}
+
+SimulationPreset PresetWithOptions(const SimulationOptions& options) {
   if (options.truth != "model" && options.truth != "montecarlo") {
     ThrowInvalidInput("--truth", "must be model or montecarlo, got '" + options.truth + "'");
-  }
-  if (options.truth == "montecarlo") {
-    ThrowInvalidInput("--truth montecarlo", "is not available in this version of svbtdf",
-                      "use --truth model; the Monte Carlo ground truth is compared by 'svbtdf validate-model'");
   }
   SimulationPreset preset = MakePreset(options.preset);
   if (!options.noise) {
@@ -190,38 +241,46 @@ SimulationOutput SimulateSession(const fs::path& out, const SimulationOptions& o
     }
     preset.eta = options.eta;
   }
-  SimulationOutput output{out / "session", out / "truth"};
-  // OUT must be new, empty, or an unfinished simulation (session/ and truth/ only).
-  if (fs::exists(out)) {
-    if (!fs::is_directory(out)) ThrowIoError(out.string(), "exists and is not a folder");
-    for (const auto& entry : fs::directory_iterator(out)) {
-      const std::string name = entry.path().filename().string();
-      if (name != "session" && name != "truth") {
-        ThrowInvalidInput(out.string(), "is not empty (it holds '" + name + "')", "choose a new output folder");
-      }
+  return preset;
+}
+
+// OUT must be new, empty, or an unfinished simulation (session/ and truth/ only).
+void CheckOutputFolder(const fs::path& out) {
+  if (!fs::exists(out)) return;
+  if (!fs::is_directory(out)) ThrowIoError(out.string(), "exists and is not a folder");
+  for (const auto& entry : fs::directory_iterator(out)) {
+    const std::string name = entry.path().filename().string();
+    if (name != "session" && name != "truth") {
+      ThrowInvalidInput(out.string(), "is not empty (it holds '" + name + "')", "choose a new output folder");
     }
   }
+}
+
+}  // namespace
+
+SimulationOutput SimulateSession(const fs::path& out, const SimulationOptions& options) {
+  const SimulationPreset preset = PresetWithOptions(options);
+  SimulationOutput output{out / "session", out / "truth"};
+  CheckOutputFolder(out);
   std::error_code error;
   fs::create_directories(output.truth, error);
   if (error) ThrowIoError(output.truth.string(), "cannot create: " + error.message(), "is the folder writable?");
 
   const Rig rig(preset.rig);
-  const TruthMaterial material = TruthMaterial::FromPattern(preset.pattern, preset.rig.sample.texels_x,
-                                                            preset.rig.sample.texels_y, preset.eta, options.seed);
-  const RigRenderer renderer(rig, &material, options.threads);
+  const bool resuming = fs::exists(output.session / "session.json");
+  if (resuming && Session::Open(output.session).Verify(/*check_crc=*/false).complete()) {
+    ThrowInvalidInput(output.session.string(), "holds a complete simulated session already; it is never overwritten",
+                      "choose a new output folder");
+  }
+  const std::unique_ptr<SpatialBtdf> material = MakeTruth(preset, rig, options, output.truth);
+  const RigRenderer renderer(rig, material.get(), options.threads);
   CaptureTruth plan = PlanCapture(preset, renderer, options.seed);
   plan.truth_kind = options.truth;
   std::vector<std::string> keys;
   for (const CaptureId& id : CaptureList(rig, plan)) keys.push_back(SessionKey(id));
 
-  const bool resuming = fs::exists(output.session / "session.json");
   Session session = Session::CreateOrResume(output.session, NominalRig(rig, preset, plan), keys);
-  if (resuming && session.Verify(/*check_crc=*/false).complete()) {
-    ThrowInvalidInput(output.session.string(), "holds a complete simulated session already; it is never overwritten",
-                 "choose a new output folder");
-  }
   if (!fs::exists(output.truth / "rig.json")) WriteRigTruth(output.truth / "rig.json", rig, plan);
-  if (!fs::exists(output.truth / "material.json")) WriteMaterialTruth(output.truth, material);
 
   output.resumed = static_cast<int64_t>(session.entries().size());
   SessionSink sink(&session);

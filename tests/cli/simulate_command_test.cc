@@ -10,6 +10,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <thread>
+#include <vector>
 
 #include "run_command.h"
 #include "svbtdf/common/atomic_file.h"
@@ -31,7 +32,8 @@ class SimulateCommand : public ::testing::Test {
   fs::path root_;
 };
 
-void ExpectCompleteSimulation(const fs::path& out) {
+// `map` is one of the truth's maps: alpha.exr for the analytic truth, slices.exr for Monte Carlo.
+void ExpectCompleteSimulation(const fs::path& out, const char* map = "alpha.exr") {
   const Session session = Session::Open(out / "session");
   const SessionVerification verification = session.Verify();
   EXPECT_TRUE(verification.complete()) << verification.Summary();
@@ -40,7 +42,7 @@ void ExpectCompleteSimulation(const fs::path& out) {
     EXPECT_TRUE(rig["camera"].contains(key)) << key;
   }
   EXPECT_TRUE(fs::exists(out / "truth" / "material.json"));
-  EXPECT_TRUE(fs::exists(out / "truth" / "alpha.exr"));
+  EXPECT_TRUE(fs::exists(out / "truth" / map));
 }
 
 TEST_F(SimulateCommand, TinyPresetWritesACompleteSessionAndRefusesToOverwriteIt) {
@@ -59,18 +61,25 @@ TEST_F(SimulateCommand, TinyPresetWritesACompleteSessionAndRefusesToOverwriteIt)
   EXPECT_NE(verify.output.find("dot/q0003/e0/r0"), std::string::npos) << verify.output;
 }
 
-TEST_F(SimulateCommand, AnInterruptedRunResumesToTheSameImages) {
-  const fs::path whole = root_ / "whole", resumed = root_ / "resumed";
-  ASSERT_EQ(RunSvbtdf("-q simulate --preset tiny --seed 5 --out " + whole.string()).exit_code, 0);
+// Runs the tiny preset whole and interrupted-then-resumed with `arguments` (a vector of extra
+// arguments); the two sessions must hold the same images.
+void ExpectInterruptedRunResumes(const fs::path& root, const std::vector<std::string>& arguments, const char* map) {
+  const fs::path whole = root / "whole", resumed = root / "resumed";
+  std::string joined;
+  for (const std::string& a : arguments) joined += " " + a;
+  ASSERT_EQ(RunSvbtdf("-q simulate" + joined + " --out " + whole.string()).exit_code, 0);
   // Start the same simulation, interrupt it once some images are journalled, then resume.
   const pid_t child = ::fork();
   if (child == 0) {
-    ::execl(SVBTDF_CLI_PATH, SVBTDF_CLI_PATH, "-q", "simulate", "--preset", "tiny", "--seed", "5", "--out",
-            resumed.c_str(), static_cast<char*>(nullptr));
+    std::vector<const char*> argv = {SVBTDF_CLI_PATH, "-q", "simulate"};
+    for (const std::string& a : arguments) argv.push_back(a.c_str());
+    for (const char* a : {"--out", resumed.c_str()}) argv.push_back(a);
+    argv.push_back(nullptr);
+    ::execv(SVBTDF_CLI_PATH, const_cast<char* const*>(argv.data()));
     ::_exit(127);
   }
   const fs::path journal = resumed / "session" / "journal.jsonl";
-  for (int wait = 0; wait < 2000; ++wait) {
+  for (int wait = 0; wait < 12000; ++wait) {
     if (fs::exists(journal) && fs::file_size(journal) > 2000) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
@@ -79,14 +88,24 @@ TEST_F(SimulateCommand, AnInterruptedRunResumesToTheSameImages) {
   ::waitpid(child, &status, 0);
   const size_t journalled = Session::Open(resumed / "session").entries().size();
   EXPECT_GT(journalled, 0u);
-  const auto resume = RunSvbtdf("-q simulate --preset tiny --seed 5 --out " + resumed.string());
+  const auto resume = RunSvbtdf("-q simulate" + joined + " --out " + resumed.string());
   ASSERT_EQ(resume.exit_code, 0) << resume.output;
-  ExpectCompleteSimulation(resumed);
+  ExpectCompleteSimulation(resumed, map);
   const Session a = Session::Open(whole / "session"), b = Session::Open(resumed / "session");
   ASSERT_EQ(a.entries().size(), b.entries().size());
   for (const SessionEntry& entry : a.entries()) {
     EXPECT_EQ(entry.crc32, b.Entry(entry.key).crc32) << entry.key;
   }
+}
+
+TEST_F(SimulateCommand, AnInterruptedRunResumesToTheSameImages) {
+  ExpectInterruptedRunResumes(root_, {"--preset", "tiny", "--seed", "5"}, "alpha.exr");
+}
+
+// The Monte Carlo truth is read back from OUT/truth on resuming, not traced again: the resumed
+// images are rendered from exactly the values the first run used.
+TEST_F(SimulateCommand, MonteCarloTruthRunResumesToTheSameImages) {
+  ExpectInterruptedRunResumes(root_, {"--preset", "tiny", "--seed", "5", "--truth", "montecarlo"}, "slices.exr");
 }
 
 TEST_F(SimulateCommand, BadArgumentsAndFoldersAreClearErrors) {

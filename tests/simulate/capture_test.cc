@@ -15,6 +15,7 @@
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/simulate/capture_simulator.h"
 #include "svbtdf/simulate/truth_io.h"
+#include "svbtdf/simulate/truth_material.h"
 
 namespace svbtdf {
 namespace {

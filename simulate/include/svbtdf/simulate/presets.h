@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "svbtdf/simulate/montecarlo_truth.h"
 #include "svbtdf/simulate/rig.h"
 
 namespace svbtdf {
@@ -18,6 +19,9 @@ struct SimulationPreset {
   // dot image (the dot nearest to straight-through) peaks at `peak_fill` of the full well.
   std::vector<double> bracket = {1.0, 16.0};
   double peak_fill = 0.9;
+  // `--truth montecarlo`: how finely each slab material's slices are traced, and the view grid.
+  MonteCarloPrecision montecarlo;
+  int view_nodes_per_axis = 3;
 };
 
 std::vector<std::string> PresetNames();

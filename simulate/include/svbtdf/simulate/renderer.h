@@ -18,7 +18,7 @@
 
 #include "svbtdf/simulate/rig.h"
 #include "svbtdf/common/image_io.h"
-#include "svbtdf/simulate/truth_material.h"
+#include "svbtdf/simulate/spatial_btdf.h"
 
 namespace svbtdf {
 
@@ -32,8 +32,9 @@ struct BoardPose {
 
 class RigRenderer {
  public:
-  // `material` may be null when only captures without the sample are rendered. threads = 0: all.
-  RigRenderer(const Rig& rig, const TruthMaterial* material, int threads = 0);
+  // `material` (the truth: analytic or Monte Carlo) may be null when only captures without the
+  // sample are rendered; it must outlive the renderer. threads = 0: all.
+  RigRenderer(const Rig& rig, const SpatialBtdf* material, int threads = 0);
 
   const Rig& rig() const { return rig_; }
 
@@ -84,7 +85,7 @@ class RigRenderer {
   Vec3 DotRadianceAt(const Dot& dot, const Group& group) const;
 
   const Rig& rig_;
-  const TruthMaterial* material_;
+  const SpatialBtdf* material_;
   int threads_;
   std::vector<Group> groups_;
   std::vector<size_t> row_begin_;         // groups_ index of each image row's first group

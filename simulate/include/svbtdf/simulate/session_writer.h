@@ -8,6 +8,7 @@
 
 #include "svbtdf/simulate/capture_simulator.h"
 #include "svbtdf/simulate/presets.h"
+#include "svbtdf/simulate/truth_material.h"
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/ndf.h"
@@ -48,6 +49,8 @@ struct MaterialTruth {
   // The texel's parameters and NDF, as the renderer used them.
   DualMicrofacetParams Params(int x, int y) const;
   std::unique_ptr<Ndf> TexelNdf(int x, int y) const;
+  // The same material as the renderer's SpatialBtdf (texel index = y * width + x).
+  TruthMaterial ToTruthMaterial() const;
 };
 // Throws svbtdf::Error naming the file for anything missing or malformed.
 MaterialTruth ReadMaterialTruth(const std::filesystem::path& truth_folder);

@@ -14,6 +14,7 @@
 #include "svbtdf/model/ndf.h"
 #include "svbtdf/model/ndf_factory.h"
 #include "svbtdf/model/vec.h"
+#include "svbtdf/simulate/spatial_btdf.h"
 
 namespace svbtdf {
 
@@ -33,7 +34,7 @@ struct TruthTexel {
 //   rice-paper  fibrous rough paper, coloured k_s and a diffuse part
 std::vector<std::string> TruthPatternNames();
 
-class TruthMaterial {
+class TruthMaterial final : public SpatialBtdf {
  public:
   // Throws svbtdf::Error(kInvalidInput) for a bad size, eta or NDF name.
   TruthMaterial(int texels_x, int texels_y, double eta, std::string ndf_name,
@@ -42,21 +43,19 @@ class TruthMaterial {
   static TruthMaterial FromPattern(const std::string& pattern, int texels_x, int texels_y,
                                    double eta, uint64_t seed);
 
-  int texels_x() const { return texels_x_; }
-  int texels_y() const { return texels_y_; }
+  int texels_x() const override { return texels_x_; }
+  int texels_y() const override { return texels_y_; }
   double eta() const { return eta_; }
   const std::string& ndf_name() const { return ndf_name_; }
   const TruthTexel& texel(int col, int row) const { return texels_[Index(col, row)]; }
   const TruthTexel& texel(int index) const { return texels_[index]; }
   const Ndf& ndf(int index) const { return *ndfs_[index]; }
-  int Index(int col, int row) const { return row * texels_x_ + col; }
-  int num_texels() const { return texels_x_ * texels_y_; }
 
   // R(x, i, o) of texel `index` for unit i (toward the light, i.z < 0) and o (toward the camera).
-  Rgb Evaluate(int index, const Vec3& i, const Vec3& o) const;
+  Rgb Evaluate(int index, const Vec3& i, const Vec3& o) const override;
 
   // The smallest NDF roughness of a texel: how sharp its lobe can be (for quadrature choices).
-  double MinRoughness(int index) const;
+  double MinRoughness(int index) const override;
 
  private:
   int texels_x_;

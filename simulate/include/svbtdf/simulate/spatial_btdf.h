@@ -1,0 +1,30 @@
+#pragma once
+// "The BTDF of texel x": what the rig's renderer needs from a ground truth. Two truths implement
+// it: the analytic dual-microfacet TruthMaterial (truth_material.h) and the Monte Carlo slab
+// truth (montecarlo_truth.h). The renderer depends only on this interface, so the measurement
+// equation and the quadrature are the same whichever truth is rendered.
+
+#include "svbtdf/model/dual_microfacet.h"
+#include "svbtdf/model/vec.h"
+
+namespace svbtdf {
+
+class SpatialBtdf {
+ public:
+  virtual ~SpatialBtdf() = default;
+
+  virtual int texels_x() const = 0;
+  virtual int texels_y() const = 0;
+  int Index(int col, int row) const { return row * texels_x() + col; }
+  int num_texels() const { return texels_x() * texels_y(); }
+
+  // R(x, i, o) RGB of texel `index` for unit i (toward the light, i.z < 0) and o (toward the
+  // camera, o.z > 0), including any diffuse part.
+  virtual Rgb Evaluate(int index, const Vec3& i, const Vec3& o) const = 0;
+
+  // How sharp the texel's lobe can be, as a microfacet roughness: the renderer treats a dot as a
+  // point when it subtends less than a tenth of this.
+  virtual double MinRoughness(int index) const = 0;
+};
+
+}  // namespace svbtdf
