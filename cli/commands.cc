@@ -11,6 +11,7 @@ void AddAllCommands(CLI::App& app) {
   AddFitCommand(app);
   AddProcessCommand(app);
   AddReportCommand(app);
+  AddRunCommand(app);
   AddSessionCommand(app);
   AddSimulateCommand(app);
   AddValidateModelCommand(app);

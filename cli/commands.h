@@ -18,6 +18,7 @@ void AddEvalCommand(CLI::App& app);            // svbtdf eval
 void AddFitCommand(CLI::App& app);             // svbtdf fit
 void AddProcessCommand(CLI::App& app);         // svbtdf process
 void AddReportCommand(CLI::App& app);          // svbtdf report
+void AddRunCommand(CLI::App& app);             // svbtdf run
 void AddSessionCommand(CLI::App& app);         // svbtdf session verify
 void AddSimulateCommand(CLI::App& app);        // svbtdf simulate
 void AddValidateModelCommand(CLI::App& app);  // svbtdf validate-model
