@@ -68,8 +68,15 @@ void RunCalibrateImages(const CalibrateOptions& options) {
   cv::Size image_size;
   ProgressBar progress("detecting board", static_cast<int64_t>(files.size()), "images");
   for (const std::string& file : files) {
-    const cv::Mat image = cv::imread(file, cv::IMREAD_GRAYSCALE);
+    cv::Mat image = cv::imread(file, cv::IMREAD_GRAYSCALE | cv::IMREAD_ANYDEPTH);
     if (image.empty()) ThrowFormatError(file, "cannot be read as an image", "is it a PNG, JPEG or TIFF file?");
+    if (image.depth() == CV_16U) {
+      // Camera-native 16-bit files often hold fewer bits (12-bit values in 16-bit containers):
+      // stretch to the image's own maximum so the detector sees the full contrast.
+      double max_value = 0.0;
+      cv::minMaxLoc(image, nullptr, &max_value);
+      image.convertTo(image, CV_8U, 255.0 / std::max(max_value, 1.0));
+    }
     if (image_size.empty()) image_size = image.size();
     if (image.size() != image_size) {
       ThrowInvalidInput(file, "is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +

@@ -32,7 +32,7 @@ SimulationPreset Tiny() {
   p.rig.sample.texels_x = p.rig.sample.texels_y = 32;
   p.rig.dots.cols = p.rig.dots.rows = 6;
   p.rig.dots.radius_px = 4.0;
-  p.rig.board = {6, 4, 0.007, 6, 0.85, 0.04, 1.0};
+  p.rig.board = {6, 4, 0.007, 12, 0.85, 0.04, 1.0};
   p.rig.sensor.bit_depth = 12;
   p.rig.dark_frames = 2;
   p.pattern = "smooth";
@@ -53,7 +53,7 @@ SimulationPreset Small() {
   p.rig.sample.texels_x = p.rig.sample.texels_y = 32;
   p.rig.dots.cols = p.rig.dots.rows = 20;
   p.rig.dots.radius_px = 3.0;
-  p.rig.board = {6, 4, 0.007, 6, 0.85, 0.04, 1.0};
+  p.rig.board = {6, 4, 0.007, 12, 0.85, 0.04, 1.0};
   p.rig.sensor.bit_depth = 12;
   p.rig.dark_frames = 2;
   p.pattern = "smooth";
