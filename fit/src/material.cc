@@ -136,14 +136,20 @@ Material AssembleBaselineMaterial(int width, int height, double eta, int ndf_res
     as_dual[r].ln_d = BaselineLnD(grid, b.lobe());
     as_dual[r].relative_rmse = b.relative_rmse;
   }
-  Material m = AssembleMaterial(width, height, eta, ndf_resolution, clustering, as_dual, rho_d);
+  // Every texel takes its cluster's representative whole. Affine blends of the baseline's fits
+  // are unsafe: where it cannot reach the measured lobe (it refracts once, so its lobe is
+  // displaced) its best log fit can be a near-delta lobe with a huge scale, and a texel blending
+  // such a scale with its neighbours' wide lobes was off by a factor of 1000s (docs/fitting.md).
+  Clustering by_cluster = clustering;
+  for (size_t t = 0; t < by_cluster.weights.size(); ++t) by_cluster.weights[t].terms = {{by_cluster.cluster[t], 1.0f}};
+  Material m = AssembleMaterial(width, height, eta, ndf_resolution, by_cluster, as_dual, rho_d);
   m.model = MaterialModel::kWalterGgx;
   m.baseline_alpha_x = FloatImage(width, height, 1);
   m.baseline_alpha_y = FloatImage(width, height, 1);
   m.baseline_azimuth = FloatImage(width, height, 1);
   for (int64_t t = 0; t < static_cast<int64_t>(width) * height; ++t) {
     std::vector<std::pair<BaselineLobe, double>> weighted;
-    for (const auto& [rep, w] : clustering.weights[t].terms) weighted.emplace_back(representative_fits[rep].lobe(), w);
+    for (const auto& [rep, w] : by_cluster.weights[t].terms) weighted.emplace_back(representative_fits[rep].lobe(), w);
     const BaselineLobe lobe = BlendBaselineLobes(weighted);
     m.baseline_alpha_x.pixels[t] = static_cast<float>(lobe.alpha_x);
     m.baseline_alpha_y.pixels[t] = static_cast<float>(lobe.alpha_y);

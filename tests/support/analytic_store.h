@@ -44,6 +44,12 @@ inline calib::SessionCalibration AnalyticCalibration(int dots_per_side) {
   const double theta = kPi / 4;
   const Vec3 camera(0.0, -kCamera * std::sin(theta), kCamera * std::cos(theta));
   calib::SessionCalibration c;
+  // A plausible camera: the store only keeps it, the geometry below is what the fit uses.
+  c.camera.camera.width = 640;
+  c.camera.camera.height = 480;
+  c.camera.camera.fx = c.camera.camera.fy = 2000.0;
+  c.camera.camera.cx = 320.0;
+  c.camera.camera.cy = 240.0;
   c.sample_plane.rotation = Eigen::Matrix3d::Identity();
   c.sample_plane.translation = -camera;  // CameraCentre() = -R^T t = camera
   c.sample_plane.width_m = c.sample_plane.height_m = kSample;

@@ -62,8 +62,9 @@ struct Material {
 Material AssembleMaterial(int width, int height, double eta, int ndf_resolution, const Clustering& clustering,
                           const std::vector<TexelFitResult>& representative_fits, const FloatImage& rho_d);
 
-// The same for the baseline (`svbtdf fit --model ggx`): a kWalterGgx material whose lobes are the
-// weighted blends of the representatives' (BlendBaselineLobes).
+// The same for the baseline (`svbtdf fit --model ggx`): a kWalterGgx material in which every
+// texel takes the fit of its cluster's representative (weight 1; see material.cc for why not the
+// affine blend).
 Material AssembleBaselineMaterial(int width, int height, double eta, int ndf_resolution, const Clustering& clustering,
                                   const std::vector<BaselineFitResult>& representative_fits, const FloatImage& rho_d);
 
