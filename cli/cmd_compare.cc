@@ -16,6 +16,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/progress.h"
 #include "svbtdf/fit/material.h"
+#include "svbtdf/fit/ndf_error.h"
 #include "svbtdf/simulate/montecarlo_truth.h"
 #include "svbtdf/simulate/session_writer.h"
 #include "svbtdf/simulate/truth_io.h"
@@ -34,24 +35,6 @@ double Median(std::vector<double> values) {
   if (values.empty()) return std::nan("");
   std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
   return values[values.size() / 2];
-}
-
-// Relative L2 of the normalised NDFs over the cells where the truth's D h.z exceeds 1% of its
-// largest value (where the truth has mass), cells weighted by solid angle.
-double NdfRelativeL2(const Hemicube& grid, const Ndf& fitted, const Ndf& truth) {
-  std::vector<double> truth_values(grid.num_cells());
-  double peak = 0;
-  for (int c = 0; c < grid.num_cells(); ++c) {
-    truth_values[c] = truth.D(grid.CellCenter(c));
-    peak = std::max(peak, truth_values[c] * grid.CellCenter(c).z());
-  }
-  double error = 0, norm = 0;
-  for (int c = 0; c < grid.num_cells(); ++c) {
-    if (truth_values[c] * grid.CellCenter(c).z() < 0.01 * peak) continue;
-    error += Square(fitted.D(grid.CellCenter(c)) - truth_values[c]) * grid.CellSolidAngle(c);
-    norm += Square(truth_values[c]) * grid.CellSolidAngle(c);
-  }
-  return norm > 0 ? std::sqrt(error / norm) : std::nan("");
 }
 
 // The ground truth either kind of simulation wrote, evaluated through the renderer's SpatialBtdf:
@@ -139,13 +122,15 @@ void RunCompare(const CompareOptions& options) {
     }
     held_out[q] = true;
   }
+  const bool fitted_alpha = material.model == fit::MaterialModel::kDualMicrofacet;
   ProgressBar progress("compare", static_cast<int64_t>(texels.size()), "texels");
   for (int t : texels) {
     const int x = t % material.width, y = t / material.width;
     const fit::TexelBtdf fitted = evaluator.Texel(x, y);
     if (truth.has_parameters()) {  // a Monte Carlo truth has no alpha and no NDF to compare with
-      alpha_errors.push_back(std::abs(fitted.params().alpha - truth.analytic().Params(x, y).alpha));
-      ndf_errors.push_back(NdfRelativeL2(grid, fitted.ndf(), *truth.analytic().TexelNdf(x, y)));
+      // The baseline has no alpha; its NDF (the GGX lobe of the one rough refraction) compares.
+      if (fitted_alpha) alpha_errors.push_back(std::abs(fitted.params().alpha - truth.analytic().Params(x, y).alpha));
+      ndf_errors.push_back(fit::NdfRelativeL2(grid, fitted.ndf(), *truth.analytic().TexelNdf(x, y)));
     }
     const double true_rho_d = Luminance(truth.RhoD(x, y));
     if (true_rho_d > 1e-3) rho_d_errors.push_back(std::abs(Luminance(fitted.params().rho_d) / true_rho_d - 1.0));
@@ -170,6 +155,7 @@ void RunCompare(const CompareOptions& options) {
       {"material", options.material},
       {"truth", options.truth},
       {"truth_kind", truth.kind()},
+      {"btdf", fit::MaterialModelName(material.model)},
       {"texels_compared", texels.size()},
       {"alpha_within_0_05", number_or_null(within)},
       {"alpha_error_median", number_or_null(Median(alpha_errors))},
@@ -181,8 +167,8 @@ void RunCompare(const CompareOptions& options) {
       {"holdout_recorded", holdout_recorded},
   };
   if (truth.has_parameters()) {
-    std::printf("compared %zu texels: alpha within 0.05 on %.1f%%, NDF rel. L2 median %.3f, ", texels.size(),
-                100 * within, Median(ndf_errors));
+    std::printf("compared %zu texels (%s): alpha within 0.05 on %.1f%%, NDF rel. L2 median %.3f, ", texels.size(),
+                fit::MaterialModelName(material.model), 100 * within, Median(ndf_errors));
   } else {
     std::printf("compared %zu texels with a %s truth (no true alpha or NDF): ", texels.size(), truth.kind().c_str());
   }

@@ -32,6 +32,36 @@ Vec3 Direction(const std::vector<double>& xyz, const char* flag, bool toward_lig
   return v.normalized();
 }
 
+// The terms behind R, for the reader: rho_T, rho_B and alpha of a dual-microfacet texel, or the
+// lobe of a baseline texel. R itself always comes from TexelBtdf::Evaluate.
+nlohmann::json ModelTerms(const fit::TexelBtdf& texel, const Vec3& wi, const Vec3& wo) {
+  const DualMicrofacetParams& p = texel.params();
+  if (const auto& lobe = texel.baseline()) {
+    return {{"baseline_alpha_x", lobe->alpha_x},
+            {"baseline_alpha_y", lobe->alpha_y},
+            {"baseline_azimuth", lobe->azimuth},
+            {"rho", fit::BaselineShape(*lobe, p.eta, wi, wo)}};
+  }
+  const DualMicrofacetModel model(p.eta, p.shadowing);
+  const double rho_T = model.RhoT(texel.ndf(), wi, wo), rho_B = model.RhoB(texel.ndf(), wi, wo);
+  return {{"rho_T", rho_T},
+          {"rho_B", rho_B},
+          {"rho", LogBlend(rho_T, rho_B, p.alpha)},
+          {"alpha", p.alpha},
+          {"shadowing_roughness", p.shadowing.roughness()}};
+}
+
+void PrintSummary(const Rgb& value, const nlohmann::json& terms) {
+  std::printf("R = %.9g %.9g %.9g   ", value[0], value[1], value[2]);
+  if (terms.contains("baseline_alpha_x")) {
+    std::printf("(walter-ggx: alpha_x %.4f, alpha_y %.4f, azimuth %.3f)\n", terms["baseline_alpha_x"].get<double>(),
+                terms["baseline_alpha_y"].get<double>(), terms["baseline_azimuth"].get<double>());
+  } else {
+    std::printf("(rho_T %.6g, rho_B %.6g, alpha %.3f)\n", terms["rho_T"].get<double>(), terms["rho_B"].get<double>(),
+                terms["alpha"].get<double>());
+  }
+}
+
 void RunEval(const EvalOptions& options) {
   const Vec3 wi = Direction(options.wi, "--wi", true), wo = Direction(options.wo, "--wo", false);
   const fit::Material material = fit::ReadMaterial(options.material);
@@ -39,28 +69,20 @@ void RunEval(const EvalOptions& options) {
   const int x = options.texel.at(0), y = options.texel.at(1);
   const fit::TexelBtdf texel = evaluator.Texel(x, y);
   const Rgb value = texel.Evaluate(wi, wo);
-  const DualMicrofacetModel model(texel.params().eta, texel.params().shadowing);
-  const double rho_T = model.RhoT(texel.ndf(), wi, wo), rho_B = model.RhoB(texel.ndf(), wi, wo);
-  if (!options.json) {
-    std::printf("R = %.9g %.9g %.9g   (rho_T %.6g, rho_B %.6g, alpha %.3f)\n", value[0], value[1], value[2], rho_T,
-                rho_B, texel.params().alpha);
-    return;
-  }
+  const nlohmann::json terms = ModelTerms(texel, wi, wo);
+  if (!options.json) return PrintSummary(value, terms);
   const DualMicrofacetParams& p = texel.params();
-  const nlohmann::json out = {
+  nlohmann::json out = {
       {"texel", {x, y}},
+      {"btdf", fit::MaterialModelName(texel.model())},
       {"rgb", {value[0], value[1], value[2]}},
-      {"rho_T", rho_T},
-      {"rho_B", rho_B},
-      {"rho", LogBlend(rho_T, rho_B, p.alpha)},
-      {"alpha", p.alpha},
       {"eta", p.eta},
-      {"shadowing_roughness", p.shadowing.roughness()},
       {"k_s", p.k_s},
       {"rho_d", p.rho_d},
       {"wi", {wi.x(), wi.y(), wi.z()}},
       {"wo", {wo.x(), wo.y(), wo.z()}},
   };
+  out.update(terms);
   std::cout << out.dump(2) << "\n";
 }
 

@@ -1,6 +1,7 @@
 // svbtdf fit PROCESSED --out MATERIAL: the dual-microfacet material of a processed session.
 
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <string>
 
@@ -54,15 +55,22 @@ void FitAndWriteMaterial(const fs::path& processed, const fs::path& out, fit::Fi
   fit::WriteMaterial(out, material);
   fs::remove(options.checkpoint);
   const nlohmann::json& statistics = material.provenance["statistics"];
-  std::printf("fitted %s representatives of %s valid texels (%s failed, %s resumed) in %.1f s; median residual %.3f\n",
-              statistics["representatives"].dump().c_str(), statistics["valid_texels"].dump().c_str(),
-              statistics["failed_fits"].dump().c_str(), statistics["resumed_fits"].dump().c_str(),
-              statistics["seconds"].get<double>(),
+  std::printf("fitted %s: %s representatives of %s valid texels (%s failed, %s resumed) in %.1f s (%.2f s per fit); "
+              "median residual %.3f\n",
+              fit::MaterialModelName(material.model), statistics["representatives"].dump().c_str(),
+              statistics["valid_texels"].dump().c_str(), statistics["failed_fits"].dump().c_str(),
+              statistics["resumed_fits"].dump().c_str(), statistics["seconds"].get<double>(),
+              statistics["seconds_per_fit"].get<double>(),
               statistics["median_relative_rmse"].is_number() ? statistics["median_relative_rmse"].get<double>() : -1.0);
   std::printf("material: %s\n", out.c_str());
 }
 
 void AddFitOptions(CLI::App* command, fit::FitMaterialOptions* options, std::string* representatives) {
+  const std::map<std::string, fit::MaterialModel> models = {{"dual", fit::MaterialModel::kDualMicrofacet},
+                                                            {"ggx", fit::MaterialModel::kWalterGgx}};
+  command->add_option("--model", options->model, "dual (the dual-microfacet model) or ggx (the single-interface baseline)")
+      ->transform(CLI::CheckedTransformer(models))
+      ->default_str("dual");
   command->add_option("--eta", options->eta, "relative index of refraction (default: the session's)");
   command->add_option("--representatives", *representatives, "fraction of texels fitted (k-means representatives), or 'all'")
       ->capture_default_str();

@@ -2,6 +2,9 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 
 #include "svbtdf/common/error.h"
@@ -13,9 +16,22 @@ namespace {
 
 // Parameters: ln alpha_x, ln alpha_y, azimuth, ln k.
 double BaselineRho(const double* p, double eta, const Vec3& i, const Vec3& o) {
-  const GgxNdf ndf(std::exp(p[0]), std::exp(p[1]));
-  const Eigen::AngleAxisd unrotate(-p[2], Vec3::UnitZ());
-  return std::exp(p[3]) * WalterBtdf(ndf, unrotate * i, unrotate * o, 1.0, eta);
+  return std::exp(p[3]) * BaselineShape({std::exp(p[0]), std::exp(p[1]), p[2]}, eta, i, o);
+}
+
+// Per-channel scales by linear least squares against the fitted shape (as the dual fit does).
+std::array<double, 3> ChannelScales(const BaselineFitResult& fit, double eta, const TexelSlice& slice,
+                                    const std::vector<int>& rows) {
+  if (slice.rho_rgb.size() != slice.rho.size()) return {fit.k_s, fit.k_s, fit.k_s};
+  std::array<double, 3> model_data = {0, 0, 0};
+  double model_model = 0;
+  for (int k : rows) {
+    const double shape = BaselineShape(fit.lobe(), eta, slice.light[k], slice.view);
+    model_model += shape * shape;
+    for (int c = 0; c < 3; ++c) model_data[c] += shape * slice.rho_rgb[k][c];
+  }
+  if (!(model_model > 0)) return {fit.k_s, fit.k_s, fit.k_s};
+  return {model_data[0] / model_model, model_data[1] / model_model, model_data[2] / model_model};
 }
 
 struct BaselineResidual {
@@ -38,6 +54,40 @@ struct BaselineResidual {
 };
 
 }  // namespace
+
+double BaselineShape(const BaselineLobe& lobe, double eta, const Vec3& i, const Vec3& o) {
+  const GgxNdf ndf(lobe.alpha_x, lobe.alpha_y);
+  const Eigen::AngleAxisd unrotate(-lobe.azimuth, Vec3::UnitZ());
+  return WalterBtdf(ndf, unrotate * i, unrotate * o, 1.0, eta);
+}
+
+std::vector<double> BaselineLnD(const Hemicube& grid, const BaselineLobe& lobe) {
+  const GgxNdf ndf(lobe.alpha_x, lobe.alpha_y);
+  const Eigen::AngleAxisd unrotate(-lobe.azimuth, Vec3::UnitZ());
+  std::vector<double> ln_d(grid.num_cells());
+  for (int c = 0; c < grid.num_cells(); ++c) {
+    ln_d[c] = std::log(std::max(ndf.D(unrotate * grid.CellCenter(c)), 1e-300));
+  }
+  return ln_d;
+}
+
+BaselineLobe BlendBaselineLobes(const std::vector<std::pair<BaselineLobe, double>>& weighted) {
+  Eigen::Matrix2d moments = Eigen::Matrix2d::Zero();
+  for (const auto& [lobe, weight] : weighted) {
+    const Eigen::Rotation2Dd rotation(lobe.azimuth);
+    const Eigen::Vector2d scales(Square(lobe.alpha_x), Square(lobe.alpha_y));
+    moments += weight * (rotation.toRotationMatrix() * scales.asDiagonal() * rotation.toRotationMatrix().transpose());
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(moments);
+  // Negative affine weights can undershoot: keep the lobe at least as narrow as the fit's bound.
+  const double floor = Square(1e-3);
+  const Eigen::Vector2d axis = eigen.eigenvectors().col(1);  // the larger eigenvalue: alpha_x
+  BaselineLobe blended;
+  blended.alpha_x = std::sqrt(std::max(eigen.eigenvalues()[1], floor));
+  blended.alpha_y = std::sqrt(std::max(eigen.eigenvalues()[0], floor));
+  blended.azimuth = std::remainder(std::atan2(axis.y(), axis.x()), kPi);
+  return blended;
+}
 
 BaselineFitter::BaselineFitter(double eta, double dark_fraction) : eta_(eta), dark_fraction_(dark_fraction) {
   DualMicrofacetModel validate_eta(eta);
@@ -109,6 +159,7 @@ BaselineFitResult BaselineFitter::Fit(const TexelSlice& slice) const {
   }
   result.relative_rmse = squared_rho > 0 ? std::sqrt(squared_error / squared_rho) : 0.0;
   result.log_rms = std::sqrt(squared_log / rows.size());
+  result.k_s_rgb = ChannelScales(result, eta_, slice, rows);
   return result;
 }
 

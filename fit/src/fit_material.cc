@@ -98,6 +98,25 @@ nlohmann::json FitToJson(const TexelFitResult& f) {
           {"samples_used", f.samples_used}};
 }
 
+nlohmann::json BaselineToJson(const BaselineFitResult& f) {
+  return {{"alpha_x", f.alpha_x}, {"alpha_y", f.alpha_y}, {"azimuth", f.azimuth},
+          {"k_s", f.k_s},         {"k_s_rgb", f.k_s_rgb}, {"log_rms", f.log_rms},
+          {"relative_rmse", f.relative_rmse}, {"converged", f.converged}};
+}
+
+BaselineFitResult BaselineFromJson(const nlohmann::json& j) {
+  BaselineFitResult f;
+  f.alpha_x = j.at("alpha_x").get<double>();
+  f.alpha_y = j.at("alpha_y").get<double>();
+  f.azimuth = j.at("azimuth").get<double>();
+  f.k_s = j.at("k_s").get<double>();
+  f.k_s_rgb = j.at("k_s_rgb").get<std::array<double, 3>>();
+  f.log_rms = j.at("log_rms").get<double>();
+  f.relative_rmse = j.at("relative_rmse").get<double>();
+  f.converged = j.at("converged").get<bool>();
+  return f;
+}
+
 TexelFitResult FitFromJson(const nlohmann::json& j) {
   TexelFitResult f;
   f.alpha = j.at("alpha").get<double>();
@@ -119,6 +138,7 @@ class Checkpoint {
  public:
   Checkpoint(const fs::path& path, const nlohmann::json& identity) : path_(path) {
     if (path.empty()) return;
+    DropTornTail(path);
     std::ifstream in(path);
     std::string line;
     if (in && std::getline(in, line)) {
@@ -132,11 +152,10 @@ class Checkpoint {
                           "re-run with the same options, or delete it to start over");
       }
       while (std::getline(in, line)) {
-        try {  // a line cut short by a crash does not count
+        try {  // a damaged line does not count: that representative is fitted again
           const nlohmann::json entry = nlohmann::json::parse(line);
-          done_[entry.at("representative").get<int>()] = FitFromJson(entry.at("result"));
+          done_[entry.at("representative").get<int>()] = entry.at("result");
         } catch (const nlohmann::json::exception&) {
-        } catch (const Error&) {
         }
       }
       return;
@@ -144,15 +163,28 @@ class Checkpoint {
     Append(nlohmann::json{{"fit", identity}});
   }
 
-  const std::map<int, TexelFitResult>& done() const { return done_; }
+  const std::map<int, nlohmann::json>& done() const { return done_; }
 
-  void Record(int representative, const TexelFitResult& result) {
+  void Record(int representative, const nlohmann::json& result) {
     if (path_.empty()) return;
     std::lock_guard<std::mutex> lock(mutex_);
-    Append({{"representative", representative}, {"result", FitToJson(result)}});
+    Append({{"representative", representative}, {"result", result}});
   }
 
  private:
+  // A kill during a write can leave a last line without its newline; the next append would be
+  // glued to it and lost too, so cut the file back to its last complete line first.
+  static void DropTornTail(const fs::path& path) {
+    std::error_code error;
+    const auto size = fs::file_size(path, error);
+    if (error || size == 0) return;
+    std::ifstream in(path, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    const size_t keep = bytes.rfind('\n') == std::string::npos ? 0 : bytes.rfind('\n') + 1;
+    if (keep < bytes.size()) fs::resize_file(path, keep, error);
+    if (error) ThrowIoError(path.string(), "cannot repair the checkpoint: " + error.message());
+  }
+
   void Append(const nlohmann::json& entry) {
     const std::string line = entry.dump() + "\n";
     const int fd = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
@@ -163,7 +195,7 @@ class Checkpoint {
   }
 
   fs::path path_;
-  std::map<int, TexelFitResult> done_;
+  std::map<int, nlohmann::json> done_;
   std::mutex mutex_;
 };
 
@@ -187,26 +219,127 @@ class WorkspacePool {
   std::vector<FitWorkspace> free_;
 };
 
-// A representative whose fit failed borrows the fit of the spatially nearest successful one.
-void BorrowFailedFits(const std::vector<int64_t>& representatives, int width, const std::vector<bool>& failed,
-                      std::vector<TexelFitResult>* fits) {
+// Which representatives borrow whose fit: a failed one takes the spatially nearest successful one.
+std::vector<int> LenderOfFailed(const std::vector<int64_t>& representatives, int width,
+                                const std::vector<uint8_t>& failed) {
+  std::vector<int> lender(representatives.size());
   for (size_t r = 0; r < representatives.size(); ++r) {
+    lender[r] = static_cast<int>(r);
     if (!failed[r]) continue;
     double best = 1e300;
     for (size_t s = 0; s < representatives.size(); ++s) {
       if (failed[s]) continue;
       const double dx = representatives[s] % width - representatives[r] % width;
       const double dy = representatives[s] / width - representatives[r] / width;
-      if (dx * dx + dy * dy < best) best = dx * dx + dy * dy, (*fits)[r] = (*fits)[s];
+      if (dx * dx + dy * dy < best) best = dx * dx + dy * dy, lender[r] = static_cast<int>(s);
     }
-    (*fits)[r].relative_rmse = -1;  // marks "not its own fit" in the residual map
   }
+  return lender;
+}
+
+// The texel indices of the representatives whose own fit failed (for the provenance).
+std::vector<int64_t> FailedTexels(const std::vector<int64_t>& reps, const std::vector<uint8_t>& failed) {
+  std::vector<int64_t> texels;
+  for (size_t r = 0; r < reps.size(); ++r) {
+    if (failed[r]) texels.push_back(reps[r]);
+  }
+  return texels;
 }
 
 double Median(std::vector<double> v) {
   if (v.empty()) return std::nan("");
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
   return v[v.size() / 2];
+}
+
+// The fits of all representatives with one model, as the journal records them.
+class RepresentativeFits {
+ public:
+  RepresentativeFits(double eta, const FitMaterialOptions& options, size_t count)
+      : model_(options.model), dual_(eta, DualOptions(options)), baseline_(eta), results_(count) {}
+
+  // Fits one slice (svbtdf::Error kNumerical when it cannot be fitted).
+  nlohmann::json Fit(const TexelSlice& slice, FitWorkspace* workspace) const {
+    if (model_ == MaterialModel::kWalterGgx) return BaselineToJson(baseline_.Fit(slice));
+    return FitToJson(dual_.Fit(slice, workspace));
+  }
+  void Set(size_t r, nlohmann::json result) { results_[r] = std::move(result); }
+  double RelativeRmse(size_t r) const { return results_[r].at("relative_rmse").get<double>(); }
+
+  // A failed representative takes its lender's fit; its residual says it is not its own (-1).
+  void Lend(const std::vector<int>& lender) {
+    for (size_t r = 0; r < results_.size(); ++r) {
+      if (lender[r] == static_cast<int>(r)) continue;
+      results_[r] = results_[lender[r]];
+      results_[r]["relative_rmse"] = -1.0;
+    }
+  }
+
+  Material Assemble(const SliceStore& store, double eta, int ndf_resolution, const Clustering& clustering) const {
+    const int width = store.info().texels_x, height = store.info().texels_y;
+    if (model_ == MaterialModel::kWalterGgx) {
+      std::vector<BaselineFitResult> fits;
+      for (const nlohmann::json& j : results_) fits.push_back(BaselineFromJson(j));
+      return AssembleBaselineMaterial(width, height, eta, ndf_resolution, clustering, fits, store.rho_d());
+    }
+    std::vector<TexelFitResult> fits;
+    for (const nlohmann::json& j : results_) fits.push_back(FitFromJson(j));
+    return AssembleMaterial(width, height, eta, ndf_resolution, clustering, fits, store.rho_d());
+  }
+
+ private:
+  static TexelFitOptions DualOptions(const FitMaterialOptions& options) {
+    TexelFitOptions fit_options;
+    fit_options.ndf_resolution = options.ndf_resolution;
+    return fit_options;
+  }
+
+  MaterialModel model_;
+  TexelFitter dual_;
+  BaselineFitter baseline_;
+  std::vector<nlohmann::json> results_;
+};
+
+// Fits the representatives the checkpoint does not hold yet, in parallel (one workspace per
+// worker), recording each in the checkpoint. Returns which failed (kNumerical).
+std::vector<uint8_t> FitPending(const SliceStore& store, const std::vector<int64_t>& reps, const std::vector<bool>& use_dot,
+                                const FitMaterialOptions& options, Checkpoint* checkpoint, RepresentativeFits* fits) {
+  std::vector<int> todo;
+  for (size_t r = 0; r < reps.size(); ++r) {
+    const auto done = checkpoint->done().find(static_cast<int>(r));
+    if (done != checkpoint->done().end()) {
+      fits->Set(r, done->second);
+    } else {
+      todo.push_back(static_cast<int>(r));
+    }
+  }
+  std::unique_ptr<ProgressBar> progress;
+  if (options.progress) {
+    progress = std::make_unique<ProgressBar>("fit", static_cast<int64_t>(reps.size()), "texels");
+    progress->SkipAlreadyDone(static_cast<int64_t>(reps.size() - todo.size()));
+  }
+  // Bytes, not vector<bool>: workers write neighbouring flags at the same time.
+  std::vector<uint8_t> failed(reps.size(), 0);
+  WorkspacePool workspaces;
+  ParallelFor(static_cast<int64_t>(todo.size()), options.threads, 1, [&](int64_t a, int64_t b) {
+    FitWorkspace workspace = workspaces.Take();
+    for (int64_t k = a; k < b; ++k) {
+      ThrowIfInterrupted("fitting");
+      const int r = todo[k];
+      try {
+        nlohmann::json result = fits->Fit(store.MakeTexelSlice(reps[r], use_dot), &workspace);
+        checkpoint->Record(r, result);
+        fits->Set(r, std::move(result));
+      } catch (const Error& e) {
+        if (e.kind() != ErrorKind::kNumerical) throw;
+        failed[r] = 1;  // not journalled: a rerun tries it again
+      }
+      if (progress) progress->Advance();
+    }
+    workspaces.Give(std::move(workspace));
+  });
+  if (progress) progress->Finish();
+  return failed;
 }
 
 }  // namespace
@@ -235,66 +368,35 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
   const std::vector<int64_t>& reps = clustering.representatives;
 
   const nlohmann::json identity = {{"store", fs::absolute(store.folder()).string()},
+                                   {"model", MaterialModelName(options.model)},
                                    {"eta", eta},
                                    {"ndf_resolution", options.ndf_resolution},
                                    {"holdout", held_out},
                                    {"representatives", reps}};
   Checkpoint checkpoint(options.checkpoint, identity);
-  TexelFitOptions fit_options;
-  fit_options.ndf_resolution = options.ndf_resolution;
-  const TexelFitter fitter(eta, fit_options);
-
-  std::vector<TexelFitResult> fits(reps.size());
-  std::vector<bool> failed(reps.size(), false);
-  std::vector<int> todo;
-  for (size_t r = 0; r < reps.size(); ++r) {
-    const auto done = checkpoint.done().find(static_cast<int>(r));
-    if (done != checkpoint.done().end()) {
-      fits[r] = done->second;
-    } else {
-      todo.push_back(static_cast<int>(r));
-    }
-  }
-  std::unique_ptr<ProgressBar> progress;
-  if (options.progress) {
-    progress = std::make_unique<ProgressBar>("fit", static_cast<int64_t>(reps.size()), "texels");
-    progress->SkipAlreadyDone(static_cast<int64_t>(reps.size() - todo.size()));
-  }
-  WorkspacePool workspaces;
-  ParallelFor(static_cast<int64_t>(todo.size()), options.threads, 1, [&](int64_t a, int64_t b) {
-    FitWorkspace workspace = workspaces.Take();
-    for (int64_t k = a; k < b; ++k) {
-      ThrowIfInterrupted("fitting");
-      const int r = todo[k];
-      try {
-        fits[r] = fitter.Fit(store.MakeTexelSlice(reps[r], use_dot), &workspace);
-        checkpoint.Record(r, fits[r]);
-      } catch (const Error& e) {
-        if (e.kind() != ErrorKind::kNumerical) throw;
-        failed[r] = true;
-      }
-      if (progress) progress->Advance();
-    }
-    workspaces.Give(std::move(workspace));
-  });
-  if (progress) progress->Finish();
-  const int64_t failures = std::count(failed.begin(), failed.end(), true);
+  RepresentativeFits fits(eta, options, reps.size());
+  const size_t resumed = checkpoint.done().size();
+  const auto fit_start = std::chrono::steady_clock::now();
+  const std::vector<uint8_t> failed = FitPending(store, reps, use_dot, options, &checkpoint, &fits);
+  const double fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fit_start).count();
+  const int64_t failures = std::count(failed.begin(), failed.end(), 1);
   if (failures == static_cast<int64_t>(reps.size())) {
-    ThrowInvalidInput(store.folder().string(), "no representative could be fitted (too few usable samples)");
+    throw Error(ErrorKind::kNumerical, store.folder().string(), "no representative could be fitted (too few usable samples)");
   }
-  BorrowFailedFits(reps, store.info().texels_x, failed, &fits);
-
-  Material material = AssembleMaterial(store.info().texels_x, store.info().texels_y, eta, options.ndf_resolution,
-                                       clustering, fits, store.rho_d());
   std::vector<double> residuals;
-  for (size_t r = 0; r < fits.size(); ++r) {
-    if (!failed[r]) residuals.push_back(fits[r].relative_rmse);
+  for (size_t r = 0; r < reps.size(); ++r) {
+    if (!failed[r]) residuals.push_back(fits.RelativeRmse(r));
   }
+  fits.Lend(LenderOfFailed(reps, store.info().texels_x, failed));
+
+  Material material = fits.Assemble(store, eta, options.ndf_resolution, clustering);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   material.provenance = {
       {"processed", fs::absolute(store.folder()).string()},
       {"session", store.info().provenance.value("session", "")},
       {"settings",
-       {{"eta", eta},
+       {{"model", MaterialModelName(options.model)},
+        {"eta", eta},
         {"representative_fraction", options.representative_fraction},
         {"ndf_resolution", options.ndf_resolution},
         {"seed", options.seed}}},
@@ -303,10 +405,15 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
         {"valid_texels", valid.size()},
         {"representatives", reps.size()},
         {"failed_fits", failures},
-        {"resumed_fits", reps.size() - todo.size()},
+        {"failed_representatives", FailedTexels(reps, failed)},
+        {"resumed_fits", resumed},
         {"median_relative_rmse", Median(residuals)},
         {"pca_explained_variance", clustering.explained_variance},
-        {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}}},
+        {"seconds", seconds},
+        {"fit_seconds", fit_seconds},
+        // Wall time per representative fitted in this run (all threads together).
+        {"seconds_per_fit", reps.size() > resumed ? fit_seconds / (reps.size() - resumed) : 0.0},
+        {"threads", ThreadCount(options.threads)}}},
   };
   // `svbtdf compare` measures the held-out error on exactly these dots.
   if (!held_out.empty()) {

@@ -30,6 +30,33 @@ const MapSpec kMaps[] = {
     {"weight_value", "weight_value.exr", &Material::weight_value, 0},
 };
 
+// The baseline's lobe maps (walter-ggx materials only).
+const MapSpec kBaselineMaps[] = {
+    {"baseline_alpha_x", "baseline_alpha_x.exr", &Material::baseline_alpha_x, 1},
+    {"baseline_alpha_y", "baseline_alpha_y.exr", &Material::baseline_alpha_y, 1},
+    {"baseline_azimuth", "baseline_azimuth.exr", &Material::baseline_azimuth, 1},
+};
+
+std::vector<MapSpec> MapsOf(MaterialModel model) {
+  std::vector<MapSpec> maps(std::begin(kMaps), std::end(kMaps));
+  if (model == MaterialModel::kWalterGgx) maps.insert(maps.end(), std::begin(kBaselineMaps), std::end(kBaselineMaps));
+  return maps;
+}
+
+// The manifest's description of the BTDF (for people; readers use "btdf").
+const char* ModelFormula(MaterialModel model) {
+  return model == MaterialModel::kWalterGgx
+             ? "walter-ggx: R = k_s f_Walter(GGX(baseline_alpha_x, baseline_alpha_y) rotated by baseline_azimuth; i, o, "
+               "1, eta) + rho_d"
+             : "dual-microfacet: R = k_s exp(alpha ln rho_T + (1 - alpha) ln rho_B) + rho_d";
+}
+
+MaterialModel ParseModel(const std::string& name, const std::string& source) {
+  if (name == "dual-microfacet") return MaterialModel::kDualMicrofacet;
+  if (name == "walter-ggx") return MaterialModel::kWalterGgx;
+  ThrowFormatError(source, "has an unknown btdf '" + name + "' (expected dual-microfacet or walter-ggx)");
+}
+
 void CheckShape(const FloatImage& image, int width, int height, int channels, const std::string& source) {
   if (image.width != width || image.height != height || (channels > 0 && image.channels != channels)) {
     ThrowFormatError(source, "is " + std::to_string(image.width) + "x" + std::to_string(image.height) + "x" +
@@ -91,6 +118,46 @@ Material AssembleMaterial(int width, int height, double eta, int ndf_resolution,
   return m;
 }
 
+const char* MaterialModelName(MaterialModel model) {
+  return model == MaterialModel::kWalterGgx ? "walter-ggx" : "dual-microfacet";
+}
+
+Material AssembleBaselineMaterial(int width, int height, double eta, int ndf_resolution, const Clustering& clustering,
+                                  const std::vector<BaselineFitResult>& representative_fits, const FloatImage& rho_d) {
+  // The shared maps (k_s, residual, weights, NDF tables of the lobes) through the dual path.
+  const Hemicube grid(ndf_resolution);
+  std::vector<TexelFitResult> as_dual(representative_fits.size());
+  for (size_t r = 0; r < representative_fits.size(); ++r) {
+    const BaselineFitResult& b = representative_fits[r];
+    as_dual[r].alpha = 0.0;
+    as_dual[r].shadowing_roughness = 0.0;
+    as_dual[r].k_s = b.k_s;
+    as_dual[r].k_s_rgb = b.k_s_rgb;
+    as_dual[r].ln_d = BaselineLnD(grid, b.lobe());
+    as_dual[r].relative_rmse = b.relative_rmse;
+  }
+  // Every texel takes its cluster's representative whole. Affine blends of the baseline's fits
+  // are unsafe: where it cannot reach the measured lobe (it refracts once, so its lobe is
+  // displaced) its best log fit can be a near-delta lobe with a huge scale, and a texel blending
+  // such a scale with its neighbours' wide lobes was off by a factor of 1000s (docs/fitting.md).
+  Clustering by_cluster = clustering;
+  for (size_t t = 0; t < by_cluster.weights.size(); ++t) by_cluster.weights[t].terms = {{by_cluster.cluster[t], 1.0f}};
+  Material m = AssembleMaterial(width, height, eta, ndf_resolution, by_cluster, as_dual, rho_d);
+  m.model = MaterialModel::kWalterGgx;
+  m.baseline_alpha_x = FloatImage(width, height, 1);
+  m.baseline_alpha_y = FloatImage(width, height, 1);
+  m.baseline_azimuth = FloatImage(width, height, 1);
+  for (int64_t t = 0; t < static_cast<int64_t>(width) * height; ++t) {
+    std::vector<std::pair<BaselineLobe, double>> weighted;
+    for (const auto& [rep, w] : by_cluster.weights[t].terms) weighted.emplace_back(representative_fits[rep].lobe(), w);
+    const BaselineLobe lobe = BlendBaselineLobes(weighted);
+    m.baseline_alpha_x.pixels[t] = static_cast<float>(lobe.alpha_x);
+    m.baseline_alpha_y.pixels[t] = static_cast<float>(lobe.alpha_y);
+    m.baseline_azimuth.pixels[t] = static_cast<float>(lobe.azimuth);
+  }
+  return m;
+}
+
 void WriteMaterial(const fs::path& folder, const Material& m) {
   if (fs::exists(folder) && (!fs::is_directory(folder) || !fs::is_empty(folder))) {
     ThrowInvalidInput(folder.string(), "exists and is not empty; a material is never overwritten",
@@ -112,7 +179,7 @@ void WriteMaterial(const fs::path& folder, const Material& m) {
   }
   WriteFloatImage(folder / "ndf_ln_d.exr", tables, /*half_precision=*/false, false);
   nlohmann::json maps = nlohmann::json::object();
-  for (const MapSpec& spec : kMaps) {
+  for (const MapSpec& spec : MapsOf(m.model)) {
     CheckShape(m.*spec.image, m.width, m.height, spec.channels, std::string("material map ") + spec.key);
     // Parameters in full float: k_s and rho_d would survive half, indices would not.
     WriteFloatImage(folder / spec.file, m.*spec.image, /*half_precision=*/false, false);
@@ -120,9 +187,11 @@ void WriteMaterial(const fs::path& folder, const Material& m) {
   }
   const nlohmann::json manifest = {
       {"format", "svbtdf-material"},
-      {"version", kMaterialFormatVersion},
+      // Version 1 readers would evaluate a baseline as a dual-microfacet material: only it needs 2.
+      {"version", m.model == MaterialModel::kWalterGgx ? 2 : 1},
       {"conventions", "docs/model.md version 1: z toward the camera, i toward the light (i.z < 0)"},
-      {"model", "dual-microfacet: R = k_s exp(alpha ln rho_T + (1 - alpha) ln rho_B) + rho_d"},
+      {"btdf", MaterialModelName(m.model)},
+      {"model", ModelFormula(m.model)},
       {"eta", m.eta},
       {"width", m.width},
       {"height", m.height},
@@ -148,10 +217,11 @@ Material ReadMaterial(const fs::path& folder) {
   try {
     if (manifest.at("format") != "svbtdf-material") ThrowFormatError(manifest_path.string(), "is not an svbtdf material");
     const int version = manifest.at("version").get<int>();
-    if (version != kMaterialFormatVersion) {
+    if (version < 1 || version > kMaterialFormatVersion) {
       ThrowFormatError(manifest_path.string(), "has material format version " + std::to_string(version) +
                                                    "; this svbtdf reads version " + std::to_string(kMaterialFormatVersion));
     }
+    m.model = ParseModel(manifest.value("btdf", "dual-microfacet"), manifest_path.string());
     m.eta = manifest.at("eta").get<double>();
     m.width = manifest.at("width").get<int>();
     m.height = manifest.at("height").get<int>();
@@ -172,7 +242,7 @@ Material ReadMaterial(const fs::path& folder) {
     for (int c = 0; c < grid.num_cells(); ++c) row[c] = tables.at(c, r);
     m.representative_ln_d.push_back(std::move(row));
   }
-  for (const MapSpec& spec : kMaps) {
+  for (const MapSpec& spec : MapsOf(m.model)) {
     const fs::path file = folder / spec.file;
     m.*spec.image = ReadFloatImage(file);
     RequireFinite(m.*spec.image, file.string());
@@ -182,6 +252,14 @@ Material ReadMaterial(const fs::path& folder) {
     ThrowFormatError((folder / "weight_value.exr").string(), "has a different channel count than weight_index.exr");
   }
   const int reps = static_cast<int>(m.representative_texels.size());
+  if (m.model == MaterialModel::kWalterGgx) {
+    for (const FloatImage* map : {&m.baseline_alpha_x, &m.baseline_alpha_y}) {
+      if (*std::min_element(map->pixels.begin(), map->pixels.end()) <= 0.0f) {
+        ThrowFormatError((folder / (map == &m.baseline_alpha_x ? "baseline_alpha_x.exr" : "baseline_alpha_y.exr")).string(),
+                         "holds a GGX roughness <= 0");
+      }
+    }
+  }
   for (float index : m.weight_index.pixels) {
     if (index < 0 || index >= reps || index != std::floor(index)) {
       ThrowFormatError((folder / "weight_index.exr").string(), "holds an index that is not a representative");
@@ -192,7 +270,23 @@ Material ReadMaterial(const fs::path& folder) {
 
 MaterialEvaluator::MaterialEvaluator(const Material& material) : material_(material), grid_(material.ndf_resolution) {}
 
+Rgb TexelBtdf::Evaluate(const Vec3& i, const Vec3& o) const {
+  if (!baseline_) return EvaluateMaterial(ndf_, params_, i, o);
+  const double shape = BaselineShape(*baseline_, params_.eta, i, o);
+  Rgb value;
+  for (int c = 0; c < 3; ++c) value[c] = params_.k_s[c] * shape + params_.rho_d[c];
+  return value;
+}
+
+std::optional<BaselineLobe> MaterialEvaluator::Lobe(int x, int y) const {
+  if (material_.model != MaterialModel::kWalterGgx) return std::nullopt;
+  return BaselineLobe{material_.baseline_alpha_x.at(x, y), material_.baseline_alpha_y.at(x, y),
+                      material_.baseline_azimuth.at(x, y)};
+}
+
 TabulatedNdf MaterialEvaluator::TexelNdf(int x, int y) const {
+  // The baseline's texel NDF is its own interpolated lobe, the one Evaluate uses.
+  if (const std::optional<BaselineLobe> lobe = Lobe(x, y)) return TabulatedNdf(grid_, BaselineLnD(grid_, *lobe));
   const int cells = grid_.num_cells();
   std::vector<double> d(cells, 0.0);
   for (int k = 0; k < material_.weight_index.channels; ++k) {
@@ -224,7 +318,7 @@ TexelBtdf MaterialEvaluator::Texel(int x, int y) const {
     params.k_s[c] = material_.k_s.at(x, y, c);
     params.rho_d[c] = material_.rho_d.at(x, y, c);
   }
-  return TexelBtdf(TexelNdf(x, y), params);
+  return TexelBtdf(TexelNdf(x, y), params, Lobe(x, y));
 }
 
 }  // namespace svbtdf::fit

@@ -60,7 +60,7 @@ TEST_F(FitChain, AnInterruptedFitResumesFromItsCheckpoint) {
   waitpid(pid, &status, 0);
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 130);
-  EXPECT_FALSE(fs::exists(out / "manifest.json"));
+  EXPECT_FALSE(fs::exists(out / "material.json"));
   const auto resumed = RunSvbtdf("fit " + Processed() + " --out " + out.string() + " --representatives 0.02");
   ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
   EXPECT_EQ(resumed.output.find(" 0 resumed"), std::string::npos) << resumed.output;

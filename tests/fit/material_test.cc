@@ -145,5 +145,22 @@ TEST_F(MaterialTest, DamagedMaterialsAreErrorsNamingTheFile) {
   }
 }
 
+// The baseline's lobes blend through their slope moments: a lobe blended with itself is itself,
+// and azimuths on either side of +-90 degrees average to 90 degrees, not to 0.
+TEST(BaselineLobes, BlendThroughSlopeMomentsAndWrapAzimuths) {
+  const BaselineLobe lobe{0.3, 0.1, 0.4};
+  const BaselineLobe same = BlendBaselineLobes({{lobe, 0.7}, {lobe, 0.3}});
+  EXPECT_NEAR(same.alpha_x, 0.3, 1e-9);
+  EXPECT_NEAR(same.alpha_y, 0.1, 1e-9);
+  EXPECT_NEAR(same.azimuth, 0.4, 1e-9);
+  const double near_90 = 88.0 * kPi / 180.0;
+  const BaselineLobe wrapped = BlendBaselineLobes({{{0.3, 0.1, near_90}, 0.5}, {{0.3, 0.1, -near_90}, 0.5}});
+  EXPECT_NEAR(std::abs(wrapped.azimuth), kPi / 2, 1e-6);
+  EXPECT_NEAR(wrapped.alpha_x, 0.3, 0.01);
+  // Affine weights may be negative; the lobe stays a valid GGX.
+  const BaselineLobe extrapolated = BlendBaselineLobes({{{0.05, 0.05, 0.0}, 1.5}, {{0.3, 0.3, 0.0}, -0.5}});
+  EXPECT_GT(extrapolated.alpha_y, 0.0);
+}
+
 }  // namespace
 }  // namespace svbtdf::fit

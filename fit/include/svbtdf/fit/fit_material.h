@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "svbtdf/fit/material.h"
 #include "svbtdf/fit/slice_store.h"
@@ -16,6 +17,7 @@
 namespace svbtdf::fit {
 
 struct FitMaterialOptions {
+  MaterialModel model = MaterialModel::kDualMicrofacet;  // or the baseline (`--model ggx`)
   double eta = 0.0;                       // 0: the store's nominal eta (an error when unknown)
   double representative_fraction = 0.01;  // the paper's 1%; >= 1 fits every valid texel
   int ndf_resolution = 32;
@@ -26,7 +28,9 @@ struct FitMaterialOptions {
   std::filesystem::path checkpoint;       // journal of finished fits; empty: none
 };
 
-// Throws svbtdf::Error(kInvalidInput) for bad options, kInterrupted when interrupted (the
+// A representative whose fit fails (kNumerical) takes the fit of the nearest one that succeeded
+// and is listed in the provenance. Throws svbtdf::Error(kInvalidInput) for bad options,
+// kNumerical when no representative can be fitted, kInterrupted when interrupted (the
 // checkpoint then holds the finished fits).
 Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options);
 

@@ -7,11 +7,13 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "svbtdf/common/image_io.h"
+#include "svbtdf/fit/baseline_fit.h"
 #include "svbtdf/fit/clustering.h"
 #include "svbtdf/fit/texel_fit.h"
 #include "svbtdf/model/dual_microfacet.h"
@@ -20,9 +22,18 @@
 
 namespace svbtdf::fit {
 
-inline constexpr int kMaterialFormatVersion = 1;
+// Version 2 adds the single-interface baseline (manifest "btdf": "walter-ggx"). Dual-microfacet
+// materials are still written as version 1, so that older readers keep reading them.
+inline constexpr int kMaterialFormatVersion = 2;
+
+// Which BTDF the material's texels hold.
+enum class MaterialModel {
+  kDualMicrofacet,  // the paper's model: NDF table, alpha, shadowing
+  kWalterGgx,       // the baseline (`svbtdf fit --model ggx`): one rough refraction, anisotropic GGX
+};
 
 struct Material {
+  MaterialModel model = MaterialModel::kDualMicrofacet;
   int width = 0, height = 0;   // texels
   double eta = 1.5;
   int ndf_resolution = 32;
@@ -39,6 +50,9 @@ struct Material {
   // Affine weights: K channels of representative indices and K of weights (sum 1; unused: 0, 0).
   FloatImage weight_index;
   FloatImage weight_value;
+  // kWalterGgx only (1 channel each, interpolated like alpha): the GGX lobe of every texel. The NDF
+  // tables then hold that lobe tabulated, and alpha and the shadowing roughness are unused (0).
+  FloatImage baseline_alpha_x, baseline_alpha_y, baseline_azimuth;
   nlohmann::json provenance = nlohmann::json::object();  // session, settings, statistics, holdout
 };
 
@@ -48,22 +62,37 @@ struct Material {
 Material AssembleMaterial(int width, int height, double eta, int ndf_resolution, const Clustering& clustering,
                           const std::vector<TexelFitResult>& representative_fits, const FloatImage& rho_d);
 
+// The same for the baseline (`svbtdf fit --model ggx`): a kWalterGgx material in which every
+// texel takes the fit of its cluster's representative (weight 1; see material.cc for why not the
+// affine blend).
+Material AssembleBaselineMaterial(int width, int height, double eta, int ndf_resolution, const Clustering& clustering,
+                                  const std::vector<BaselineFitResult>& representative_fits, const FloatImage& rho_d);
+
+// "dual-microfacet" | "walter-ggx", as in the manifest's "btdf" field.
+const char* MaterialModelName(MaterialModel model);
+
 // Writes MATERIAL/ (a new or empty folder; an existing material is never overwritten).
 void WriteMaterial(const std::filesystem::path& folder, const Material& material);
 // Reads and checks a material; every problem is an svbtdf::Error naming the file.
 Material ReadMaterial(const std::filesystem::path& folder);
 
 // One texel of a material, ready to evaluate at many direction pairs.
+// For the baseline, `params` holds eta, k_s and rho_d, and `baseline` the lobe:
+//   R[c] = k_s[c] BaselineShape(lobe, eta, i, o) + rho_d[c].
 class TexelBtdf {
  public:
-  TexelBtdf(TabulatedNdf ndf, DualMicrofacetParams params) : ndf_(std::move(ndf)), params_(params) {}
-  Rgb Evaluate(const Vec3& i, const Vec3& o) const { return EvaluateMaterial(ndf_, params_, i, o); }
+  TexelBtdf(TabulatedNdf ndf, DualMicrofacetParams params, std::optional<BaselineLobe> baseline = std::nullopt)
+      : ndf_(std::move(ndf)), params_(params), baseline_(baseline) {}
+  Rgb Evaluate(const Vec3& i, const Vec3& o) const;
   const TabulatedNdf& ndf() const { return ndf_; }
   const DualMicrofacetParams& params() const { return params_; }
+  MaterialModel model() const { return baseline_ ? MaterialModel::kWalterGgx : MaterialModel::kDualMicrofacet; }
+  const std::optional<BaselineLobe>& baseline() const { return baseline_; }
 
  private:
   TabulatedNdf ndf_;
   DualMicrofacetParams params_;
+  std::optional<BaselineLobe> baseline_;
 };
 
 // Evaluates R(x, i, o) for any texel: D = sum of w_j D_j over the texel's representatives.
@@ -79,6 +108,8 @@ class MaterialEvaluator {
   TabulatedNdf TexelNdf(int x, int y) const;
 
  private:
+  std::optional<BaselineLobe> Lobe(int x, int y) const;  // the texel's lobe, for a walter-ggx material
+
   const Material& material_;
   Hemicube grid_;
 };

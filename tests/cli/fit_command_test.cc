@@ -1,0 +1,92 @@
+// `svbtdf fit` on a small processed store synthesised from a known material
+// (tests/support/analytic_store.h): arguments, refusals, and the ggx baseline through `svbtdf eval`.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "analytic_store.h"
+#include "run_command.h"
+#include "svbtdf/common/atomic_file.h"
+#include "svbtdf/fit/material.h"
+
+namespace svbtdf {
+namespace {
+namespace fs = std::filesystem;
+using testing::RunSvbtdf;
+
+class FitCommand : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    root_ = fs::temp_directory_path() / ("svbtdf-fitcommand-" + std::to_string(::getpid()));
+    fs::remove_all(root_);
+    fs::create_directories(root_);
+    testing::WriteAnalyticStore(root_ / "processed", testing::AnalyticMaterial{6, 6}, 16, 0.01);
+  }
+  static void TearDownTestSuite() { fs::remove_all(root_); }
+  static std::string Fit(const std::string& out, const std::string& options) {
+    return "fit " + (root_ / "processed").string() + " --out " + (root_ / out).string() + " " + options;
+  }
+  static inline fs::path root_;
+};
+
+TEST_F(FitCommand, BadArgumentsExitWithTwoNamingTheArgument) {
+  const struct {
+    std::string options, named;
+  } cases[] = {{"--holdout 0.95", "--holdout"},
+               {"--holdout -1", "--holdout"},
+               {"--model walter", "--model"},
+               {"--representatives 2", "--representatives"},
+               {"--representatives some", "--representatives"},
+               {"--eta 0.9", "--eta"}};
+  for (const auto& c : cases) {
+    const auto result = RunSvbtdf(Fit("bad", c.options));
+    EXPECT_EQ(result.exit_code, 2) << c.options << ": " << result.output;
+    EXPECT_NE(result.output.find(c.named), std::string::npos) << c.options << ": " << result.output;
+  }
+  EXPECT_FALSE(fs::exists(root_ / "bad" / "material.json"));
+  const auto missing = RunSvbtdf("fit " + (root_ / "nowhere").string() + " --out " + (root_ / "m").string());
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;
+  EXPECT_NE(missing.output.find("nowhere"), std::string::npos) << missing.output;
+}
+
+TEST_F(FitCommand, GgxBaselineIsFittedWrittenAndEvaluated) {
+  const auto fitted = RunSvbtdf(Fit("ggx", "--model ggx --representatives 0.25 --holdout 0.1"));
+  ASSERT_EQ(fitted.exit_code, 0) << fitted.output;
+  EXPECT_NE(fitted.output.find("walter-ggx"), std::string::npos) << fitted.output;
+  EXPECT_NE(fitted.output.find("material: " + (root_ / "ggx").string()), std::string::npos) << fitted.output;
+  const nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(root_ / "ggx" / "material.json"));
+  EXPECT_EQ(manifest["btdf"], "walter-ggx");
+  EXPECT_EQ(manifest["version"], 2);
+  EXPECT_EQ(manifest["provenance"]["holdout"]["dots"].size(), 26u);  // 10% of 256 dots
+  const auto eval = RunSvbtdf("eval " + (root_ / "ggx").string() + " --texel 2 3 --wi 0 0.3 -1 --wo 0 -0.7 0.7 --json");
+  ASSERT_EQ(eval.exit_code, 0) << eval.output;
+  const nlohmann::json value = nlohmann::json::parse(eval.output);
+  EXPECT_EQ(value["btdf"], "walter-ggx");
+  EXPECT_GT(value["baseline_alpha_x"].get<double>(), 0.0);
+  // The command evaluates through the library's one path: the same value as in process.
+  const fit::Material material = fit::ReadMaterial(root_ / "ggx");
+  const Rgb expected = fit::MaterialEvaluator(material).Evaluate(2, 3, Vec3(0, 0.3, -1).normalized(),
+                                                                 Vec3(0, -0.7, 0.7).normalized());
+  EXPECT_NEAR(value["rgb"][0].get<double>(), expected[0], 1e-6 * std::abs(expected[0]) + 1e-12);
+  EXPECT_GE(value["rgb"][0].get<double>(), material.rho_d.at(2, 3, 0));
+}
+
+TEST_F(FitCommand, AnExistingMaterialIsNeverOverwritten) {
+  const auto first = RunSvbtdf(Fit("dual", "--representatives 0.1"));
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_NE(first.output.find("dual-microfacet"), std::string::npos) << first.output;
+  const std::string before = ReadTextFile(root_ / "dual" / "material.json");
+  const auto second = RunSvbtdf(Fit("dual", "--representatives 0.1"));
+  EXPECT_EQ(second.exit_code, 2) << second.output;
+  EXPECT_NE(second.output.find("never overwritten"), std::string::npos) << second.output;
+  EXPECT_EQ(ReadTextFile(root_ / "dual" / "material.json"), before);
+  const nlohmann::json manifest = nlohmann::json::parse(before);
+  EXPECT_EQ(manifest["version"], 1);  // dual-microfacet materials stay readable by version 1 readers
+  EXPECT_EQ(manifest["btdf"], "dual-microfacet");
+}
+
+}  // namespace
+}  // namespace svbtdf
