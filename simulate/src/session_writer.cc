@@ -8,6 +8,7 @@
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/common/session.h"
 #include "svbtdf/model/ndf_factory.h"
+#include "svbtdf/simulate/capture_render.h"
 #include "svbtdf/simulate/capture_simulator.h"
 #include "svbtdf/simulate/truth_io.h"
 
@@ -199,11 +200,11 @@ SimulationOutput SimulateSession(const fs::path& out, const SimulationOptions& o
   fs::create_directories(output.truth, error);
   if (error) ThrowIoError(output.truth.string(), "cannot create: " + error.message(), "is the folder writable?");
 
-  const Rig rig(preset.rig);
-  const TruthMaterial material = TruthMaterial::FromPattern(preset.pattern, preset.rig.sample.texels_x,
-                                                            preset.rig.sample.texels_y, preset.eta, options.seed);
-  const RigRenderer renderer(rig, &material, options.threads);
-  CaptureTruth plan = PlanCapture(preset, renderer, options.seed);
+  const std::unique_ptr<SimulatedSetup> setup = MakeSimulatedSetup(preset, options.seed, options.threads);
+  const Rig& rig = *setup->rig;
+  const TruthMaterial& material = *setup->material;
+  const RigRenderer& renderer = *setup->renderer;
+  CaptureTruth& plan = setup->plan;
   plan.truth_kind = options.truth;
   std::vector<std::string> keys;
   for (const CaptureId& id : CaptureList(rig, plan)) keys.push_back(SessionKey(id));
