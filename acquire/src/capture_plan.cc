@@ -92,6 +92,7 @@ class Fields {
 
 constexpr double kMaxExposure = 3600.0;
 constexpr double kMaxMonitorPx = 100000.0;
+constexpr double kMaxCaptures = 1e6;
 
 // Dots either as an explicit list or as a regular grid, in monitor pixels or millimetres.
 void ParseDots(const json& object, const std::string& source, double pixel_pitch_mm, CapturePlan* plan) {
@@ -173,6 +174,13 @@ CapturePlan ParsePlanJson(const json& root, const std::string& source) {
     plan.all_dots = plan.flat_white = false;
   }
   plan.bytes_per_image = static_cast<uint64_t>(f.Number("bytes_per_image", 0.0, 1e12, 0.0));
+  // Far beyond any real session (the paper's 40 x 40 dots x 3 brackets is 4800), and it keeps the
+  // expanded plan in memory small.
+  const double dot_captures = static_cast<double>(plan.dots_px.size()) * plan.exposures_s.size() * plan.repeats;
+  if (dot_captures > kMaxCaptures) {
+    f.Fail("dots", "with the exposures and repeats asks for " + std::to_string(static_cast<int64_t>(dot_captures)) +
+                       " dot images, more than " + std::to_string(static_cast<int64_t>(kMaxCaptures)));
+  }
   return plan;
 }
 

@@ -155,6 +155,7 @@ std::shared_ptr<const SimulatedSetup> LoadSimulation(const std::filesystem::path
 
 void FaultInjectingCamera::SetExposure(const ExposureSettings& settings) {
   if (plan_.unplug && plan_.fail_at > 0 && calls_ >= plan_.fail_at) {
+    ++failures_;
     throw Error(ErrorKind::kHardware, inner_.Info().id, "cable pulled");
   }
   inner_.SetExposure(settings);
