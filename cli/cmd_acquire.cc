@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <iostream>
 #include <memory>
 #include <string>
 
@@ -92,7 +93,7 @@ std::unique_ptr<acquire::Operator> MakeOperator(const std::string& calibration, 
     return std::make_unique<acquire::SimOperator>(rig.world);  // the virtual lab arranges itself
   }
   const std::string mode = !calibration.empty() ? calibration : (::isatty(STDIN_FILENO) ? "prompt" : "as-is");
-  if (mode == "prompt") return std::make_unique<acquire::ConsoleOperator>();
+  if (mode == "prompt") return std::make_unique<acquire::ConsoleOperator>(std::cin, std::cerr);
   if (mode == "skip") return std::make_unique<acquire::UnattendedOperator>(acquire::UnattendedPolicy::kSkip);
   return std::make_unique<acquire::UnattendedOperator>(acquire::UnattendedPolicy::kAsIs);
 }

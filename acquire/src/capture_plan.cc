@@ -167,12 +167,7 @@ CapturePlan ParsePlanJson(const json& root, const std::string& source) {
   plan.repeats = f.Integer("repeats", 1, 100, 1);
   plan.settle_s = f.Number("settle_s", 0.0, 60.0, 0.2);
   plan.dark_frames = f.Integer("dark_frames", 0, 100, 2);
-  if (f.Has("calibration")) {
-    ParseCalibration(f.Raw("calibration"), source, &plan);
-  } else {
-    plan.sample_plane_views = 0;
-    plan.all_dots = plan.flat_white = false;
-  }
+  if (f.Has("calibration")) ParseCalibration(f.Raw("calibration"), source, &plan);
   plan.bytes_per_image = static_cast<uint64_t>(f.Number("bytes_per_image", 0.0, 1e12, 0.0));
   // Far beyond any real session (the paper's 40 x 40 dots x 3 brackets is 4800), and it keeps the
   // expanded plan in memory small.
@@ -265,6 +260,7 @@ CapturePlan PlanFromSimulation(const SimulatedSetup& setup) {
   plan.dark_frames = config.dark_frames;
   plan.board_views = static_cast<int>(capture.zhang_boards.size());
   plan.sample_plane_views = 1;
+  plan.all_dots = plan.flat_white = true;
   plan.board_exposure_s = capture.board_exposure_s;
   plan.all_dots_exposure_s = capture.all_dots_exposure_s;
   plan.flat_white_exposure_s = capture.flat_exposure_s;

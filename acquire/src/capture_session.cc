@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -9,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <regex>
+#include <set>
 #include <thread>
 
 #include "svbtdf/common/error.h"
@@ -117,6 +119,7 @@ class CaptureRun {
         continue;
       }
       const Frame frame = CaptureWithRetries(capture);
+      CheckFrame(capture, frame);
       session_.AddImage(capture.key, ToImage(frame, camera_id_), frame.exposure_s, frame.gain);
       ++result_.captured;
       if (progress) progress->Advance(1);
@@ -130,6 +133,30 @@ class CaptureRun {
                 "acquisition interrupted with " + std::to_string(session_.entries().size()) + " of " +
                     std::to_string(session_.planned_keys().size()) + " images captured",
                 "the session is resumable: run the same command again");
+  }
+
+  // One session holds one sensor mode (calibration assumes it), also across resumes with
+  // another camera; and a camera that snaps the exposure is worth knowing about.
+  void CheckFrame(const PlannedCapture& capture, const Frame& frame) {
+    const std::array<int, 3> size = {frame.width, frame.height, frame.channels};
+    if (!size_ && !session_.entries().empty()) {
+      const CameraImage first = session_.ReadImage(session_.entries().front().key);
+      size_ = {first.width, first.height, first.channels};
+    }
+    if (size_ && *size_ != size) {
+      const auto text = [](const std::array<int, 3>& s) {
+        return std::to_string(s[0]) + "x" + std::to_string(s[1]) + "x" + std::to_string(s[2]);
+      };
+      throw Error(ErrorKind::kInvalidInput, camera_id_,
+                  "delivers " + text(size) + " frames but the session holds " + text(*size_) + " images",
+                  "resume with the camera and format the session was started with");
+    }
+    size_ = size;
+    if (std::abs(frame.exposure_s - capture.exposure_s) > 0.05 * capture.exposure_s &&
+        warned_exposures_.insert(capture.exposure_s).second) {
+      spdlog::warn("{}: asked for {} s, the camera used {} s (journalled as used)", camera_id_, capture.exposure_s,
+                   frame.exposure_s);
+    }
   }
 
   // Asks the operator once per scene change; a skipped scene skips all its captures.
@@ -202,6 +229,8 @@ class CaptureRun {
   std::optional<Pattern> shown_;
   std::optional<double> exposure_;
   std::optional<std::pair<Scene, int>> scene_;
+  std::optional<std::array<int, 3>> size_;
+  std::set<double> warned_exposures_;
   bool scene_ready_ = false;
 };
 
@@ -217,10 +246,9 @@ bool UnattendedOperator::Prepare(Scene scene, int view, const std::string& instr
 }
 
 bool ConsoleOperator::Prepare(Scene scene, int view, const std::string& instruction) {
-  std::fprintf(stderr, "\n>>> %s\n    Enter: capture, s + Enter: skip these captures > ", instruction.c_str());
-  std::fflush(stderr);
+  out_ << "\n>>> " << instruction << "\n    Enter: capture, s + Enter: skip these captures > " << std::flush;
   std::string line;
-  if (!std::getline(std::cin, line)) return false;  // no operator after all
+  if (!std::getline(in_, line)) return false;  // no operator after all
   return line.empty() || (line[0] != 's' && line[0] != 'S');
 }
 

@@ -1,6 +1,8 @@
 #include "svbtdf/acquire/sim_hardware.h"
 
 #include <cmath>
+#include <functional>
+#include <optional>
 
 #include "svbtdf/acquire/pattern_raster.h"
 #include "svbtdf/common/error.h"
@@ -50,7 +52,7 @@ bool SimOperator::Prepare(Scene scene, int view, const std::string& instruction)
 
 struct SimCamera::Identified {
   CaptureId id;
-  bool cacheable = true;
+  std::optional<Dot> free_dot;  // a dot that is not one of the rig's grid
 };
 
 SimCamera::SimCamera(std::shared_ptr<SimWorld> world, std::shared_ptr<const SimulatedSetup> setup, std::string id)
@@ -90,34 +92,38 @@ SimCamera::Identified SimCamera::Identify() const {
   const Pattern& p = world_->pattern;
   const Rig& rig = *setup_->rig;
   const int e = ExposureIndex();
+  const auto known = [&](const char* kind, int index, int bracket) {
+    return Identified{{kind, index, bracket, settings_.exposure_s}, std::nullopt};
+  };
   if (p.kind == Pattern::Kind::kBlack) {
     if (world_->scene == Scene::kBoardView) {
       if (world_->view >= static_cast<int>(setup_->plan.zhang_boards.size())) {
         NotSimulated(id_, "board view " + std::to_string(world_->view) + ": the simulation has " +
                               std::to_string(setup_->plan.zhang_boards.size()) + " board poses");
       }
-      return {{"board", world_->view, 0, settings_.exposure_s}};
+      return known("board", world_->view, 0);
     }
-    if (world_->scene == Scene::kBoardInHolder) return {{"holder_board", world_->view, 0, settings_.exposure_s}};
-    return {{"dark", 0, e, settings_.exposure_s}, false};
+    if (world_->scene == Scene::kBoardInHolder) return known("holder_board", world_->view, 0);
+    return known("dark", 0, e);
   }
   if (world_->scene == Scene::kNoSample && p.kind == Pattern::Kind::kAllDots) {
     if (p.all_dots_px.size() != rig.dots().size()) NotSimulated(id_, "an all-dots pattern other than the rig's dots");
-    return {{"all_dots", 0, 0, settings_.exposure_s}};
+    return known("all_dots", 0, 0);
   }
   if (world_->scene == Scene::kNoSample && p.kind == Pattern::Kind::kFlatWhite && p.intensity == 1.0) {
-    return {{"flat", 0, 0, settings_.exposure_s}};
+    return known("flat", 0, 0);
   }
   if (world_->scene == Scene::kSample && p.kind == Pattern::Kind::kDot) {
-    if (std::abs(p.dot_radius_px - rig.config().dots.radius_px) > 1e-9) NotSimulated(id_, "dots of another radius");
-    for (size_t q = 0; q < rig.dots().size(); ++q) {
+    const MonitorConfig& m = rig.config().monitor;
+    const bool rig_like = p.dot_radius_px == rig.config().dots.radius_px &&
+                          p.intensity == m.Luminance(rig.config().dots.level);
+    for (size_t q = 0; rig_like && q < rig.dots().size(); ++q) {
       const Dot& dot = rig.dots()[q];
-      if (std::abs(p.x_px - dot.monitor_x) < 1e-6 && std::abs(p.y_px - dot.monitor_y) < 1e-6) {
-        return {{"dots", static_cast<int>(q), e, settings_.exposure_s}};
-      }
+      if (p.x_px == dot.monitor_x && p.y_px == dot.monitor_y) return known("dots", static_cast<int>(q), e);
     }
-    NotSimulated(id_, "a dot at (" + std::to_string(p.x_px) + ", " + std::to_string(p.y_px) +
-                          ") px, which is not one of the simulated rig's dots");
+    // Any other dot: rendered by the simulator all the same, with a noise stream of its own.
+    return {{"free_dot", 0, e, settings_.exposure_s},
+            rig.DotAt(p.x_px, p.y_px, p.dot_radius_px, m.Luminance(std::pow(p.intensity, 1.0 / m.gamma)))};
   }
   NotSimulated(id_, "this pattern in this scene (" + SceneInstruction(world_->scene, world_->view) + ")");
 }
@@ -134,9 +140,18 @@ Frame SimCamera::Capture() {
   } else {
     stream = id.Stream() ^ (static_cast<uint64_t>(n) * 0xd1b54a32d192ed03ULL);
   }
-  FloatImage radiance;
-  RenderCaptureRadiance(*setup_->renderer, setup_->plan, id, &radiance);
-  const CameraImage image = setup_->renderer->Expose(radiance, settings_.exposure_s, setup_->seed, stream);
+  // Brackets and repeats of one scene share its radiance image, as in the simulator.
+  const std::string scene_key = id.kind + "/" + std::to_string(id.index);
+  if (what.free_dot) {
+    const Dot& dot = *what.free_dot;
+    stream ^= std::hash<double>{}(dot.position.x()) * 31 + std::hash<double>{}(dot.position.y());
+    setup_->renderer->RenderDot(dot, &radiance_);
+    rendered_.clear();
+  } else if (id.kind == "dark" || scene_key != rendered_) {
+    RenderCaptureRadiance(*setup_->renderer, setup_->plan, id, &radiance_);
+    rendered_ = id.kind == "dark" ? std::string() : scene_key;
+  }
+  const CameraImage image = setup_->renderer->Expose(radiance_, settings_.exposure_s, setup_->seed, stream);
   Frame frame;
   frame.width = image.width;
   frame.height = image.height;

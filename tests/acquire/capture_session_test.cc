@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <sstream>
 
 #include "svbtdf/acquire/capture_session.h"
 #include "svbtdf/acquire/sim_hardware.h"
@@ -227,7 +228,11 @@ TEST_F(AcquireOnSimulatedRig, SimDisplayRastersTheDotItShows) {
   ASSERT_EQ(codes.size(), static_cast<size_t>(info.width_px) * info.height_px);
   EXPECT_EQ(codes[50 * info.width_px + 100], 255);
   EXPECT_EQ(codes[50 * info.width_px + 110], 0);
-  // The simulated camera refuses a dot the simulated rig does not have, naming itself.
+  // The simulated camera refuses a pattern it cannot render (a chessboard on the monitor), naming
+  // itself.
+  Pattern board;
+  board.kind = Pattern::Kind::kChessboard;
+  display_->Show(board);
   camera_->SetExposure({0.01, 1.0});
   try {
     camera_->Capture();
@@ -235,6 +240,82 @@ TEST_F(AcquireOnSimulatedRig, SimDisplayRastersTheDotItShows) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("sim:test"), std::string::npos) << e.what();
   }
+}
+
+// A plan of one's own (a 3 x 2 grid, another radius, half intensity) on the simulated rig: the
+// dots are rendered by the simulator wherever they are, so the dot image that sits straight
+// behind the sample centre is bright and a half-intensity dot is half as bright as a full one.
+TEST_F(AcquireOnSimulatedRig, AnyPlansDotsAreRenderedByTheSimulator) {
+  CapturePlan own;
+  own.name = "own";
+  own.dot_cols = 3;
+  own.dot_rows = 2;
+  const Dot& centre = setup_->rig->dots()[14];  // near the middle of the tiny 6 x 6 grid
+  for (int row = 0; row < 2; ++row) {
+    for (int col = 0; col < 3; ++col) own.dots_px.emplace_back(centre.monitor_x + 7.5 * col, centre.monitor_y + 5.0 * row);
+  }
+  own.dot_radius_px = 3.0;
+  own.exposures_s = {plan_->exposures_s[0]};
+  own.dark_frames = 1;
+  own.settle_s = 0;
+  const AcquireResult full = Acquire(own, *camera_, *display_, *op_, root_ / "own", options_);
+  EXPECT_TRUE(full.complete());
+  EXPECT_EQ(full.captured, 1 + 6);
+  own.dot_intensity = 0.5;
+  Acquire(own, *camera_, *display_, *op_, root_ / "own-half", options_);
+  const auto sum = [](const CameraImage& image) {
+    double total = 0;
+    for (uint16_t v : image.pixels) total += v;
+    return total;
+  };
+  const Session a = Session::Open(root_ / "own"), b = Session::Open(root_ / "own-half");
+  const double dark = sum(a.ReadImage("dark/e0/r0"));
+  const double bright = sum(a.ReadImage("dot/q0000/e0/r0")) - dark;
+  const double half = sum(b.ReadImage("dot/q0000/e0/r0")) - dark;
+  EXPECT_GT(bright, 1.0 * a.ReadImage("dark/e0/r0").pixels.size());  // > 1 DN per pixel on average
+  EXPECT_NEAR(half / bright, 0.5, 0.02);
+}
+
+TEST_F(AcquireOnSimulatedRig, ACameraOfAnotherFrameSizeCannotResumeTheSession) {
+  const fs::path out = root_ / "other-camera";
+  FaultInjectingCamera unplugged(*camera_, {5, 1, true});
+  options_.retries = 0;
+  EXPECT_THROW(Run(unplugged, out), Error);
+  // A camera that delivers half-size frames.
+  class Cropping : public Camera {
+   public:
+    explicit Cropping(Camera& inner) : inner_(inner) {}
+    CameraInfo Info() const override { return inner_.Info(); }
+    void SetExposure(const ExposureSettings& s) override { inner_.SetExposure(s); }
+    Frame Capture() override {
+      Frame f = inner_.Capture();
+      f.height /= 2;
+      f.pixels.resize(static_cast<size_t>(f.width) * f.height * f.channels);
+      return f;
+    }
+
+   private:
+    Camera& inner_;
+  } cropping(*camera_);
+  try {
+    Run(cropping, out);
+    FAIL() << "mixed frame sizes in one session";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("240x100x3 frames but the session holds 240x200x3"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(Session::Open(out).entries().size(), 4u);
+}
+
+TEST(ConsoleOperator, EnterCapturesSSkipsAndEndOfInputSkips) {
+  std::istringstream in("\ns\n");
+  std::ostringstream out;
+  ConsoleOperator op(in, out);
+  EXPECT_TRUE(op.Prepare(Scene::kBoardView, 3, "hold the board, pose 3"));
+  EXPECT_FALSE(op.Prepare(Scene::kNoSample, 0, "remove the sample"));
+  EXPECT_FALSE(op.Prepare(Scene::kSample, 0, "put the sample back"));
+  EXPECT_NE(out.str().find("hold the board, pose 3"), std::string::npos);
+  EXPECT_NE(out.str().find("put the sample back"), std::string::npos);
 }
 
 }  // namespace

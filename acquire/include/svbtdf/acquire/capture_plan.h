@@ -42,10 +42,12 @@ struct CapturePlan {
   int repeats = 1;                  // dot images per dot and bracket
   double settle_s = 0.2;            // wait after the display has presented a pattern
   int dark_frames = 2;              // per bracket
+  // Calibration captures: none unless asked for (a plan file's `calibration` object defaults to
+  // one sample-plane view, all dots and flat white).
   int board_views = 0;
-  int sample_plane_views = 1;
-  bool all_dots = true;
-  bool flat_white = true;
+  int sample_plane_views = 0;
+  bool all_dots = false;
+  bool flat_white = false;
   double board_exposure_s = 0.0;
   double all_dots_exposure_s = 0.0;
   double flat_white_exposure_s = 0.0;

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <iosfwd>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -47,7 +48,12 @@ class UnattendedOperator : public Operator {
 // Asks on the terminal: Enter to capture, "s" to skip the scene; end of input skips.
 class ConsoleOperator : public Operator {
  public:
+  ConsoleOperator(std::istream& in, std::ostream& out) : in_(in), out_(out) {}
   bool Prepare(Scene scene, int view, const std::string& instruction) override;
+
+ private:
+  std::istream& in_;
+  std::ostream& out_;
 };
 
 struct AcquireOptions {

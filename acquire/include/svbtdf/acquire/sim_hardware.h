@@ -17,6 +17,7 @@
 #include "svbtdf/acquire/capture_plan.h"
 #include "svbtdf/acquire/capture_session.h"
 #include "svbtdf/acquire/display.h"
+#include "svbtdf/common/image_io.h"
 
 namespace svbtdf {
 struct SimulatedSetup;
@@ -61,6 +62,8 @@ class SimOperator : public Operator {
 // `svbtdf simulate` uses for the same capture (dot q at bracket e, dark frame n, board view v),
 // so a fresh acquisition with the simulation's plan stores the simulator's very bytes. Repeated
 // captures of one scene (dark frames, repeats) are numbered in the order this camera takes them.
+// Dots that are not the rig's (another plan's grid, radius or intensity) are rendered too, with
+// noise streams of their own.
 class SimCamera : public Camera {
  public:
   SimCamera(std::shared_ptr<SimWorld> world, std::shared_ptr<const SimulatedSetup> setup, std::string id);
@@ -78,6 +81,8 @@ class SimCamera : public Camera {
   std::string id_;
   ExposureSettings settings_;
   std::map<std::tuple<std::string, int, int>, int> taken_;  // captures per (kind, index, bracket)
+  FloatImage radiance_;   // of the last capture
+  std::string rendered_;  // its kind/index, empty when it cannot be reused
 };
 
 // `sim:DIR`: loads the simulation in DIR (simulate/capture_render.h, LoadSimulatedSetup).
