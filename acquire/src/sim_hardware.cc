@@ -1,5 +1,6 @@
 #include "svbtdf/acquire/sim_hardware.h"
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <optional>
@@ -78,20 +79,20 @@ void SimCamera::SetExposure(const ExposureSettings& settings) {
   settings_ = settings;
 }
 
-// The simulator numbers brackets by the dot exposures; other exposures are bracket 0, as in
-// `svbtdf simulate` (all_dots/e0, flat_white/e0).
+// The simulator numbers brackets by the dot exposures; -1 for any other exposure.
 int SimCamera::ExposureIndex() const {
   const std::vector<double>& exposures = setup_->plan.dot_exposures_s;
   for (size_t e = 0; e < exposures.size(); ++e) {
     if (std::abs(exposures[e] - settings_.exposure_s) <= 1e-9 * exposures[e]) return static_cast<int>(e);
   }
-  return 0;
+  return -1;
 }
 
 SimCamera::Identified SimCamera::Identify() const {
   const Pattern& p = world_->pattern;
   const Rig& rig = *setup_->rig;
-  const int e = ExposureIndex();
+  // Calibration captures are bracket 0 in `svbtdf simulate` (all_dots/e0, flat_white/e0).
+  const int e = std::max(ExposureIndex(), 0);
   const auto known = [&](const char* kind, int index, int bracket) {
     return Identified{{kind, index, bracket, settings_.exposure_s}, std::nullopt};
   };
@@ -140,6 +141,10 @@ Frame SimCamera::Capture() {
   } else {
     stream = id.Stream() ^ (static_cast<uint64_t>(n) * 0xd1b54a32d192ed03ULL);
   }
+  // Another plan's dot brackets: noise streams of their own rather than bracket 0's. (The
+  // calibration captures have one exposure each, bracket 0 in the simulator whatever it is.)
+  const bool bracketed = id.kind == "dots" || id.kind == "dark" || id.kind == "free_dot";
+  if (bracketed && ExposureIndex() < 0) stream ^= std::hash<double>{}(settings_.exposure_s) * 0x9e3779b97f4a7c15ULL;
   // Brackets and repeats of one scene share its radiance image, as in the simulator.
   const std::string scene_key = id.kind + "/" + std::to_string(id.index);
   if (what.free_dot) {

@@ -1,7 +1,8 @@
 // `svbtdf acquire` end to end on the simulated rig (sim camera + sim display): a tiny acquisition
 // is a complete session that `session verify` accepts and that holds the simulator's images; a
 // process killed with SIGKILL mid-capture resumes to a complete session with every key journalled
-// once; bad arguments, plans and folders are one-line errors with exit code 2.
+// once; Ctrl-C stops with exit code 130 and resumes; bad arguments, plans and folders are
+// one-line errors with exit code 2.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -99,6 +100,31 @@ TEST_F(AcquireCommand, KilledMidCaptureResumesWithNoMissingDuplicatedOrCorruptIm
   const Session session = Session::Open(out);
   EXPECT_EQ(times.size(), session.planned_keys().size());
   for (const std::string& key : session.planned_keys()) EXPECT_EQ(times[key], 1) << key;
+}
+
+TEST_F(AcquireCommand, CtrlCStopsCleanlyWithExitCode130AndTheRunResumes) {
+  const fs::path out = root_ / "interrupted";
+  const std::string sim_camera = "sim:" + Sim().string();
+  const pid_t child = ::fork();
+  if (child == 0) {
+    ::execl(SVBTDF_CLI_PATH, SVBTDF_CLI_PATH, "-q", "acquire", "--plan-preset", "tiny", "--camera", sim_camera.c_str(),
+            "--display", "sim", "--out", out.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  for (int wait = 0; wait < 4000 && JournalLines(out) < 20; ++wait) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  ::kill(child, SIGINT);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  const Session stopped = Session::Open(out);
+  EXPECT_LT(stopped.entries().size(), 85u);
+  EXPECT_TRUE(stopped.Verify().corrupt.empty());
+  const auto resume = RunSvbtdf(AcquireArgs(out));
+  ASSERT_EQ(resume.exit_code, 0) << resume.output;
+  EXPECT_EQ(RunSvbtdf("session verify " + out.string()).exit_code, 0);
 }
 
 TEST_F(AcquireCommand, BadArgumentsPlansAndFoldersAreClearErrors) {
