@@ -77,7 +77,6 @@ class Fields {
   [[noreturn]] void Fail(const std::string& field, const std::string& problem) const {
     ThrowFormatError(source_, "field '" + field + "' " + problem, "see docs/capture.md for the plan format");
   }
-  const std::string& prefix() const { return prefix_; }
 
  private:
   static std::string Short(double v) {
