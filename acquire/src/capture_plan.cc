@@ -143,9 +143,29 @@ void ParseCalibration(const json& object, const std::string& source, CapturePlan
   plan->flat_white_exposure_s = plan->flat_white ? f.Number("flat_white_exposure_s", 1e-7, kMaxExposure) : 0.0;
 }
 
+void ParseRigNotes(const json& object, const std::string& source, RigNotes* rig) {
+  const Fields f(object, source, "rig.", {"monitor_distance_mm", "emission", "board", "sample_width_mm",
+                                          "sample_height_mm", "texels_x", "texels_y", "eta", "camera_response"});
+  rig->monitor_distance_mm = f.Number("monitor_distance_mm", 0.0, 10000.0, 0.0);
+  rig->emission = f.Text("emission", "");
+  if (!rig->emission.empty() && rig->emission != "isotropic" && rig->emission != "lambertian" && rig->emission != "lcd") {
+    f.Fail("rig.emission", "must be isotropic, lambertian or lcd");
+  }
+  rig->board = f.Text("board", "");
+  rig->sample_width_mm = f.Number("sample_width_mm", 0.0, 10000.0, 0.0);
+  rig->sample_height_mm = f.Number("sample_height_mm", 0.0, 10000.0, 0.0);
+  rig->texels_x = f.Integer("texels_x", 0, 100000, 0);
+  rig->texels_y = f.Integer("texels_y", 0, 100000, 0);
+  rig->eta = f.Number("eta", 0.0, 10.0, 0.0);
+  rig->camera_response = f.Text("camera_response", "");
+  if (!rig->camera_response.empty() && rig->camera_response != "linear" && rig->camera_response != "srgb") {
+    f.Fail("rig.camera_response", "must be linear or srgb");
+  }
+}
+
 CapturePlan ParsePlanJson(const json& root, const std::string& source) {
   const Fields f(root, source, "", {"format", "version", "name", "monitor", "dots", "exposures_s", "gain", "repeats",
-                                    "settle_s", "dark_frames", "calibration", "bytes_per_image"});
+                                    "settle_s", "dark_frames", "calibration", "bytes_per_image", "rig"});
   if (f.Text("format", "") != kFormatName) f.Fail("format", std::string("must be \"") + kFormatName + "\"");
   const int version = f.Integer("version", 0, 1000000);
   if (version != kCapturePlanVersion) {
@@ -167,6 +187,7 @@ CapturePlan ParsePlanJson(const json& root, const std::string& source) {
   plan.settle_s = f.Number("settle_s", 0.0, 60.0, 0.2);
   plan.dark_frames = f.Integer("dark_frames", 0, 100, 2);
   if (f.Has("calibration")) ParseCalibration(f.Raw("calibration"), source, &plan);
+  if (f.Has("rig")) ParseRigNotes(f.Raw("rig"), source, &plan.rig);
   plan.bytes_per_image = static_cast<uint64_t>(f.Number("bytes_per_image", 0.0, 1e12, 0.0));
   // Far beyond any real session (the paper's 40 x 40 dots x 3 brackets is 4800), and it keeps the
   // expanded plan in memory small.
@@ -228,6 +249,10 @@ json CapturePlanToJson(const CapturePlan& plan) {
                        {"all_dots_exposure_s", plan.all_dots_exposure_s}, {"flat_white", plan.flat_white},
                        {"flat_white_exposure_s", plan.flat_white_exposure_s}}},
       {"bytes_per_image", plan.bytes_per_image},
+      {"rig", {{"monitor_distance_mm", plan.rig.monitor_distance_mm}, {"emission", plan.rig.emission},
+               {"board", plan.rig.board}, {"sample_width_mm", plan.rig.sample_width_mm},
+               {"sample_height_mm", plan.rig.sample_height_mm}, {"texels_x", plan.rig.texels_x},
+               {"texels_y", plan.rig.texels_y}, {"eta", plan.rig.eta}, {"camera_response", plan.rig.camera_response}}},
   };
 }
 
@@ -265,6 +290,18 @@ CapturePlan PlanFromSimulation(const SimulatedSetup& setup) {
   plan.flat_white_exposure_s = capture.flat_exposure_s;
   plan.pixel_pitch_mm = config.monitor.pixel_pitch * 1000.0;
   plan.bytes_per_image = static_cast<uint64_t>(config.intrinsics.width) * config.intrinsics.height * 3 * 2;
+  // What `svbtdf simulate` writes as the session's nominal rig.
+  const BoardConfig& b = config.board;
+  plan.rig.monitor_distance_mm = config.monitor.distance * 1000.0;
+  plan.rig.emission = config.monitor.emission.kind;
+  plan.rig.board = "chessboard:" + std::to_string(b.inner_cols) + "x" + std::to_string(b.inner_rows) + ":" +
+                   std::to_string(b.square * 1000.0);
+  plan.rig.sample_width_mm = config.sample.width * 1000.0;
+  plan.rig.sample_height_mm = config.sample.height() * 1000.0;
+  plan.rig.texels_x = config.sample.texels_x;
+  plan.rig.texels_y = config.sample.texels_y;
+  plan.rig.eta = setup.preset.eta;
+  plan.rig.camera_response = config.sensor.response;
   return plan;
 }
 

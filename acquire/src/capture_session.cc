@@ -281,16 +281,35 @@ uint64_t EstimatedBytesPerImage(const CapturePlan& plan, const CameraInfo& camer
 nlohmann::json AcquisitionRig(const CapturePlan& plan, const CameraInfo& camera, const DisplayInfo& display) {
   nlohmann::json positions = nlohmann::json::array();
   for (const auto& [x, y] : plan.dots_px) positions.push_back({x, y});
-  return {
+  const RigNotes& notes = plan.rig;
+  const double pitch_mm = plan.pixel_pitch_mm > 0 ? plan.pixel_pitch_mm : display.pixel_pitch_mm;
+  nlohmann::json rig = {
       {"camera", {{"id", camera.id}, {"model", camera.model}}},
       {"monitor", {{"id", display.id}, {"width_px", display.width_px}, {"height_px", display.height_px},
-                   {"pixel_pitch_m", plan.pixel_pitch_mm > 0 ? plan.pixel_pitch_mm / 1000.0 : display.pixel_pitch_mm / 1000.0},
                    {"gamma", display.gamma}}},
       {"dots", {{"cols", plan.dot_cols}, {"rows", plan.dot_rows}, {"radius_px", plan.dot_radius_px},
                 {"positions_px", positions}}},
       {"exposures_s", plan.exposures_s},
       {"acquisition_plan", CapturePlanToJson(plan)},
   };
+  // The keys `svbtdf simulate` writes, only where known, so that calibration reads either.
+  nlohmann::json& c = rig["camera"];
+  if (camera.frame_width > 0) c["width"] = camera.frame_width, c["height"] = camera.frame_height;
+  if (camera.frame_channels > 0) c["channels"] = camera.frame_channels;
+  if (camera.frame_bits > 0) c["bit_depth"] = camera.frame_bits;
+  if (!notes.camera_response.empty()) c["response"] = notes.camera_response;
+  nlohmann::json& m = rig["monitor"];
+  if (pitch_mm > 0) m["pixel_pitch_m"] = pitch_mm / 1000.0;
+  if (notes.monitor_distance_mm > 0) m["distance_m"] = notes.monitor_distance_mm / 1000.0;
+  if (!notes.emission.empty()) m["emission"] = notes.emission;
+  if (!notes.board.empty()) rig["board"] = {{"spec", notes.board}, {"views", plan.board_views}};
+  nlohmann::json sample = nlohmann::json::object();
+  if (notes.sample_width_mm > 0) sample["width_m"] = notes.sample_width_mm / 1000.0;
+  if (notes.sample_height_mm > 0) sample["height_m"] = notes.sample_height_mm / 1000.0;
+  if (notes.texels_x > 0) sample["texels_x"] = notes.texels_x, sample["texels_y"] = notes.texels_y;
+  if (notes.eta > 0) sample["eta"] = notes.eta;
+  if (!sample.empty()) rig["sample"] = sample;
+  return rig;
 }
 
 AcquireResult Acquire(const CapturePlan& plan, Camera& camera, Display& display, Operator& op,

@@ -68,6 +68,10 @@ CameraInfo SimCamera::Info() const {
                   std::to_string(k.height)};
   info.min_exposure_s = 1e-7;
   info.max_exposure_s = 3600.0;
+  info.frame_width = k.width;
+  info.frame_height = k.height;
+  info.frame_channels = 3;
+  info.frame_bits = setup_->rig->config().sensor.bit_depth;
   return info;
 }
 

@@ -20,7 +20,8 @@ const char* kGridPlan = R"({
   "dots": {"cols": 3, "rows": 2, "units": "mm", "pitch": [10, 5], "origin": [20, 30], "radius": 1},
   "exposures_s": [0.01, 0.16], "repeats": 2, "settle_s": 0.3, "dark_frames": 1,
   "calibration": {"board_views": 4, "board_exposure_s": 0.02, "sample_plane_views": 1,
-                  "all_dots_exposure_s": 0.005, "flat_white_exposure_s": 0.005}
+                  "all_dots_exposure_s": 0.005, "flat_white_exposure_s": 0.005},
+  "rig": {"monitor_distance_mm": 40, "board": "chessboard:9x6:25", "sample_width_mm": 80, "emission": "lcd"}
 })";
 
 TEST(CapturePlan, TinyPresetDescribesTheSimulatorsCaptures) {
@@ -48,6 +49,8 @@ TEST(CapturePlan, GridsInMillimetresResolveToMonitorPixelsAndRoundTrip) {
   EXPECT_DOUBLE_EQ(plan.dots_px[5].first, 160.0);  // (20 + 2 * 10) mm
   EXPECT_DOUBLE_EQ(plan.dots_px[5].second, 140.0); // (30 + 5) mm
   EXPECT_DOUBLE_EQ(plan.dot_radius_px, 4.0);
+  EXPECT_EQ(plan.rig.monitor_distance_mm, 40.0);
+  EXPECT_EQ(plan.rig.board, "chessboard:9x6:25");
   const std::vector<PlannedCapture> captures = ExpandPlan(plan);
   // 2 x 1 dark, 4 boards, 1 sample plane, all dots, flat, 6 dots x 2 brackets x 2 repeats.
   EXPECT_EQ(captures.size(), 2u + 4 + 1 + 1 + 1 + 24);
@@ -76,6 +79,7 @@ TEST(CapturePlan, BadPlansAreClearErrorsNamingTheFileAndField) {
       {edit("\"cols\": 3", "\"cols\": \"3\""), "dots.cols"},
       {edit("\"board_views\": 4", "\"board_views\": 2"), "calibration.board_views"},
       {edit("\"repeats\": 2", "\"repeats\": 1e9"), "repeats"},
+      {edit("\"lcd\"", "\"crt\""), "rig.emission"},
       {"[]", "the plan"},
       {"", "not valid JSON"},
   };

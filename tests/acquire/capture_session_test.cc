@@ -90,6 +90,17 @@ TEST_F(AcquireOnSimulatedRig, TinyPlanStoresTheSimulatorsImages) {
   EXPECT_EQ(result.captured, 85);
   EXPECT_TRUE(result.complete());
   ExpectEqualToTheSimulator(out);
+  // The manifest holds the nominal rig values calibration reads, as `svbtdf simulate` writes them.
+  const nlohmann::json a = Session::Open(out).rig(), b = Session::Open(SimulatedSession()).rig();
+  for (const char* key : {"/camera/width", "/camera/height", "/camera/bit_depth", "/camera/channels",
+                          "/camera/response", "/board/spec", "/board/views", "/monitor/emission",
+                          "/dots/radius_px", "/dots/positions_px", "/dots/cols", "/exposures_s"}) {
+    EXPECT_EQ(a.at(nlohmann::json::json_pointer(key)), b.at(nlohmann::json::json_pointer(key))) << key;
+  }
+  for (const char* key : {"/monitor/pixel_pitch_m", "/monitor/distance_m", "/sample/width_m", "/sample/height_m"}) {
+    EXPECT_NEAR(a.at(nlohmann::json::json_pointer(key)).get<double>(),
+                b.at(nlohmann::json::json_pointer(key)).get<double>(), 1e-12) << key;
+  }
   // Each pattern is shown once for all its brackets: 1 black, 6 boards + 1 holder share the black
   // pattern too (no re-show), all dots, flat, 36 dots.
   EXPECT_EQ(world_->patterns_shown, 1 + 1 + 1 + 36);

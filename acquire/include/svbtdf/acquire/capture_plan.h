@@ -30,6 +30,18 @@ enum class Scene {
   kBoardInHolder,  // the board lying in the sample holder (sample_plane/vNN)
 };
 
+// What the lab writes down about its set-up, recorded in the session manifest (rig) as the
+// nominal values calibration starts from (docs/session-format.md). 0 or empty = not given.
+struct RigNotes {
+  double monitor_distance_mm = 0.0;  // d: the monitor plane behind the sample plane
+  std::string emission;              // isotropic | lambertian | lcd
+  std::string board;                 // calibration board, e.g. "chessboard:9x6:25"
+  double sample_width_mm = 0.0, sample_height_mm = 0.0;
+  int texels_x = 0, texels_y = 0;    // the texel grid for processing
+  double eta = 0.0;                  // the sample's relative index of refraction, if known
+  std::string camera_response;       // linear | srgb
+};
+
 struct CapturePlan {
   std::string name;
   // Dot centres in monitor pixels, row-major over a cols x rows grid (dot q = row * cols + col).
@@ -53,6 +65,7 @@ struct CapturePlan {
   double flat_white_exposure_s = 0.0;
   double pixel_pitch_mm = 0.0;      // of the monitor; 0 = unknown (then mm units are refused)
   uint64_t bytes_per_image = 0;     // for the free-space check; 0 = estimate from the camera
+  RigNotes rig;
 };
 
 // One capture of the expanded plan.
