@@ -66,10 +66,10 @@ TEST(CapturePlan, GridsInMillimetresResolveToMonitorPixelsAndRoundTrip) {
 TEST(CapturePlan, BadPlansAreClearErrorsNamingTheFileAndField) {
   const std::string good = kGridPlan;
   const auto edit = [&](const std::string& from, const std::string& to) {
-    std::string text = good;
-    const size_t at = text.find(from);
+    const size_t at = good.find(from);
     EXPECT_NE(at, std::string::npos) << from;
-    return text.replace(at, from.size(), to);
+    if (at == std::string::npos) return good;
+    return good.substr(0, at) + to + good.substr(at + from.size());
   };
   const std::vector<std::pair<std::string, std::string>> cases = {
       {edit("\"version\": 1", "\"version\": 2"), "version 2"},
@@ -128,7 +128,7 @@ TEST(CapturePlan, GarbledPlansNeverCrashAndAlwaysThrowSvbtdfErrors) {
       switch (next() % 3) {
         case 0: text[at] = kBytes[next() % (sizeof kBytes - 1)]; break;
         case 1: text.erase(at, 1 + next() % 8); break;
-        default: text.insert(at, 1, kBytes[next() % (sizeof kBytes - 1)]); break;
+        default: text = text.substr(0, at) + kBytes[next() % (sizeof kBytes - 1)] + text.substr(at); break;
       }
       if (text.empty()) text = "{";
     }
