@@ -130,7 +130,7 @@ TEST(CapturePlan, GarbledPlansNeverCrashAndAlwaysThrowSvbtdfErrors) {
         case 1: text.erase(at, 1 + next() % 8); break;
         default: text = text.substr(0, at) + kBytes[next() % (sizeof kBytes - 1)] + text.substr(at); break;
       }
-      if (text.empty()) text = "{";
+      if (text.empty()) text.push_back('{');
     }
     attempt(text);
   }
