@@ -3,6 +3,7 @@
 namespace svbtdf::cli {
 
 void AddAllCommands(CLI::App& app) {
+  AddAcquireCommand(app);
   AddBtdfCommand(app);
   AddCalibrateCommand(app);
   AddCompareCommand(app);

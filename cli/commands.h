@@ -10,6 +10,7 @@ namespace svbtdf::cli {
 
 void AddAllCommands(CLI::App& app);
 
+void AddAcquireCommand(CLI::App& app);        // svbtdf acquire
 void AddBtdfCommand(CLI::App& app);           // svbtdf btdf eval
 void AddCalibrateCommand(CLI::App& app);      // svbtdf calibrate
 void AddCompareCommand(CLI::App& app);        // svbtdf compare

@@ -173,6 +173,10 @@ void Session::ReadJournal() {
   std::string line;
   int number = 0;
   const bool ends_cleanly = text.empty() || text.back() == '\n';
+  journal_truncate_to_.reset();
+  // A complete last line without its newline (a write torn just before it) is kept; the next
+  // append starts a new line.
+  journal_needs_newline_ = !ends_cleanly;
   while (std::getline(lines, line)) {
     ++number;
     const std::string where = path.string() + ":" + std::to_string(number);
@@ -182,7 +186,11 @@ void Session::ReadJournal() {
       object = nlohmann::json::parse(line);
     } catch (const nlohmann::json::exception&) {  // parse errors, but also number overflow
       // Only the very last line may be cut short, by a crash during the append.
-      if (!ends_cleanly && lines.peek() == EOF) break;
+      if (!ends_cleanly && lines.peek() == EOF) {
+        // The next append must not continue this fragment: it is cut off first.
+        journal_truncate_to_ = text.size() - line.size();
+        break;
+      }
       ThrowFormatError(where, "is not a valid journal line");
     }
     SessionEntry entry;
@@ -222,6 +230,7 @@ void Session::AddImage(const std::string& key, const CameraImage& image, double 
   const nlohmann::json line = {{"key", entry.key},   {"file", entry.file},       {"bytes", entry.bytes},
                                {"crc32", entry.crc32}, {"exposure_s", exposure_s}, {"gain", gain},
                                {"time", entry.time}};
+  RepairJournalTail();
   AppendLineDurably(folder_ / kJournal, line.dump());
   index_.emplace(key, entries_.size());
   entries_.push_back(std::move(entry));
@@ -237,6 +246,21 @@ CameraImage Session::ReadImage(const std::string& key, bool check_crc) const {
     ThrowFormatError(file.string(), "does not match its journal entry (corrupt)", "re-capture it: resume the session");
   }
   return ReadCameraImage(file);
+}
+
+void Session::RepairJournalTail() {
+  const fs::path path = folder_ / kJournal;
+  if (journal_truncate_to_) {
+    std::error_code error;
+    fs::resize_file(path, *journal_truncate_to_, error);
+    if (error) ThrowIoError(path.string(), "cannot cut off its torn last line: " + error.message());
+    journal_truncate_to_.reset();
+    journal_needs_newline_ = false;  // the file now ends after a complete line (or is empty)
+  }
+  if (journal_needs_newline_) {
+    AppendLineDurably(path, "");
+    journal_needs_newline_ = false;
+  }
 }
 
 SessionVerification Session::Verify(bool check_crc) const {

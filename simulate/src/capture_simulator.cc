@@ -4,6 +4,7 @@
 #include <functional>
 
 #include "svbtdf/common/interrupt.h"
+#include "svbtdf/simulate/capture_render.h"
 #include "svbtdf/common/progress.h"
 
 namespace svbtdf {
@@ -69,7 +70,6 @@ void RunCapture(const RigRenderer& renderer, const CaptureTruth& plan, CaptureSi
   if (options.progress) {
     progress = std::make_unique<ProgressBar>("simulate", static_cast<int64_t>(list.size()), "images");
   }
-  const CameraIntrinsics& k = rig.config().intrinsics;
   FloatImage radiance;
   std::string rendered;  // identity of the radiance image in `radiance` (brackets share it)
   for (const CaptureId& id : list) {
@@ -80,19 +80,7 @@ void RunCapture(const RigRenderer& renderer, const CaptureTruth& plan, CaptureSi
     }
     const std::string key = id.kind + "/" + std::to_string(id.index);
     if (key != rendered) {
-      if (id.kind == "dark") {
-        radiance = FloatImage(k.width, k.height, 3);
-      } else if (id.kind == "board") {
-        renderer.RenderBoard(plan.zhang_boards.at(id.index), &radiance);
-      } else if (id.kind == "holder_board") {
-        renderer.RenderBoard(plan.holder_board, &radiance);
-      } else if (id.kind == "all_dots") {
-        renderer.RenderAllDots(&radiance);
-      } else if (id.kind == "flat") {
-        renderer.RenderFlatField(1.0, &radiance);
-      } else {
-        renderer.RenderDot(rig.dots().at(id.index), &radiance);
-      }
+      RenderCaptureRadiance(renderer, plan, id, &radiance);
       // Dark frames differ only by their noise, so they are not cached by index.
       rendered = id.kind == "dark" ? std::string() : key;
     }

@@ -226,7 +226,6 @@ void Rig::LayOutDots() {
   const Vec2 monitor_origin = m.centre - Vec2(m.width, m.height) / 2.0;  // corner of pixel (0, 0)
   const int monitor_px_x = static_cast<int>(std::floor(m.width / m.pixel_pitch));
   const int monitor_px_y = static_cast<int>(std::floor(m.height / m.pixel_pitch));
-  const double radius = g.radius_px * m.pixel_pitch;
   dots_.clear();
   dots_.reserve(static_cast<size_t>(g.cols) * g.rows);
   for (int row = 0; row < g.rows; ++row) {
@@ -237,11 +236,6 @@ void Rig::LayOutDots() {
       const Vec2 nominal = grid_centre + Vec2(fx * span_x, fy * span_y);
       // Dots are drawn centred on a monitor pixel.
       const Vec2 in_monitor = (nominal - monitor_origin) / m.pixel_pitch;
-      Dot dot;
-      dot.col = col;
-      dot.row = row;
-      dot.monitor_x = static_cast<int>(std::floor(in_monitor.x()));
-      dot.monitor_y = static_cast<int>(std::floor(in_monitor.y()));
       if (in_monitor.x() - g.radius_px < 0.0 || in_monitor.y() - g.radius_px < 0.0 ||
           in_monitor.x() + g.radius_px > monitor_px_x || in_monitor.y() + g.radius_px > monitor_px_y) {
         ThrowInvalidInput("monitor", "dot (" + std::to_string(col) + ", " + std::to_string(row) +
@@ -249,11 +243,10 @@ void Rig::LayOutDots() {
                           ") m is off the monitor's active area",
                           "use a larger monitor, move its centre or shrink dots.span_scale");
       }
-      const Vec2 xy = monitor_origin + (Vec2(dot.monitor_x, dot.monitor_y) + Vec2(0.5, 0.5)) *
-                                           m.pixel_pitch;
-      dot.position = Vec3(xy.x(), xy.y(), -m.distance);
-      dot.radius = radius;
-      dot.intensity = m.white_exitance * m.Luminance(g.level) * kPi * radius * radius;
+      Dot dot = DotAt(std::floor(in_monitor.x()), std::floor(in_monitor.y()), g.radius_px,
+                      m.Luminance(g.level));
+      dot.col = col;
+      dot.row = row;
       // The all-dots image (sample removed) must show every dot to locate it.
       const std::optional<Vec2> px = camera_.Project(dot.position);
       const CameraIntrinsics& k = config_.intrinsics;
@@ -267,6 +260,20 @@ void Rig::LayOutDots() {
       dots_.push_back(dot);
     }
   }
+}
+
+Dot Rig::DotAt(double x_px, double y_px, double radius_px, double luminance) const {
+  const MonitorConfig& m = config_.monitor;
+  const Vec2 monitor_origin = m.centre - Vec2(m.width, m.height) / 2.0;
+  Dot dot;
+  dot.col = dot.row = -1;
+  dot.monitor_x = static_cast<int>(std::floor(x_px));
+  dot.monitor_y = static_cast<int>(std::floor(y_px));
+  const Vec2 xy = monitor_origin + (Vec2(x_px, y_px) + Vec2(0.5, 0.5)) * m.pixel_pitch;
+  dot.position = Vec3(xy.x(), xy.y(), -m.distance);
+  dot.radius = radius_px * m.pixel_pitch;
+  dot.intensity = m.white_exitance * luminance * kPi * dot.radius * dot.radius;
+  return dot;
 }
 
 double Rig::DotIntensityToward(const Dot& dot, const Vec3& x) const {

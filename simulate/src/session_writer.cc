@@ -8,6 +8,7 @@
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/common/session.h"
 #include "svbtdf/model/ndf_factory.h"
+#include "svbtdf/simulate/capture_render.h"
 #include "svbtdf/simulate/capture_simulator.h"
 #include "svbtdf/simulate/montecarlo_truth.h"
 #include "svbtdf/simulate/truth_material.h"

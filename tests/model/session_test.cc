@@ -89,6 +89,36 @@ TEST_F(SessionTest, ACrashMidAppendLeavesAReadableJournal) {
   EXPECT_FALSE(reopened.Contains("board/v00"));
 }
 
+// Resuming after a torn append: the fragment must not swallow the next journal line.
+TEST_F(SessionTest, AppendingAfterACrashMidAppendKeepsTheJournalReadable) {
+  {
+    Session session = Session::Create(folder_, rig_, plan_);
+    session.AddImage("dark/e0", Frame(3), 0.1, 1.0);
+  }
+  std::ofstream(folder_ / "journal.jsonl", std::ios::app) << R"({"key": "board/v00", "fi)";  // cut short
+  {
+    Session resumed = Session::Open(folder_);
+    resumed.AddImage("board/v00", Frame(4), 0.1, 1.0);
+  }
+  // A complete last line that lost its newline is kept, and the next one starts a new line.
+  std::string text = ReadTextFile(folder_ / "journal.jsonl");
+  ASSERT_EQ(text.back(), '\n');
+  text.pop_back();
+  WriteTextAtomically(folder_ / "journal.jsonl", text);
+  {
+    Session resumed = Session::Open(folder_);
+    EXPECT_EQ(resumed.entries().size(), 2u);
+    resumed.AddImage("dot/q0000/e0/r0", Frame(5), 0.1, 1.0);
+  }
+  const Session reopened = Session::Open(folder_);
+  EXPECT_EQ(reopened.entries().size(), 3u);
+  EXPECT_TRUE(reopened.Contains("board/v00"));
+  EXPECT_TRUE(reopened.Contains("dot/q0000/e0/r0"));
+  const SessionVerification report = reopened.Verify();
+  EXPECT_TRUE(report.corrupt.empty() && report.duplicated.empty()) << report.Summary();
+  EXPECT_EQ(report.missing, std::vector<std::string>{"dot/q0001/e0/r0"});
+}
+
 TEST_F(SessionTest, BrokenJournalLinesAreErrorsNamingFileAndLine) {
   Session session = Session::Create(folder_, rig_, plan_);
   session.AddImage("dark/e0", Frame(3), 0.1, 1.0);

@@ -35,6 +35,9 @@ struct CameraInfo {
   std::vector<std::string> controls;  // e.g. "exposure_time_absolute [1, 10000] 100us"
   double min_exposure_s = 0.0;
   double max_exposure_s = 0.0;
+  // The frames Capture() delivers, when the backend knows before the first one (0 = unknown);
+  // recorded in a new session's manifest (rig.camera).
+  int frame_width = 0, frame_height = 0, frame_channels = 0, frame_bits = 0;
 };
 
 class Camera {

@@ -83,6 +83,9 @@ class Session {
  private:
   Session() = default;
   void ReadJournal();
+  // After a crash mid-append: cuts off a torn last journal line, or ends a complete one that
+  // lost its newline, so that the next line appended stands on its own.
+  void RepairJournalTail();
 
   std::filesystem::path folder_;
   nlohmann::json rig_;
@@ -90,6 +93,8 @@ class Session {
   std::unordered_set<std::string> planned_;  // the same keys, for lookups
   std::vector<SessionEntry> entries_;
   std::unordered_map<std::string, size_t> index_;  // key -> first entry
+  std::optional<uint64_t> journal_truncate_to_;    // set when the last line is torn
+  bool journal_needs_newline_ = false;             // the journal does not end with '\n'
 };
 
 // CRC-32 of a file's bytes; throws naming the file when it cannot be read.

@@ -187,6 +187,13 @@ class Rig {
   const PinholeCamera& camera() const { return camera_; }
   const std::vector<Dot>& dots() const { return dots_; }
 
+  // The dot drawn centred on monitor coordinate (x_px, y_px) with a radius of `radius_px` monitor
+  // pixels at `luminance` (a fraction of white, black level included: MonitorConfig::Luminance).
+  // Monitor pixel (i, j) is centred (i + 0.5, j + 0.5) pitches from the active area's corner,
+  // as the grid's dots are. For the simulated camera of `svbtdf acquire`, which renders whatever
+  // dot a capture plan shows; col = row = -1.
+  Dot DotAt(double x_px, double y_px, double radius_px, double luminance) const;
+
   // Angle of the camera from vertical, as seen from the sample centre.
   double CameraTheta() const;
 

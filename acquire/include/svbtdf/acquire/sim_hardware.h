@@ -1,0 +1,114 @@
+#pragma once
+// Simulated rig hardware for `svbtdf acquire --camera sim:DIR --display sim` and the tests: a
+// headless display that remembers (and can rasterise) the pattern it shows, a camera that renders
+// with the simulator (simulate/capture_render.h) what the rig of the simulation in DIR would see
+// of that pattern, and an operator that arranges the virtual scene (sample in or out, board
+// poses). They share one SimWorld, the state of the virtual lab.
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "svbtdf/acquire/camera.h"
+#include "svbtdf/acquire/capture_plan.h"
+#include "svbtdf/acquire/capture_session.h"
+#include "svbtdf/acquire/display.h"
+#include "svbtdf/common/image_io.h"
+
+namespace svbtdf {
+struct SimulatedSetup;
+}
+
+namespace svbtdf::acquire {
+
+// What is in front of the virtual camera.
+struct SimWorld {
+  Pattern pattern;              // on the monitor (black until something is shown)
+  Scene scene = Scene::kSample;
+  int view = 0;
+  int patterns_shown = 0;
+};
+
+class SimDisplay : public Display {
+ public:
+  SimDisplay(std::shared_ptr<SimWorld> world, DisplayInfo info);
+  DisplayInfo Info() const override { return info_; }
+  void Show(const Pattern& pattern) override;
+  // The code values a real monitor would show now (pattern_raster.h).
+  std::vector<uint8_t> Raster() const;
+
+ private:
+  std::shared_ptr<SimWorld> world_;
+  DisplayInfo info_;
+};
+
+// The display of the simulated rig: the monitor's size and gamma.
+DisplayInfo SimDisplayInfo(const SimulatedSetup& setup);
+
+class SimOperator : public Operator {
+ public:
+  explicit SimOperator(std::shared_ptr<SimWorld> world) : world_(std::move(world)) {}
+  bool Prepare(Scene scene, int view, const std::string& instruction) override;
+
+ private:
+  std::shared_ptr<SimWorld> world_;
+};
+
+// Renders the current SimWorld with the simulator. The noise stream of each image is the one
+// `svbtdf simulate` uses for the same capture (dot q at bracket e, dark frame n, board view v),
+// so a fresh acquisition with the simulation's plan stores the simulator's very bytes. Repeated
+// captures of one scene (dark frames, repeats) are numbered in the order this camera takes them.
+// Dots that are not the rig's (another plan's grid, radius or intensity) are rendered too, with
+// noise streams of their own.
+class SimCamera : public Camera {
+ public:
+  SimCamera(std::shared_ptr<SimWorld> world, std::shared_ptr<const SimulatedSetup> setup, std::string id);
+  CameraInfo Info() const override;
+  void SetExposure(const ExposureSettings& settings) override;
+  Frame Capture() override;
+
+ private:
+  struct Identified;  // the simulator's CaptureId of what is in view
+  Identified Identify() const;
+  int ExposureIndex() const;
+
+  std::shared_ptr<SimWorld> world_;
+  std::shared_ptr<const SimulatedSetup> setup_;
+  std::string id_;
+  ExposureSettings settings_;
+  std::map<std::tuple<std::string, int, int>, int> taken_;  // captures per (kind, index, bracket)
+  FloatImage radiance_;   // of the last capture
+  std::string rendered_;  // its kind/index, empty when it cannot be reused
+};
+
+// `sim:DIR`: loads the simulation in DIR (simulate/capture_render.h, LoadSimulatedSetup).
+std::shared_ptr<const SimulatedSetup> LoadSimulation(const std::filesystem::path& dir);
+
+// A camera wrapper that injects faults, for tests: capture number `fail_at` (1-based, counting
+// every Capture() call) fails with Error(kHardware) `fail_count` times in a row (then captures
+// succeed again), or, with `unplug`, every capture from `fail_at` on fails ("cable pulled").
+struct FaultPlan {
+  int fail_at = 0;      // 0: never
+  int fail_count = 1;
+  bool unplug = false;
+};
+class FaultInjectingCamera : public Camera {
+ public:
+  FaultInjectingCamera(Camera& inner, FaultPlan plan) : inner_(inner), plan_(plan) {}
+  CameraInfo Info() const override { return inner_.Info(); }
+  void SetExposure(const ExposureSettings& settings) override;
+  Frame Capture() override;
+  int calls() const { return calls_; }
+  int failures() const { return failures_; }
+
+ private:
+  Camera& inner_;
+  FaultPlan plan_;
+  int calls_ = 0;
+  int failures_ = 0;
+};
+
+}  // namespace svbtdf::acquire

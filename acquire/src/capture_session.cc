@@ -1,0 +1,339 @@
+#include "svbtdf/acquire/capture_session.h"
+
+#include <spdlog/spdlog.h>
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <regex>
+#include <set>
+#include <thread>
+
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/interrupt.h"
+#include "svbtdf/common/progress.h"
+#include "svbtdf/common/session.h"
+
+namespace svbtdf::acquire {
+namespace fs = std::filesystem;
+namespace {
+
+std::string Megabytes(uint64_t bytes) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.1f MB", bytes / 1e6);
+  return buffer;
+}
+
+bool SamePattern(const Pattern& a, const Pattern& b) {
+  return a.kind == b.kind && a.x_px == b.x_px && a.y_px == b.y_px && a.dot_radius_px == b.dot_radius_px &&
+         a.intensity == b.intensity && a.all_dots_px == b.all_dots_px && a.board_cols == b.board_cols &&
+         a.board_rows == b.board_rows && a.board_square_px == b.board_square_px;
+}
+
+// A plan whose dots the display cannot show would fail late, after the calibration captures.
+void RequireDotsOnDisplay(const CapturePlan& plan, const DisplayInfo& display) {
+  if (display.width_px <= 0 || display.height_px <= 0) return;  // size unknown
+  for (size_t q = 0; q < plan.dots_px.size(); ++q) {
+    const auto [x, y] = plan.dots_px[q];
+    const double r = plan.dot_radius_px;
+    if (x - r < -0.5 || y - r < -0.5 || x + r > display.width_px - 0.5 || y + r > display.height_px - 0.5) {
+      ThrowInvalidInput("plan", "dot " + std::to_string(q) + " at (" + std::to_string(x) + ", " + std::to_string(y) +
+                                    ") px does not fit display " + display.id + " (" + std::to_string(display.width_px) +
+                                    " x " + std::to_string(display.height_px) + " px)",
+                        "move the dot grid's origin or shrink its pitch");
+    }
+  }
+}
+
+// An existing session must be this plan's, and intact: the journal is append-only, so a corrupt
+// image cannot be re-captured under its key by resuming.
+std::optional<Session> OpenExisting(const fs::path& folder, const CapturePlan& plan) {
+  if (!fs::exists(folder / "session.json")) return std::nullopt;
+  Session session = Session::Open(folder);
+  const nlohmann::json& rig = session.rig();
+  if (!rig.contains("acquisition_plan")) {
+    ThrowInvalidInput(folder.string(), "holds a session that `svbtdf acquire` did not write; it will not be changed",
+                      "choose a new --out folder");
+  }
+  if (rig.at("acquisition_plan") != CapturePlanToJson(plan)) {
+    ThrowInvalidInput(folder.string(), "holds a session of a different capture plan; it will not be changed",
+                      "resume with the plan it was started with (its session.json records it), or choose a new --out");
+  }
+  const SessionVerification report = session.Verify(/*check_crc=*/true);
+  if (!report.corrupt.empty() || !report.duplicated.empty()) {
+    ThrowFormatError(folder.string(), "cannot be resumed: " + report.Summary(),
+                     "run `svbtdf session verify " + folder.string() + "` for the list");
+  }
+  return session;
+}
+
+void RequireFreeSpace(const fs::path& folder, uint64_t needed, int64_t images, const AcquireOptions& options) {
+  const uint64_t available = options.free_space ? options.free_space(folder) : FreeSpaceAt(folder);
+  if (available < needed) {
+    ThrowIoError(folder.string(), "has " + Megabytes(available) + " free but the " + std::to_string(images) +
+                                      " images still to capture need about " + Megabytes(needed),
+                 "free some space or choose an --out folder on another disk");
+  }
+}
+
+CameraImage ToImage(const Frame& frame, const std::string& camera_id) {
+  const size_t expected = static_cast<size_t>(frame.width) * frame.height * frame.channels;
+  if (frame.width <= 0 || frame.height <= 0 || (frame.channels != 1 && frame.channels != 3) ||
+      frame.pixels.size() != expected) {
+    throw Error(ErrorKind::kHardware, camera_id, "delivered a malformed frame (" + std::to_string(frame.width) + "x" +
+                                                     std::to_string(frame.height) + "x" + std::to_string(frame.channels) + ")");
+  }
+  CameraImage image;
+  image.width = frame.width;
+  image.height = frame.height;
+  image.channels = frame.channels;
+  image.bits_per_sample = frame.bits_per_sample;
+  image.pixels = frame.pixels;
+  return image;
+}
+
+// One run over the missing captures. Keeps what the hardware currently shows and uses, so that a
+// pattern is shown (and settled) once for all its brackets and repeats.
+class CaptureRun {
+ public:
+  CaptureRun(const CapturePlan& plan, Camera& camera, Display& display, Operator& op, Session& session,
+             const AcquireOptions& options, AcquireResult& result)
+      : plan_(plan), camera_(camera), display_(display), op_(op), session_(session), options_(options),
+        result_(result), camera_id_(camera.Info().id) {}
+
+  void Run(const std::vector<PlannedCapture>& captures) {
+    std::unique_ptr<ProgressBar> progress;
+    if (options_.progress) {
+      progress = std::make_unique<ProgressBar>("acquire", static_cast<int64_t>(captures.size()), "images");
+      progress->SkipAlreadyDone(result_.already);
+    }
+    for (const PlannedCapture& capture : captures) {
+      if (session_.Contains(capture.key)) continue;
+      StopIfInterrupted();
+      if (!SceneReady(capture)) {
+        ++result_.skipped;
+        continue;
+      }
+      const Frame frame = CaptureWithRetries(capture);
+      CheckFrame(capture, frame);
+      session_.AddImage(capture.key, ToImage(frame, camera_id_), frame.exposure_s, frame.gain);
+      ++result_.captured;
+      if (progress) progress->Advance(1);
+    }
+  }
+
+ private:
+  void StopIfInterrupted() const {
+    if (!InterruptRequested()) return;
+    throw Error(ErrorKind::kInterrupted, session_.folder().string(),
+                "acquisition interrupted with " + std::to_string(session_.entries().size()) + " of " +
+                    std::to_string(session_.planned_keys().size()) + " images captured",
+                "the session is resumable: run the same command again");
+  }
+
+  // One session holds one sensor mode (calibration assumes it), also across resumes with
+  // another camera; and a camera that snaps the exposure is worth knowing about.
+  void CheckFrame(const PlannedCapture& capture, const Frame& frame) {
+    const std::array<int, 3> size = {frame.width, frame.height, frame.channels};
+    if (!size_ && !session_.entries().empty()) {
+      const CameraImage first = session_.ReadImage(session_.entries().front().key);
+      size_ = {first.width, first.height, first.channels};
+    }
+    if (size_ && *size_ != size) {
+      const auto text = [](const std::array<int, 3>& s) {
+        return std::to_string(s[0]) + "x" + std::to_string(s[1]) + "x" + std::to_string(s[2]);
+      };
+      throw Error(ErrorKind::kInvalidInput, camera_id_,
+                  "delivers " + text(size) + " frames but the session holds " + text(*size_) + " images",
+                  "resume with the camera and format the session was started with");
+    }
+    size_ = size;
+    if (std::abs(frame.exposure_s - capture.exposure_s) > 0.05 * capture.exposure_s &&
+        warned_exposures_.insert(capture.exposure_s).second) {
+      spdlog::warn("{}: asked for {} s, the camera used {} s (journalled as used)", camera_id_, capture.exposure_s,
+                   frame.exposure_s);
+    }
+  }
+
+  // Asks the operator once per scene change; a skipped scene skips all its captures.
+  bool SceneReady(const PlannedCapture& capture) {
+    const std::pair<Scene, int> scene{capture.scene, capture.view};
+    if (scene_ != scene) {
+      scene_ = scene;
+      scene_ready_ = op_.Prepare(capture.scene, capture.view, SceneInstruction(capture.scene, capture.view));
+      StopIfInterrupted();  // the operator may have pressed Ctrl-C while asked
+    }
+    return scene_ready_;
+  }
+
+  Frame CaptureWithRetries(const PlannedCapture& capture) {
+    for (int attempt = 0;; ++attempt) {
+      try {
+        return CaptureOnce(capture, /*reset=*/attempt > 0);
+      } catch (const Error& e) {
+        if (e.kind() != ErrorKind::kHardware) throw;
+        if (attempt >= options_.retries) {
+          throw Error(ErrorKind::kHardware, camera_id_,
+                      "failed " + std::to_string(attempt + 1) + " times in a row at " + capture.key + " (" + e.what() +
+                          "); stopped with " + std::to_string(session_.entries().size()) + " of " +
+                          std::to_string(session_.planned_keys().size()) + " images captured",
+                      "the session is resumable: check the camera and its cable, then run the same command again");
+        }
+        const double wait = options_.retry_backoff_s * std::pow(2.0, attempt);
+        spdlog::warn("{}: capture of {} failed ({}); retry {} of {} in {:.1f} s", camera_id_, capture.key, e.what(),
+                     attempt + 1, options_.retries, wait);
+        ++result_.retries;
+        Sleep(wait);
+        StopIfInterrupted();
+      }
+    }
+  }
+
+  // After a failure everything is set again: the camera or display may have been reset.
+  Frame CaptureOnce(const PlannedCapture& capture, bool reset) {
+    if (reset || !shown_ || !SamePattern(*shown_, capture.pattern)) {
+      shown_.reset();
+      display_.Show(capture.pattern);
+      shown_ = capture.pattern;
+      Sleep(plan_.settle_s);  // the monitor's response time, and its glow after a bright pattern
+    }
+    if (reset || exposure_ != capture.exposure_s) {
+      exposure_.reset();
+      camera_.SetExposure({capture.exposure_s, plan_.gain});
+      exposure_ = capture.exposure_s;
+    }
+    return camera_.Capture();
+  }
+
+  void Sleep(double seconds) const {
+    if (seconds <= 0) return;
+    if (options_.sleep) {
+      options_.sleep(seconds);
+    } else {
+      std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
+    }
+  }
+
+  const CapturePlan& plan_;
+  Camera& camera_;
+  Display& display_;
+  Operator& op_;
+  Session& session_;
+  const AcquireOptions& options_;
+  AcquireResult& result_;
+  std::string camera_id_;
+  std::optional<Pattern> shown_;
+  std::optional<double> exposure_;
+  std::optional<std::pair<Scene, int>> scene_;
+  std::optional<std::array<int, 3>> size_;
+  std::set<double> warned_exposures_;
+  bool scene_ready_ = false;
+};
+
+}  // namespace
+
+bool UnattendedOperator::Prepare(Scene scene, int view, const std::string& instruction) {
+  if (policy_ == UnattendedPolicy::kSkip && scene != Scene::kSample) {
+    spdlog::info("skipping captures that need the operator: {}", instruction);
+    return false;
+  }
+  spdlog::info("capturing as set up (not prompted): {}", instruction);
+  return true;
+}
+
+bool ConsoleOperator::Prepare(Scene scene, int view, const std::string& instruction) {
+  out_ << "\n>>> " << instruction << "\n    Enter: capture, s + Enter: skip these captures > " << std::flush;
+  std::string line;
+  if (!std::getline(in_, line)) return false;  // no operator after all
+  return line.empty() || (line[0] != 's' && line[0] != 'S');
+}
+
+uint64_t FreeSpaceAt(const fs::path& folder) {
+  fs::path existing = fs::absolute(folder);
+  while (!fs::exists(existing) && existing.has_parent_path() && existing != existing.parent_path()) {
+    existing = existing.parent_path();
+  }
+  std::error_code error;
+  const fs::space_info space = fs::space(existing, error);
+  if (error) ThrowIoError(existing.string(), "cannot query its free space: " + error.message());
+  return space.available;
+}
+
+uint64_t EstimatedBytesPerImage(const CapturePlan& plan, const CameraInfo& camera) {
+  if (plan.bytes_per_image > 0) return plan.bytes_per_image;
+  const std::regex size(R"((\d+)x(\d+))");
+  uint64_t largest = 0;
+  for (const std::string& format : camera.formats) {
+    std::smatch match;
+    if (std::regex_search(format, match, size)) {
+      largest = std::max<uint64_t>(largest, std::stoull(match[1]) * std::stoull(match[2]));
+    }
+  }
+  constexpr uint64_t kPngOverhead = 64 * 1024;
+  if (largest == 0) return 64ull * 1024 * 1024;  // unknown: a 10 MP RGB image, generously
+  return largest * 3 * 2 + kPngOverhead;
+}
+
+nlohmann::json AcquisitionRig(const CapturePlan& plan, const CameraInfo& camera, const DisplayInfo& display) {
+  nlohmann::json positions = nlohmann::json::array();
+  for (const auto& [x, y] : plan.dots_px) positions.push_back({x, y});
+  const RigNotes& notes = plan.rig;
+  const double pitch_mm = plan.pixel_pitch_mm > 0 ? plan.pixel_pitch_mm : display.pixel_pitch_mm;
+  nlohmann::json rig = {
+      {"camera", {{"id", camera.id}, {"model", camera.model}}},
+      {"monitor", {{"id", display.id}, {"width_px", display.width_px}, {"height_px", display.height_px},
+                   {"gamma", display.gamma}}},
+      {"dots", {{"cols", plan.dot_cols}, {"rows", plan.dot_rows}, {"radius_px", plan.dot_radius_px},
+                {"positions_px", positions}}},
+      {"exposures_s", plan.exposures_s},
+      {"acquisition_plan", CapturePlanToJson(plan)},
+  };
+  // The keys `svbtdf simulate` writes, only where known, so that calibration reads either.
+  nlohmann::json& c = rig["camera"];
+  if (camera.frame_width > 0) c["width"] = camera.frame_width, c["height"] = camera.frame_height;
+  if (camera.frame_channels > 0) c["channels"] = camera.frame_channels;
+  if (camera.frame_bits > 0) c["bit_depth"] = camera.frame_bits;
+  if (!notes.camera_response.empty()) c["response"] = notes.camera_response;
+  nlohmann::json& m = rig["monitor"];
+  if (pitch_mm > 0) m["pixel_pitch_m"] = pitch_mm / 1000.0;
+  if (notes.monitor_distance_mm > 0) m["distance_m"] = notes.monitor_distance_mm / 1000.0;
+  if (!notes.emission.empty()) m["emission"] = notes.emission;
+  if (!notes.board.empty()) rig["board"] = {{"spec", notes.board}, {"views", plan.board_views}};
+  nlohmann::json sample = nlohmann::json::object();
+  if (notes.sample_width_mm > 0) sample["width_m"] = notes.sample_width_mm / 1000.0;
+  if (notes.sample_height_mm > 0) sample["height_m"] = notes.sample_height_mm / 1000.0;
+  if (notes.texels_x > 0) sample["texels_x"] = notes.texels_x, sample["texels_y"] = notes.texels_y;
+  if (notes.eta > 0) sample["eta"] = notes.eta;
+  if (!sample.empty()) rig["sample"] = sample;
+  return rig;
+}
+
+AcquireResult Acquire(const CapturePlan& plan, Camera& camera, Display& display, Operator& op,
+                      const fs::path& session_folder, const AcquireOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<PlannedCapture> captures = ExpandPlan(plan);
+  const std::vector<std::string> keys = PlanKeys(captures);
+  const CameraInfo camera_info = camera.Info();
+  const DisplayInfo display_info = display.Info();
+  RequireDotsOnDisplay(plan, display_info);
+  std::optional<Session> session = OpenExisting(session_folder, plan);
+
+  AcquireResult result;
+  result.planned = static_cast<int64_t>(keys.size());
+  result.already = session ? static_cast<int64_t>(session->entries().size()) : 0;
+  const int64_t missing = result.planned - result.already;
+  constexpr uint64_t kManifestAndJournal = 1 << 20;
+  RequireFreeSpace(session_folder, EstimatedBytesPerImage(plan, camera_info) * missing + kManifestAndJournal, missing,
+                   options);
+  if (!session) session = Session::Create(session_folder, AcquisitionRig(plan, camera_info, display_info), keys);
+
+  CaptureRun(plan, camera, display, op, *session, options, result).Run(captures);
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace svbtdf::acquire

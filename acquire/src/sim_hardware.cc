@@ -1,0 +1,199 @@
+#include "svbtdf/acquire/sim_hardware.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <optional>
+
+#include "svbtdf/acquire/pattern_raster.h"
+#include "svbtdf/common/error.h"
+#include "svbtdf/simulate/capture_render.h"
+
+namespace svbtdf::acquire {
+namespace {
+
+[[noreturn]] void NotSimulated(const std::string& camera, const std::string& what) {
+  throw Error(ErrorKind::kInvalidInput, camera, "cannot simulate " + what,
+              "the simulated rig renders the captures of docs/capture.md's scenes only");
+}
+
+}  // namespace
+
+SimDisplay::SimDisplay(std::shared_ptr<SimWorld> world, DisplayInfo info) : world_(std::move(world)), info_(std::move(info)) {}
+
+void SimDisplay::Show(const Pattern& pattern) {
+  if (!(pattern.intensity >= 0.0 && pattern.intensity <= 1.0) || !std::isfinite(pattern.x_px) ||
+      !std::isfinite(pattern.y_px)) {
+    ThrowInvalidInput(info_.id, "pattern with a non-finite position or an intensity outside [0, 1]");
+  }
+  world_->pattern = pattern;
+  ++world_->patterns_shown;
+}
+
+std::vector<uint8_t> SimDisplay::Raster() const {
+  return RasterizePattern(world_->pattern, info_.width_px, info_.height_px, info_.gamma);
+}
+
+DisplayInfo SimDisplayInfo(const SimulatedSetup& setup) {
+  const MonitorConfig& m = setup.rig->config().monitor;
+  DisplayInfo info;
+  info.id = "sim";
+  info.width_px = static_cast<int>(std::floor(m.width / m.pixel_pitch));
+  info.height_px = static_cast<int>(std::floor(m.height / m.pixel_pitch));
+  info.pixel_pitch_mm = m.pixel_pitch * 1000.0;
+  info.gamma = m.gamma;
+  return info;
+}
+
+bool SimOperator::Prepare(Scene scene, int view, const std::string& instruction) {
+  world_->scene = scene;
+  world_->view = view;
+  return true;
+}
+
+struct SimCamera::Identified {
+  CaptureId id;
+  std::optional<Dot> free_dot;  // a dot that is not one of the rig's grid
+};
+
+SimCamera::SimCamera(std::shared_ptr<SimWorld> world, std::shared_ptr<const SimulatedSetup> setup, std::string id)
+    : world_(std::move(world)), setup_(std::move(setup)), id_(std::move(id)) {}
+
+CameraInfo SimCamera::Info() const {
+  const CameraIntrinsics& k = setup_->rig->config().intrinsics;
+  CameraInfo info;
+  info.id = id_;
+  info.model = "svbtdf simulated camera (preset " + setup_->preset.name + ")";
+  info.formats = {"RGB" + std::to_string(setup_->rig->config().sensor.bit_depth) + " " + std::to_string(k.width) + "x" +
+                  std::to_string(k.height)};
+  info.min_exposure_s = 1e-7;
+  info.max_exposure_s = 3600.0;
+  info.frame_width = k.width;
+  info.frame_height = k.height;
+  info.frame_channels = 3;
+  info.frame_bits = setup_->rig->config().sensor.bit_depth;
+  return info;
+}
+
+void SimCamera::SetExposure(const ExposureSettings& settings) {
+  if (!(settings.exposure_s > 0) || !std::isfinite(settings.exposure_s)) {
+    ThrowInvalidInput(id_, "exposure must be positive");
+  }
+  if (settings.gain != 1.0) ThrowInvalidInput(id_, "the simulated sensor has only gain 1");
+  settings_ = settings;
+}
+
+// The simulator numbers brackets by the dot exposures; -1 for any other exposure.
+int SimCamera::ExposureIndex() const {
+  const std::vector<double>& exposures = setup_->plan.dot_exposures_s;
+  for (size_t e = 0; e < exposures.size(); ++e) {
+    if (std::abs(exposures[e] - settings_.exposure_s) <= 1e-9 * exposures[e]) return static_cast<int>(e);
+  }
+  return -1;
+}
+
+SimCamera::Identified SimCamera::Identify() const {
+  const Pattern& p = world_->pattern;
+  const Rig& rig = *setup_->rig;
+  // Calibration captures are bracket 0 in `svbtdf simulate` (all_dots/e0, flat_white/e0).
+  const int e = std::max(ExposureIndex(), 0);
+  const auto known = [&](const char* kind, int index, int bracket) {
+    return Identified{{kind, index, bracket, settings_.exposure_s}, std::nullopt};
+  };
+  if (p.kind == Pattern::Kind::kBlack) {
+    if (world_->scene == Scene::kBoardView) {
+      if (world_->view >= static_cast<int>(setup_->plan.zhang_boards.size())) {
+        NotSimulated(id_, "board view " + std::to_string(world_->view) + ": the simulation has " +
+                              std::to_string(setup_->plan.zhang_boards.size()) + " board poses");
+      }
+      return known("board", world_->view, 0);
+    }
+    if (world_->scene == Scene::kBoardInHolder) return known("holder_board", world_->view, 0);
+    return known("dark", 0, e);
+  }
+  if (world_->scene == Scene::kNoSample && p.kind == Pattern::Kind::kAllDots) {
+    if (p.all_dots_px.size() != rig.dots().size()) NotSimulated(id_, "an all-dots pattern other than the rig's dots");
+    return known("all_dots", 0, 0);
+  }
+  if (world_->scene == Scene::kNoSample && p.kind == Pattern::Kind::kFlatWhite && p.intensity == 1.0) {
+    return known("flat", 0, 0);
+  }
+  if (world_->scene == Scene::kSample && p.kind == Pattern::Kind::kDot) {
+    const MonitorConfig& m = rig.config().monitor;
+    const bool rig_like = p.dot_radius_px == rig.config().dots.radius_px &&
+                          p.intensity == m.Luminance(rig.config().dots.level);
+    for (size_t q = 0; rig_like && q < rig.dots().size(); ++q) {
+      const Dot& dot = rig.dots()[q];
+      if (p.x_px == dot.monitor_x && p.y_px == dot.monitor_y) return known("dots", static_cast<int>(q), e);
+    }
+    // Any other dot: rendered by the simulator all the same, with a noise stream of its own.
+    return {{"free_dot", 0, e, settings_.exposure_s},
+            rig.DotAt(p.x_px, p.y_px, p.dot_radius_px, m.Luminance(std::pow(p.intensity, 1.0 / m.gamma)))};
+  }
+  NotSimulated(id_, "this pattern in this scene (" + SceneInstruction(world_->scene, world_->view) + ")");
+}
+
+Frame SimCamera::Capture() {
+  Identified what = Identify();
+  CaptureId& id = what.id;
+  // The n-th capture of the same thing: dark frame n, or a repeat with its own noise.
+  const int n = taken_[{id.kind, id.index, id.exposure_index}]++;
+  uint64_t stream;
+  if (id.kind == "dark") {
+    id.index = n;
+    stream = id.Stream();
+  } else {
+    stream = id.Stream() ^ (static_cast<uint64_t>(n) * 0xd1b54a32d192ed03ULL);
+  }
+  // Another plan's dot brackets: noise streams of their own rather than bracket 0's. (The
+  // calibration captures have one exposure each, bracket 0 in the simulator whatever it is.)
+  const bool bracketed = id.kind == "dots" || id.kind == "dark" || id.kind == "free_dot";
+  if (bracketed && ExposureIndex() < 0) stream ^= std::hash<double>{}(settings_.exposure_s) * 0x9e3779b97f4a7c15ULL;
+  // Brackets and repeats of one scene share its radiance image, as in the simulator.
+  const std::string scene_key = id.kind + "/" + std::to_string(id.index);
+  if (what.free_dot) {
+    const Dot& dot = *what.free_dot;
+    stream ^= std::hash<double>{}(dot.position.x()) * 31 + std::hash<double>{}(dot.position.y());
+    setup_->renderer->RenderDot(dot, &radiance_);
+    rendered_.clear();
+  } else if (id.kind == "dark" || scene_key != rendered_) {
+    RenderCaptureRadiance(*setup_->renderer, setup_->plan, id, &radiance_);
+    rendered_ = id.kind == "dark" ? std::string() : scene_key;
+  }
+  const CameraImage image = setup_->renderer->Expose(radiance_, settings_.exposure_s, setup_->seed, stream);
+  Frame frame;
+  frame.width = image.width;
+  frame.height = image.height;
+  frame.channels = image.channels;
+  frame.bits_per_sample = image.bits_per_sample;
+  frame.linear = setup_->rig->config().sensor.response == "linear";
+  frame.exposure_s = settings_.exposure_s;
+  frame.gain = settings_.gain;
+  frame.pixels = image.pixels;
+  return frame;
+}
+
+std::shared_ptr<const SimulatedSetup> LoadSimulation(const std::filesystem::path& dir) {
+  return LoadSimulatedSetup(dir, /*threads=*/0);
+}
+
+void FaultInjectingCamera::SetExposure(const ExposureSettings& settings) {
+  if (plan_.unplug && plan_.fail_at > 0 && calls_ >= plan_.fail_at) {
+    ++failures_;
+    throw Error(ErrorKind::kHardware, inner_.Info().id, "cable pulled");
+  }
+  inner_.SetExposure(settings);
+}
+
+Frame FaultInjectingCamera::Capture() {
+  ++calls_;
+  const bool failing = plan_.fail_at > 0 && calls_ >= plan_.fail_at &&
+                       (plan_.unplug || calls_ < plan_.fail_at + plan_.fail_count);
+  if (failing) {
+    ++failures_;
+    throw Error(ErrorKind::kHardware, inner_.Info().id, plan_.unplug ? "cable pulled" : "injected capture failure");
+  }
+  return inner_.Capture();
+}
+
+}  // namespace svbtdf::acquire

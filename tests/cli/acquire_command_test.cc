@@ -1,0 +1,168 @@
+// `svbtdf acquire` end to end on the simulated rig (sim camera + sim display): a tiny acquisition
+// is a complete session that `session verify` accepts and that holds the simulator's images; a
+// process killed with SIGKILL mid-capture resumes to a complete session with every key journalled
+// once; Ctrl-C stops with exit code 130 and resumes; bad arguments, plans and folders are
+// one-line errors with exit code 2.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+#include "run_command.h"
+#include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/session.h"
+
+namespace svbtdf {
+namespace {
+namespace fs = std::filesystem;
+using testing::RunSvbtdf;
+
+class AcquireCommand : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root_ = fs::temp_directory_path() / ("svbtdf-acquire-cli-" + std::to_string(::getpid()));
+    fs::remove_all(root_);
+    fs::create_directories(root_);
+    const auto simulate = RunSvbtdf("-q simulate --preset tiny --out " + Sim().string());
+    ASSERT_EQ(simulate.exit_code, 0) << simulate.output;
+  }
+  void TearDown() override { fs::remove_all(root_); }
+  fs::path Sim() const { return root_ / "sim"; }
+  std::string AcquireArgs(const fs::path& out) const {
+    return "-q acquire --plan-preset tiny --camera sim:" + Sim().string() + " --display sim --out " + out.string();
+  }
+  static size_t JournalLines(const fs::path& session) {
+    if (!fs::exists(session / "journal.jsonl")) return 0;
+    const std::string text = ReadTextFile(session / "journal.jsonl");
+    return static_cast<size_t>(std::count(text.begin(), text.end(), '\n'));
+  }
+  fs::path root_;
+};
+
+TEST_F(AcquireCommand, TinyAcquireIsACompleteSessionWithTheSimulatorsImages) {
+  const fs::path out = root_ / "acquired";
+  const auto start = std::chrono::steady_clock::now();
+  const auto result = RunSvbtdf(AcquireArgs(out));
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("acquired 85 images"), std::string::npos) << result.output;
+  const auto verify = RunSvbtdf("session verify " + out.string());
+  EXPECT_EQ(verify.exit_code, 0) << verify.output;
+  const Session acquired = Session::Open(out), simulated = Session::Open(Sim() / "session");
+  ASSERT_EQ(acquired.planned_keys(), simulated.planned_keys());
+  for (const SessionEntry& entry : simulated.entries()) {
+    EXPECT_EQ(acquired.Entry(entry.key).crc32, entry.crc32) << entry.key;
+  }
+  std::printf("tiny acquire: %zu images in %.2f s (wall, including start-up)\n", acquired.entries().size(), seconds);
+  // Re-running a complete session captures nothing and succeeds.
+  const auto again = RunSvbtdf(AcquireArgs(out));
+  EXPECT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_NE(again.output.find("acquired 0 images"), std::string::npos) << again.output;
+}
+
+TEST_F(AcquireCommand, KilledMidCaptureResumesWithNoMissingDuplicatedOrCorruptImage) {
+  const fs::path out = root_ / "killed";
+  const std::string sim_camera = "sim:" + Sim().string();
+  const pid_t child = ::fork();
+  if (child == 0) {
+    ::execl(SVBTDF_CLI_PATH, SVBTDF_CLI_PATH, "-q", "acquire", "--plan-preset", "tiny", "--camera", sim_camera.c_str(),
+            "--display", "sim", "--out", out.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  // Kill it once a good part of the session is journalled, with no chance to clean up.
+  for (int wait = 0; wait < 4000 && JournalLines(out) < 30; ++wait) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  ::kill(child, SIGKILL);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "the acquisition ended before it was killed";
+  const size_t before = Session::Open(out).entries().size();
+  EXPECT_GE(before, 30u);
+  EXPECT_LT(before, 85u);
+  const auto resume = RunSvbtdf(AcquireArgs(out));
+  ASSERT_EQ(resume.exit_code, 0) << resume.output;
+  EXPECT_NE(resume.output.find(std::to_string(before) + " were already there"), std::string::npos) << resume.output;
+  EXPECT_EQ(RunSvbtdf("session verify " + out.string()).exit_code, 0);
+  // The journal names every planned key exactly once.
+  std::map<std::string, int> times;
+  std::istringstream lines(ReadTextFile(out / "journal.jsonl"));
+  for (std::string line; std::getline(lines, line);) {
+    if (!line.empty()) ++times[nlohmann::json::parse(line).at("key").get<std::string>()];
+  }
+  const Session session = Session::Open(out);
+  EXPECT_EQ(times.size(), session.planned_keys().size());
+  for (const std::string& key : session.planned_keys()) EXPECT_EQ(times[key], 1) << key;
+}
+
+TEST_F(AcquireCommand, CtrlCStopsCleanlyWithExitCode130AndTheRunResumes) {
+  const fs::path out = root_ / "interrupted";
+  const std::string sim_camera = "sim:" + Sim().string();
+  const pid_t child = ::fork();
+  if (child == 0) {
+    ::execl(SVBTDF_CLI_PATH, SVBTDF_CLI_PATH, "-q", "acquire", "--plan-preset", "tiny", "--camera", sim_camera.c_str(),
+            "--display", "sim", "--out", out.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  for (int wait = 0; wait < 4000 && JournalLines(out) < 20; ++wait) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  ::kill(child, SIGINT);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  const Session stopped = Session::Open(out);
+  EXPECT_LT(stopped.entries().size(), 85u);
+  EXPECT_TRUE(stopped.Verify().corrupt.empty());
+  const auto resume = RunSvbtdf(AcquireArgs(out));
+  ASSERT_EQ(resume.exit_code, 0) << resume.output;
+  EXPECT_EQ(RunSvbtdf("session verify " + out.string()).exit_code, 0);
+}
+
+TEST_F(AcquireCommand, BadArgumentsPlansAndFoldersAreClearErrors) {
+  const std::string sim = "--camera sim:" + Sim().string() + " --display sim";
+  const fs::path garbled = root_ / "garbled.json";
+  WriteTextAtomically(garbled, "{\"format\": \"svbtdf-capture-plan\", \"version\": 1, \"dots\": {\"cols\": 2");
+  const fs::path changed = root_ / "changed.json";
+  WriteTextAtomically(changed, R"({"format": "svbtdf-capture-plan", "version": 1,
+    "dots": {"cols": 2, "rows": 2, "pitch": [40, 40], "origin": [600, 400], "radius": 4},
+    "exposures_s": [0.01]})");
+  const fs::path partial = root_ / "partial";
+  // A plan of one's own runs on the simulated rig too (its dots are not the simulation's).
+  const auto own = RunSvbtdf("-q acquire --plan " + changed.string() + " " + sim + " --out " + partial.string());
+  ASSERT_EQ(own.exit_code, 0) << own.output;
+  EXPECT_EQ(RunSvbtdf("session verify " + partial.string()).exit_code, 0);
+  struct Case {
+    std::string arguments, names;
+  };
+  const std::vector<Case> cases = {
+      {"acquire --plan " + garbled.string() + " " + sim + " --out " + (root_ / "a").string(), garbled.string()},
+      {"acquire --plan-preset tiny --camera sim:" + (root_ / "nowhere").string() + " --display sim --out " +
+           (root_ / "b").string(), "nowhere"},
+      {"acquire --plan-preset tiny --camera webcam --display sim --out " + (root_ / "c").string(), "--camera"},
+      {"acquire --plan-preset tiny --camera sim:" + Sim().string() + " --display sdl:0 --out " + (root_ / "d").string(),
+       "--display"},
+      {"acquire --plan-preset tiny " + sim + " --out " + partial.string(), "different capture plan"},
+      {"acquire --plan-preset tiny " + sim + " --out " + (Sim() / "session").string(), "did not write"},
+      {"acquire --plan " + changed.string() + " --plan-preset tiny " + sim + " --out " + (root_ / "e").string(),
+       "exactly one"},
+  };
+  for (const Case& c : cases) {
+    const auto result = RunSvbtdf(c.arguments);
+    EXPECT_EQ(result.exit_code, 2) << c.arguments << "\n" << result.output;
+    EXPECT_NE(result.output.find("svbtdf: error: "), std::string::npos) << result.output;
+    EXPECT_NE(result.output.find(c.names), std::string::npos) << c.names << "\n" << result.output;
+  }
+  EXPECT_FALSE(fs::exists(root_ / "a"));
+}
+
+}  // namespace
+}  // namespace svbtdf
