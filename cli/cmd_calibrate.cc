@@ -14,7 +14,9 @@
 #include <vector>
 
 #include "commands.h"
+#include "svbtdf/calib/calibrate_session.h"
 #include "svbtdf/calib/camera_calibration.h"
+#include "svbtdf/common/session.h"
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/progress.h"
@@ -23,6 +25,7 @@ namespace svbtdf::cli {
 namespace {
 
 struct CalibrateOptions {
+  std::string session;
   std::string images_glob;
   std::string board = "chessboard:9x6:25";
   std::string json_path;
@@ -93,17 +96,50 @@ void RunCalibrateImages(const CalibrateOptions& options) {
   }
 }
 
+void RunCalibrateSession(const CalibrateOptions& options) {
+  const Session session = Session::Open(options.session);
+  calib::CalibrateSessionOptions calibrate_options;
+  calibrate_options.camera.fix_k3 = options.fix_k3;
+  const calib::SessionCalibration c = calib::CalibrateSession(session, calibrate_options);
+  PrintSummary(c.camera);
+  const Vec3 centre = c.sample_plane.CameraCentre();
+  const double angle = std::acos(centre.normalized().z()) * 180.0 / 3.14159265358979;
+  std::printf("sample plane: reprojection RMS %.3f px; camera %.1f mm from the sample centre, %.1f degrees from its normal\n",
+              c.sample_plane.rms_px, 1000.0 * centre.norm(), angle);
+  int found = 0;
+  for (const calib::DotPosition& dot : c.monitor.dots) found += dot.residual_mm >= 0;
+  std::printf("monitor: %.2f mm behind the sample; %d of %zu dots found, residual RMS %.3f mm, max %.3f mm\n",
+              1000.0 * c.monitor.distance_m, found, c.monitor.dots.size(), c.monitor.residual_rms_mm,
+              c.monitor.residual_max_mm);
+  std::printf("radiometry: %s response, %d bits, black offset %.1f DN\n", c.radiometry.response.c_str(),
+              c.radiometry.bit_depth, c.radiometry.black_offset_dn);
+  const std::filesystem::path out = std::filesystem::path(options.session) / "calibration.json";
+  calib::WriteSessionCalibration(out, c);
+  std::printf("wrote %s\n", out.c_str());
+}
+
 }  // namespace
 
 void AddCalibrateCommand(CLI::App& app) {
   auto options = std::make_shared<CalibrateOptions>();
-  CLI::App* calibrate = app.add_subcommand("calibrate", "Zhang camera calibration from board images");
-  calibrate->add_option("--images", options->images_glob, "glob of board photos, e.g. 'boards/*.png'")->required();
+  CLI::App* calibrate = app.add_subcommand(
+      "calibrate", "Calibrate a capture session (camera, sample plane, dots, radiometry), or a camera from board photos");
+  CLI::Option* session = calibrate->add_option(
+      "session", options->session, "capture session folder: writes SESSION/calibration.json");
+  CLI::Option* images = calibrate->add_option("--images", options->images_glob, "glob of board photos, e.g. 'boards/*.png'");
+  session->excludes(images);
+  images->excludes(session);
   calibrate->add_option("--board", options->board, "chessboard:COLSxROWS:SQUARE_MM or charuco:COLSxROWS:SQUARE_MM:MARKER_MM[:DICT]")
       ->capture_default_str();
   calibrate->add_option("--json", options->json_path, "write the calibration to this JSON file");
   calibrate->add_flag("--fix-k3", options->fix_k3, "hold the k3 distortion coefficient at zero");
-  calibrate->callback([options] { RunCalibrateImages(*options); });
+  calibrate->callback([options] {
+    if (!options->session.empty()) return RunCalibrateSession(*options);
+    if (options->images_glob.empty()) {
+      ThrowInvalidInput("calibrate", "needs a SESSION folder or --images 'GLOB'", "see 'svbtdf calibrate --help'");
+    }
+    RunCalibrateImages(*options);
+  });
 }
 
 }  // namespace svbtdf::cli

@@ -36,8 +36,6 @@ double Median(std::vector<double> values) {
   return values[values.size() / 2];
 }
 
-double Luminance(const Rgb& rgb) { return (rgb[0] + rgb[1] + rgb[2]) / 3.0; }
-
 // Relative L2 of the normalised NDFs over the cells where the truth's D h.z exceeds 1% of its
 // largest value (where the truth has mass), cells weighted by solid angle.
 double NdfRelativeL2(const Hemicube& grid, const Ndf& fitted, const Ndf& truth) {

@@ -24,6 +24,7 @@ void AddSimulateCommand(CLI::App& app) {
   simulate->add_option("--truth", options->truth, "model: a dual-microfacet material; montecarlo: traced two-interface slab materials")
       ->check(CLI::IsMember({"model", "montecarlo"}))
       ->capture_default_str();
+  simulate->add_flag("!--no-noise", options->noise, "no shot or read noise (quantisation stays): for accuracy checks");
   simulate->add_option("--threads", options->threads, "worker threads (0: all cores)")->capture_default_str();
   simulate->callback([options, out] {
     const SimulationOutput result = SimulateSession(*out, *options);

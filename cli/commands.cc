@@ -8,6 +8,9 @@ void AddAllCommands(CLI::App& app) {
   AddCompareCommand(app);
   AddDevicesCommand(app);
   AddEvalCommand(app);
+  AddFitCommand(app);
+  AddProcessCommand(app);
+  AddReportCommand(app);
   AddSessionCommand(app);
   AddSimulateCommand(app);
   AddValidateModelCommand(app);

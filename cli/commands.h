@@ -15,6 +15,9 @@ void AddCalibrateCommand(CLI::App& app);      // svbtdf calibrate
 void AddCompareCommand(CLI::App& app);        // svbtdf compare
 void AddDevicesCommand(CLI::App& app);         // svbtdf devices
 void AddEvalCommand(CLI::App& app);            // svbtdf eval
+void AddFitCommand(CLI::App& app);             // svbtdf fit
+void AddProcessCommand(CLI::App& app);         // svbtdf process
+void AddReportCommand(CLI::App& app);          // svbtdf report
 void AddSessionCommand(CLI::App& app);         // svbtdf session verify
 void AddSimulateCommand(CLI::App& app);        // svbtdf simulate
 void AddValidateModelCommand(CLI::App& app);  // svbtdf validate-model

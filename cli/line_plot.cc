@@ -175,8 +175,10 @@ std::vector<unsigned char> LinePlot::Render() const {
   return canvas.Take();
 }
 
-void LinePlot::WritePng(const std::filesystem::path& path) const {
-  const std::vector<unsigned char> pixels = Render();
+void LinePlot::WritePng(const std::filesystem::path& path) const { WriteRgb8PngAtomically(path, Render(), width, height); }
+
+void WriteRgb8PngAtomically(const std::filesystem::path& path, const std::vector<unsigned char>& pixels, int width,
+                            int height) {
   WriteFileAtomically(
       path, [&](const std::filesystem::path& temp) { WriteRgb8Png(temp, pixels, width, height, path); },
       /*overwrite=*/false);

@@ -37,4 +37,8 @@ struct LinePlot {
 
 std::string HexColor(const Rgb8& color);  // "#rrggbb", for the HTML legend
 
+// Writes 8-bit RGB pixels (row-major) as a PNG atomically; refuses to overwrite an existing file.
+void WriteRgb8PngAtomically(const std::filesystem::path& path, const std::vector<unsigned char>& pixels, int width,
+                            int height);
+
 }  // namespace svbtdf::cli

@@ -11,33 +11,13 @@
 
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/interrupt.h"
+#include "svbtdf/common/parallel.h"
 
 namespace svbtdf::fit {
 namespace {
 
 using MatrixF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 using VectorF = Eigen::VectorXf;
-
-int ThreadCount(int requested) {
-  const int hardware = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  return requested > 0 ? requested : hardware;
-}
-
-// Runs body(begin, end) over [0, n) in contiguous chunks on `threads` threads.
-void ParallelFor(int64_t n, int threads, const std::function<void(int64_t, int64_t)>& body) {
-  threads = static_cast<int>(std::min<int64_t>(threads, std::max<int64_t>(n, 1)));
-  if (threads <= 1) {
-    body(0, n);
-    return;
-  }
-  std::vector<std::thread> pool;
-  const int64_t chunk = (n + threads - 1) / threads;
-  for (int t = 0; t < threads; ++t) {
-    const int64_t begin = t * chunk, end = std::min(n, begin + chunk);
-    if (begin < end) pool.emplace_back(body, begin, end);
-  }
-  for (std::thread& thread : pool) thread.join();
-}
 
 std::vector<int64_t> RandomSubset(int64_t n, int64_t m, std::mt19937_64& rng) {
   std::vector<int64_t> all(n);
@@ -96,7 +76,7 @@ Pca ComputePca(const SliceSource& source, const ClusteringOptions& options, std:
 MatrixF ProjectAll(const SliceSource& source, const Pca& pca, int threads) {
   const int p = static_cast<int>(pca.components.cols());
   MatrixF z(source.num_texels, p);
-  ParallelFor(source.num_texels, threads, [&](int64_t begin, int64_t end) {
+  ParallelFor(source.num_texels, threads, (source.num_texels + threads - 1) / threads, [&](int64_t begin, int64_t end) {
     VectorF slice(source.dimension);
     for (int64_t t = begin; t < end; ++t) {
       source.read(t, slice.data());
@@ -150,7 +130,7 @@ void Assign(const MatrixF& z, const MatrixF& centres, int threads, std::vector<i
   distance->resize(z.rows());
   constexpr int64_t kBlock = 2048;
   const int64_t blocks = (z.rows() + kBlock - 1) / kBlock;
-  ParallelFor(blocks, threads, [&](int64_t block_begin, int64_t block_end) {
+  ParallelFor(blocks, threads, (blocks + threads - 1) / threads, [&](int64_t block_begin, int64_t block_end) {
     for (int64_t b = block_begin; b < block_end; ++b) {
       const int64_t begin = b * kBlock, end = std::min<int64_t>(z.rows(), begin + kBlock);
       const MatrixF d = BlockDistances(z, begin, end, centres, centre_norms);
@@ -260,7 +240,7 @@ Clustering ClusterSlices(const SliceSource& source, const ClusteringOptions& opt
   const VectorF rep_norms = rep_z.rowwise().squaredNorm();
   constexpr int64_t kBlock = 1024;
   const int64_t blocks = (n + kBlock - 1) / kBlock;
-  ParallelFor(blocks, threads, [&](int64_t block_begin, int64_t block_end) {
+  ParallelFor(blocks, threads, (blocks + threads - 1) / threads, [&](int64_t block_begin, int64_t block_end) {
     std::vector<int> order(r);
     for (int64_t b = block_begin; b < block_end; ++b) {
       const int64_t begin = b * kBlock, end = std::min<int64_t>(n, begin + kBlock);

@@ -1,5 +1,7 @@
 #include "svbtdf/simulate/renderer.h"
 
+#include "svbtdf/common/parallel.h"
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -80,31 +82,6 @@ double SubSample(int k, int n) { return (k + 0.5) / n - 0.5; }
 
 }  // namespace
 
-void ParallelFor(int n, int threads, int chunk, const std::function<void(int, int)>& fn) {
-  if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  threads = std::min(threads, std::max(1, (n + chunk - 1) / chunk));
-  std::atomic<int> next{0};
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  auto work = [&] {
-    try {
-      for (;;) {
-        const int begin = next.fetch_add(chunk);
-        if (begin >= n) return;
-        fn(begin, std::min(n, begin + chunk));
-      }
-    } catch (...) {
-      std::lock_guard<std::mutex> lock(error_mutex);
-      if (!error) error = std::current_exception();
-      next = n;  // stop the others at their next chunk
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
-  for (std::thread& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
-}
 
 RigRenderer::RigRenderer(const Rig& rig, const SpatialBtdf* material, int threads)
     : rig_(rig), material_(material), threads_(threads) {

@@ -57,7 +57,9 @@ nlohmann::json NominalRig(const Rig& rig, const SimulationPreset& preset, const 
                    {"emission", c.monitor.emission.kind}}},
       {"dots", {{"cols", c.dots.cols}, {"rows", c.dots.rows}, {"radius_px", c.dots.radius_px},
                 {"positions_px", dots}}},
-      {"sample", {{"width_m", c.sample.width}, {"height_m", c.sample.height()}}},
+      // The texel grid and eta a lab would choose for processing and fitting (defaults there).
+      {"sample", {{"width_m", c.sample.width}, {"height_m", c.sample.height()},
+                  {"texels_x", c.sample.texels_x}, {"texels_y", c.sample.texels_y}, {"eta", preset.eta}}},
       {"board", {{"spec", "chessboard:" + std::to_string(c.board.inner_cols) + "x" + std::to_string(c.board.inner_rows) +
                               ":" + std::to_string(c.board.square * 1000.0)},
                  {"views", c.board.views}}},
@@ -229,6 +231,10 @@ SimulationPreset PresetWithOptions(const SimulationOptions& options) {
     ThrowInvalidInput("--truth", "must be model or montecarlo, got '" + options.truth + "'");
   }
   SimulationPreset preset = MakePreset(options.preset);
+  if (!options.noise) {
+    preset.rig.sensor.shot_noise = false;
+    preset.rig.sensor.read_noise = 0.0;
+  }
   if (options.eta != 0.0) {
     if (!(options.eta > 1.0) || !std::isfinite(options.eta)) {
       ThrowInvalidInput("--eta", "must be > 1, got " + std::to_string(options.eta));

@@ -52,7 +52,7 @@ using PatternFunction = TruthTexel (*)(double u, double v, double aspect, uint64
 TruthTexel SmoothPattern(double u, double v, double aspect, uint64_t seed) {
   TruthTexel t;
   const double n = Fractal(3.0 * u, 3.0 * v * aspect, seed);
-  t.ndf.alpha_x = Mix(0.12, 0.35, n);
+  t.ndf.alpha_x = Mix(0.2, 0.4, n);
   t.ndf.alpha_y = t.ndf.alpha_x * Mix(0.8, 1.25, Fractal(2.0 * u + 7.0, 2.0 * v + 3.0, seed + 10));
   t.alpha = Mix(0.35, 0.7, v);
   t.shadowing_roughness = 0.2;

@@ -65,6 +65,10 @@ double WalterBtdf(const Ndf& ndf, const Vec3& i, const Vec3& o, double eta_i, do
 
 using Rgb = std::array<double, 3>;
 
+// The grey value fitting and comparison work on: the mean of the channels (the fit recovers the
+// per-channel scale k_s afterwards, so any fixed positive weighting would do).
+inline double Luminance(const Rgb& rgb) { return (rgb[0] + rgb[1] + rgb[2]) / 3.0; }
+
 // Everything one texel of a fitted material needs besides its NDF (paper Sec. 4):
 //   R(i, o)[c] = k_s[c] * rho(i, o) + rho_d[c].
 struct DualMicrofacetParams {

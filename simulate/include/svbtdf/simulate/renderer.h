@@ -92,8 +92,4 @@ class RigRenderer {
   std::vector<float> background_;         // black-level glow per group (RGB), when enabled
 };
 
-// Splits [0, n) into chunks run on `threads` threads (0: hardware concurrency); fn(begin, end).
-// Exceptions from fn propagate after all threads have stopped.
-void ParallelFor(int n, int threads, int chunk, const std::function<void(int, int)>& fn);
-
 }  // namespace svbtdf

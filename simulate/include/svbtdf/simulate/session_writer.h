@@ -23,6 +23,7 @@ struct SimulationOptions {
   std::string truth = "model";  // model | montecarlo
   int threads = 0;
   bool progress = true;
+  bool noise = true;  // false: no shot or read noise (quantisation stays), for accuracy checks
 };
 
 struct SimulationOutput {

@@ -1,0 +1,74 @@
+// Processing cost and peak memory of `svbtdf process` on a simulated session.
+//
+// Baseline (same process): reading and decoding every image of the session once, the floor for
+// any processing that reads its input. Measured: the whole ProcessSession (dark frames, flat
+// field, rectification, HDR merge, measurement equation, diffuse separation, push-pull) with the
+// true calibration. Reports both times, their ratio, and the process's peak resident memory.
+//
+//   svbtdf simulate --preset rice-paper --out SIM
+//   bench_process SIM [THREADS] [TEXELS_X TEXELS_Y]
+
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/session.h"
+#include "svbtdf/fit/process_session.h"
+#include "truth_calibration.h"
+
+namespace {
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+double PeakResidentMegabytes() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss / 1024.0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: bench_process SIMULATION_FOLDER [THREADS] [TEXELS_X TEXELS_Y]\n");
+    return 2;
+  }
+  namespace fs = std::filesystem;
+  try {
+    const fs::path simulation = argv[1];
+    const svbtdf::Session session = svbtdf::Session::Open(simulation / "session");
+    const svbtdf::calib::SessionCalibration calibration = svbtdf::CalibrationFromTruth(simulation);
+    auto start = std::chrono::steady_clock::now();
+    for (const std::string& key : session.planned_keys()) session.ReadImage(key);
+    const double baseline = Seconds(start);
+    const double baseline_peak = PeakResidentMegabytes();
+
+    const fs::path out = simulation / ("bench-processed-" + std::to_string(::getpid()));
+    svbtdf::fit::ProcessOptions options;
+    options.threads = argc > 2 ? std::atoi(argv[2]) : 0;
+    if (argc > 4) {
+      options.texels_x = std::atoi(argv[3]);
+      options.texels_y = std::atoi(argv[4]);
+    }
+    start = std::chrono::steady_clock::now();
+    const svbtdf::fit::ProcessReport report = svbtdf::fit::ProcessSession(session, calibration, out, options);
+    const double measured = Seconds(start);
+    std::printf("session: %zu images, %lld texels x %d dots\n", session.planned_keys().size(),
+                static_cast<long long>(report.texels), report.dots);
+    std::printf("baseline, read every image once:   %.1f s (peak %.0f MB)\n", baseline, baseline_peak);
+    std::printf("process:                           %.1f s\n", measured);
+    std::printf("ratio measured / baseline:         %.2f\n", measured / baseline);
+    std::printf("peak resident memory:              %.0f MB\n", PeakResidentMegabytes());
+    fs::remove_all(out);
+  } catch (const svbtdf::Error& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  }
+  return 0;
+}

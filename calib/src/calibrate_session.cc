@@ -1,0 +1,351 @@
+#include "svbtdf/calib/calibrate_session.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/progress.h"
+
+namespace svbtdf::calib {
+namespace {
+
+std::string ImageFile(const Session& session, const std::string& key) {
+  return (session.folder() / session.Entry(key).file).string();
+}
+
+std::vector<std::string> KeysWithPrefix(const Session& session, const std::string& prefix) {
+  std::vector<std::string> keys;
+  for (const std::string& key : session.planned_keys()) {
+    if (key.rfind(prefix, 0) == 0) keys.push_back(key);
+  }
+  return keys;
+}
+
+double MaxDn(int bits) { return std::ldexp(1.0, bits) - 1.0; }
+
+// The mean of the channels as float, checked for size.
+cv::Mat GrayImage(const Session& session, const std::string& key, const cv::Size& expected) {
+  if (!session.Contains(key)) {
+    ThrowInvalidInput(session.folder().string(), "has no image '" + key + "'", "complete the capture first");
+  }
+  const CameraImage image = session.ReadImage(key);
+  if (!expected.empty() && (image.width != expected.width || image.height != expected.height)) {
+    ThrowFormatError(ImageFile(session, key), "is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                                                  " pixels but the session's camera is " + std::to_string(expected.width) +
+                                                  "x" + std::to_string(expected.height));
+  }
+  cv::Mat gray(image.height, image.width, CV_32F);
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 0; x < image.width; ++x) {
+      float sum = 0;
+      for (int c = 0; c < image.channels; ++c) sum += image.at(x, y, c);
+      gray.at<float>(y, x) = sum / image.channels;
+    }
+  }
+  return gray;
+}
+
+cv::Mat ToEightBit(const cv::Mat& gray, int bits) {
+  cv::Mat eight;
+  gray.convertTo(eight, CV_8U, 255.0 / MaxDn(bits));
+  return eight;
+}
+
+CalibrationReport CalibrateCameraFromBoards(const Session& session, const BoardSpec& board, const cv::Size& size,
+                                            int bits, const CalibrateSessionOptions& options) {
+  const std::vector<std::string> keys = KeysWithPrefix(session, "board/");
+  std::vector<BoardDetection> detections;
+  std::unique_ptr<ProgressBar> progress;
+  if (options.progress) progress = std::make_unique<ProgressBar>("detecting boards", static_cast<int64_t>(keys.size()), "images");
+  for (const std::string& key : keys) {
+    detections.push_back(DetectBoard(ToEightBit(GrayImage(session, key, size), bits), board, key));
+    if (progress) progress->Advance();
+  }
+  if (progress) progress->Finish();
+  return CalibrateCamera(detections, size, options.camera);
+}
+
+// The pose of the sample frame from the board in the holder. The board is centred on the sample
+// with its x axis along the sample's x and its y axis along the sample's -y (it faces the camera);
+// OpenCV may number the corners from either end, which turns the pose by 180 degrees about the
+// normal: the camera is on the sample's -y side (docs/calibration-format.md) decides.
+SamplePlane SamplePlaneFromBoard(const Session& session, const BoardSpec& board, const CameraModel& camera, int bits) {
+  const std::vector<std::string> keys = KeysWithPrefix(session, "sample_plane/");
+  if (keys.empty()) ThrowInvalidInput(session.folder().string(), "plans no sample_plane/ capture (the board in the sample holder)");
+  const cv::Size size(camera.width, camera.height);
+  const BoardDetection detection = DetectBoard(ToEightBit(GrayImage(session, keys.front(), size), bits), board, keys.front());
+  if (!detection.found) {
+    ThrowFormatError(ImageFile(session, keys.front()), "shows no " + board.ToString() + " board: " + detection.failure,
+                     "the board must lie flat in the sample holder, fully in view");
+  }
+  // Board corner (i, j) -> sample frame (i s - cx, cy - j s, 0), centred on the inner corners.
+  double max_x = 0, max_y = 0;
+  for (const cv::Point3f& p : detection.object_points) max_x = std::max<double>(max_x, p.x), max_y = std::max<double>(max_y, p.y);
+  std::vector<cv::Point3d> sample_points;
+  for (const cv::Point3f& p : detection.object_points) {
+    sample_points.emplace_back((p.x - max_x / 2) / 1000.0, (max_y / 2 - p.y) / 1000.0, 0.0);
+  }
+  SamplePlane plane;
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    std::vector<cv::Point2f> image_points = detection.image_points;
+    if (attempt == 1) std::reverse(image_points.begin(), image_points.end());
+    cv::Vec3d rvec, tvec;
+    cv::solvePnP(sample_points, image_points, camera.CameraMatrix(), camera.DistortionCoefficients(), rvec, tvec, false,
+                 cv::SOLVEPNP_IPPE);
+    cv::Mat rotation;
+    cv::Rodrigues(rvec, rotation);
+    cv::cv2eigen(rotation, plane.rotation);
+    plane.translation = Vec3(tvec[0], tvec[1], tvec[2]);
+    std::vector<cv::Point2d> reprojected;
+    cv::projectPoints(sample_points, rvec, tvec, camera.CameraMatrix(), camera.DistortionCoefficients(), reprojected);
+    double sum = 0;
+    for (size_t k = 0; k < reprojected.size(); ++k) {
+      sum += std::pow(cv::norm(cv::Point2d(image_points[k]) - reprojected[k]), 2);
+    }
+    plane.rms_px = std::sqrt(sum / reprojected.size());
+    const Vec3 camera_centre = plane.CameraCentre();
+    if (camera_centre.z() > 0 && camera_centre.y() < 0) return plane;
+  }
+  ThrowFormatError(ImageFile(session, keys.front()), "gives a sample-plane pose with the camera not above the sample's -y side",
+                   "lay the board in the holder with its rows along the sample's x axis");
+}
+
+// Blobs brighter than a fifth of the way from the background to the peak, with centroids
+// weighted by their brightness above the background.
+std::vector<Eigen::Vector2d> FindBlobs(const cv::Mat& gray) {
+  std::vector<float> values(gray.begin<float>(), gray.end<float>());
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  const double background = values[values.size() / 2];
+  double peak = 0;
+  cv::minMaxLoc(gray, nullptr, &peak);
+  const double threshold = background + 0.2 * (peak - background);
+  cv::Mat mask = gray > threshold, labels, stats, centroids;
+  const int count = cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8, CV_32S);
+  std::vector<Eigen::Vector3d> sums(count, Eigen::Vector3d::Zero());  // (w x, w y, w)
+  for (int y = 0; y < gray.rows; ++y) {
+    for (int x = 0; x < gray.cols; ++x) {
+      const int label = labels.at<int>(y, x);
+      if (label == 0) continue;
+      const double w = gray.at<float>(y, x) - background;
+      sums[label] += Eigen::Vector3d(w * x, w * y, w);
+    }
+  }
+  std::vector<Eigen::Vector2d> blobs;
+  for (int label = 1; label < count; ++label) {
+    if (sums[label].z() > 0) blobs.emplace_back(sums[label].x() / sums[label].z(), sums[label].y() / sums[label].z());
+  }
+  return blobs;
+}
+
+// Where the camera ray through `pixel` meets the plane z = z0 of the sample frame.
+Vec3 BackProject(const Eigen::Vector2d& pixel, const CameraModel& camera, const SamplePlane& plane, double z0) {
+  std::vector<cv::Point2d> in = {{pixel.x(), pixel.y()}}, out;
+  cv::undistortPoints(in, out, camera.CameraMatrix(), camera.DistortionCoefficients());
+  const Vec3 direction = plane.rotation.transpose() * Vec3(out[0].x, out[0].y, 1.0);
+  const Vec3 origin = plane.CameraCentre();
+  return origin + direction * ((z0 - origin.z()) / direction.z());
+}
+
+struct NominalDots {
+  std::vector<Eigen::Vector2d> monitor_px;  // displayed centre of each dot, in monitor pixels
+  double pitch_m = 0, radius_px = 0, distance_m = 0.04, spacing_m = 0;
+};
+
+NominalDots ReadNominalDots(const Session& session) {
+  const std::string source = (session.folder() / "session.json").string();
+  NominalDots n;
+  try {
+    const nlohmann::json& rig = session.rig();
+    n.pitch_m = rig.at("monitor").at("pixel_pitch_m").get<double>();
+    n.distance_m = rig.at("monitor").at("distance_m").get<double>();
+    n.radius_px = rig.at("dots").at("radius_px").get<double>();
+    for (const nlohmann::json& p : rig.at("dots").at("positions_px")) {
+      // A dot drawn centred on pixel (x, y) has its centre at (x + 0.5, y + 0.5).
+      n.monitor_px.emplace_back(p.at(0).get<double>() + 0.5, p.at(1).get<double>() + 0.5);
+    }
+  } catch (const nlohmann::json::exception& e) {
+    ThrowFormatError(source, std::string("does not describe the monitor and dots: ") + e.what());
+  }
+  if (n.monitor_px.size() < 4 || !(n.pitch_m > 0) || !(n.distance_m > 0)) {
+    ThrowFormatError(source, "needs at least 4 dots, a positive monitor pixel pitch and distance");
+  }
+  n.spacing_m = std::numeric_limits<double>::infinity();
+  for (size_t a = 1; a < n.monitor_px.size(); ++a) {
+    n.spacing_m = std::min(n.spacing_m, (n.monitor_px[a] - n.monitor_px[a - 1]).norm() * n.pitch_m);
+  }
+  return n;
+}
+
+// Matches blobs to dots: the blobs' back-projections onto the nominal monitor plane are aligned
+// with the displayed grid by a translation (centroids, then the median of the matched offsets),
+// and each dot takes the nearest blob within a third of the grid spacing. Missing and extra
+// blobs only lose or add unmatched entries.
+std::vector<int> MatchDots(const std::vector<Vec3>& blob_positions, const NominalDots& nominal) {
+  std::vector<Eigen::Vector2d> grid;
+  for (const auto& px : nominal.monitor_px) grid.push_back(px * nominal.pitch_m);
+  Eigen::Vector2d blob_mean = Eigen::Vector2d::Zero(), grid_mean = Eigen::Vector2d::Zero();
+  for (const Vec3& b : blob_positions) blob_mean += b.head<2>();
+  for (const auto& g : grid) grid_mean += g;
+  Eigen::Vector2d offset = blob_mean / blob_positions.size() - grid_mean / grid.size();
+  std::vector<int> match(grid.size(), -1);
+  for (double tolerance : {0.5, 0.33, 0.33}) {
+    std::vector<double> dx, dy;
+    for (size_t q = 0; q < grid.size(); ++q) {
+      double best = tolerance * nominal.spacing_m;
+      match[q] = -1;
+      for (size_t b = 0; b < blob_positions.size(); ++b) {
+        const double d = (blob_positions[b].head<2>() - grid[q] - offset).norm();
+        if (d < best) best = d, match[q] = static_cast<int>(b);
+      }
+      if (match[q] >= 0) {
+        dx.push_back(blob_positions[match[q]].x() - grid[q].x());
+        dy.push_back(blob_positions[match[q]].y() - grid[q].y());
+      }
+    }
+    if (dx.empty()) break;
+    std::nth_element(dx.begin(), dx.begin() + dx.size() / 2, dx.end());
+    std::nth_element(dy.begin(), dy.begin() + dy.size() / 2, dy.end());
+    offset = {dx[dx.size() / 2], dy[dy.size() / 2]};
+  }
+  return match;
+}
+
+MonitorCalibration CalibrateMonitor(const Session& session, const CameraModel& camera, const SamplePlane& plane) {
+  const std::vector<std::string> keys = KeysWithPrefix(session, "all_dots/");
+  if (keys.empty()) ThrowInvalidInput(session.folder().string(), "plans no all_dots/ capture (every dot lit, sample removed)");
+  const NominalDots nominal = ReadNominalDots(session);
+  const cv::Mat gray = GrayImage(session, keys.front(), cv::Size(camera.width, camera.height));
+  const std::vector<Eigen::Vector2d> blobs = FindBlobs(gray);
+  std::vector<Vec3> on_plane;
+  for (const auto& b : blobs) on_plane.push_back(BackProject(b, camera, plane, -nominal.distance_m));
+  const std::vector<int> match = on_plane.empty() ? std::vector<int>(nominal.monitor_px.size(), -1)
+                                                  : MatchDots(on_plane, nominal);
+  std::vector<cv::Point3d> object;
+  std::vector<cv::Point2d> image;
+  for (size_t q = 0; q < match.size(); ++q) {
+    if (match[q] < 0) continue;
+    object.emplace_back(nominal.monitor_px[q].x() * nominal.pitch_m, nominal.monitor_px[q].y() * nominal.pitch_m, 0.0);
+    image.emplace_back(blobs[match[q]].x(), blobs[match[q]].y());
+  }
+  if (object.size() < std::max<size_t>(4, match.size() / 2)) {
+    ThrowFormatError(ImageFile(session, keys.front()), "shows " + std::to_string(object.size()) + " of the " +
+                                                           std::to_string(match.size()) + " displayed dots",
+                     "check that the sample is removed, the room dark and the exposure right");
+  }
+  // The monitor's pose from its dots (monitor frame: pixel x, pixel y, normal toward the sample).
+  cv::Vec3d rvec, tvec;
+  cv::solvePnP(object, image, camera.CameraMatrix(), camera.DistortionCoefficients(), rvec, tvec, false, cv::SOLVEPNP_IPPE);
+  cv::Mat r;
+  cv::Rodrigues(rvec, r);
+  Eigen::Matrix3d monitor_rotation;
+  cv::cv2eigen(r, monitor_rotation);
+  const Eigen::Matrix3d to_sample = plane.rotation.transpose() * monitor_rotation;
+  const Vec3 origin = plane.rotation.transpose() * (Vec3(tvec[0], tvec[1], tvec[2]) - plane.translation);
+
+  MonitorCalibration monitor;
+  monitor.normal = to_sample.col(2).normalized();
+  if (monitor.normal.z() < 0) monitor.normal = -monitor.normal;
+  monitor.distance_m = std::abs(monitor.normal.dot(origin)) / std::max(1e-9, std::abs(monitor.normal.z()));
+  monitor.pixel_pitch_m = nominal.pitch_m;
+  monitor.dot_radius_m = nominal.radius_px * nominal.pitch_m;
+  monitor.emission = session.rig().value("monitor", nlohmann::json::object()).value("emission", "isotropic");
+  if (monitor.emission != "lambertian" && monitor.emission != "lcd") monitor.emission = "isotropic";
+  double sum = 0;
+  int found = 0;
+  for (size_t q = 0; q < match.size(); ++q) {
+    DotPosition dot;
+    dot.monitor_px = nominal.monitor_px[q] - Eigen::Vector2d(0.5, 0.5);
+    dot.position = origin + to_sample * Vec3(nominal.monitor_px[q].x() * nominal.pitch_m,
+                                             nominal.monitor_px[q].y() * nominal.pitch_m, 0.0);
+    dot.image_px = match[q] >= 0 ? blobs[match[q]] : Eigen::Vector2d(-1.0, -1.0);  // -1: not found
+    if (match[q] >= 0) {
+      // The centroid's ray on the fitted monitor plane, against the fitted grid.
+      const Vec3 centre = plane.CameraCentre();
+      std::vector<cv::Point2d> in = {{blobs[match[q]].x(), blobs[match[q]].y()}}, out;
+      cv::undistortPoints(in, out, camera.CameraMatrix(), camera.DistortionCoefficients());
+      const Vec3 direction = plane.rotation.transpose() * Vec3(out[0].x, out[0].y, 1.0);
+      const double t = monitor.normal.dot(dot.position - centre) / monitor.normal.dot(direction);
+      dot.residual_mm = 1000.0 * (centre + t * direction - dot.position).norm();
+      sum += dot.residual_mm * dot.residual_mm;
+      monitor.residual_max_mm = std::max(monitor.residual_max_mm, dot.residual_mm);
+      ++found;
+    } else {
+      dot.residual_mm = -1.0;  // not found: its position comes from the fitted grid alone
+    }
+    monitor.dots.push_back(dot);
+  }
+  monitor.residual_rms_mm = std::sqrt(sum / found);
+  return monitor;
+}
+
+Radiometry RadiometryOf(const Session& session, int bits, const cv::Size& size) {
+  Radiometry r;
+  r.bit_depth = bits;
+  r.saturation_dn = MaxDn(bits);  // clipped values sit at full scale
+  const std::string response = session.rig().at("camera").value("response", "linear");
+  if (response == "srgb") {
+    // The sRGB transfer curve inverted, in digital-number units so that "linear" and "table"
+    // agree at full scale.
+    r.response = "table";
+    constexpr int kEntries = 1024;
+    for (int k = 0; k < kEntries; ++k) {
+      const double v = static_cast<double>(k) / (kEntries - 1);
+      const double linear = v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+      r.inverse_response.push_back(linear * MaxDn(bits));
+    }
+  } else if (response != "linear") {
+    ThrowFormatError((session.folder() / "session.json").string(), "has camera response '" + response + "'",
+                     "use 'linear' or 'srgb', or recover the curve with calib::RecoverResponse");
+  }
+  // The black offset: the median of the first dark frame (dark current adds little to it).
+  const std::vector<std::string> darks = KeysWithPrefix(session, "dark/");
+  if (!darks.empty()) {
+    const cv::Mat dark = GrayImage(session, darks.front(), size);
+    std::vector<float> values(dark.begin<float>(), dark.end<float>());
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    r.black_offset_dn = values[values.size() / 2];
+  }
+  return r;
+}
+
+}  // namespace
+
+SessionCalibration CalibrateSession(const Session& session, const CalibrateSessionOptions& options) {
+  const std::string manifest = (session.folder() / "session.json").string();
+  int bits = 16, width = 0, height = 0;
+  std::string board_text;
+  double sample_width = 0, sample_height = 0;
+  try {
+    const nlohmann::json& rig = session.rig();
+    bits = rig.at("camera").at("bit_depth").get<int>();
+    width = rig.at("camera").at("width").get<int>();
+    height = rig.at("camera").at("height").get<int>();
+    board_text = rig.at("board").at("spec").get<std::string>();
+    sample_width = rig.at("sample").at("width_m").get<double>();
+    sample_height = rig.at("sample").at("height_m").get<double>();
+  } catch (const nlohmann::json::exception& e) {
+    ThrowFormatError(manifest, std::string("does not describe the rig: ") + e.what(),
+                     "calibration needs rig.camera (width, height, bit_depth), rig.board.spec and rig.sample");
+  }
+  const BoardSpec board = BoardSpec::Parse(board_text, manifest + " rig.board.spec");
+  const cv::Size size(width, height);
+  SessionCalibration c;
+  c.camera = CalibrateCameraFromBoards(session, board, size, bits, options);
+  c.sample_plane = SamplePlaneFromBoard(session, board, c.camera.camera, bits);
+  c.sample_plane.width_m = sample_width;
+  c.sample_plane.height_m = sample_height;
+  c.monitor = CalibrateMonitor(session, c.camera.camera, c.sample_plane);
+  c.radiometry = RadiometryOf(session, bits, size);
+  c.provenance = {{"session", std::filesystem::absolute(session.folder()).string()}, {"board", board.ToString()}};
+  return c;
+}
+
+}  // namespace svbtdf::calib

@@ -1,0 +1,90 @@
+// svbtdf fit PROCESSED --out MATERIAL: the dual-microfacet material of a processed session.
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "commands.h"
+#include "fit_command.h"
+#include "svbtdf/common/error.h"
+#include "svbtdf/fit/fit_material.h"
+#include "svbtdf/fit/material.h"
+#include "svbtdf/fit/slice_store.h"
+
+namespace svbtdf::cli {
+namespace {
+namespace fs = std::filesystem;
+
+struct FitCommandOptions {
+  std::string processed, out;
+  std::string representatives = "0.01";
+  fit::FitMaterialOptions fit;
+};
+
+}  // namespace
+
+namespace {
+
+// The checkpoint of an unfinished fit of MATERIAL, next to it (the material folder itself is
+// written only once, complete).
+fs::path FitCheckpointPath(const fs::path& material) {
+  return material.parent_path() / (material.filename().string() + ".partial-fits.jsonl");
+}
+
+}  // namespace
+
+double ParseRepresentatives(const std::string& text) {
+  if (text == "all") return 1.0;
+  try {
+    size_t used = 0;
+    const double fraction = std::stod(text, &used);
+    if (used == text.size() && fraction > 0 && fraction <= 1) return fraction;
+  } catch (const std::exception&) {
+  }
+  ThrowInvalidInput("--representatives", "must be a fraction in (0, 1] or 'all', got '" + text + "'");
+}
+
+void FitAndWriteMaterial(const fs::path& processed, const fs::path& out, fit::FitMaterialOptions options) {
+  if (fs::exists(out) && (!fs::is_directory(out) || !fs::is_empty(out))) {
+    ThrowInvalidInput(out.string(), "exists and is not empty; a material is never overwritten", "choose a new --out folder");
+  }
+  const fit::SliceStore store = fit::SliceStore::Open(processed);
+  options.checkpoint = FitCheckpointPath(out);
+  const fit::Material material = fit::FitMaterial(store, options);
+  fit::WriteMaterial(out, material);
+  fs::remove(options.checkpoint);
+  const nlohmann::json& statistics = material.provenance["statistics"];
+  std::printf("fitted %s representatives of %s valid texels (%s failed, %s resumed) in %.1f s; median residual %.3f\n",
+              statistics["representatives"].dump().c_str(), statistics["valid_texels"].dump().c_str(),
+              statistics["failed_fits"].dump().c_str(), statistics["resumed_fits"].dump().c_str(),
+              statistics["seconds"].get<double>(),
+              statistics["median_relative_rmse"].is_number() ? statistics["median_relative_rmse"].get<double>() : -1.0);
+  std::printf("material: %s\n", out.c_str());
+}
+
+void AddFitOptions(CLI::App* command, fit::FitMaterialOptions* options, std::string* representatives) {
+  command->add_option("--eta", options->eta, "relative index of refraction (default: the session's)");
+  command->add_option("--representatives", *representatives, "fraction of texels fitted (k-means representatives), or 'all'")
+      ->capture_default_str();
+  command->add_option("--holdout", options->holdout, "fraction of the dots withheld from the fit, for 'svbtdf compare'")
+      ->capture_default_str();
+  command->add_option("--ndf-resolution", options->ndf_resolution, "NDF hemicube resolution (top face)")
+      ->capture_default_str();
+  command->add_option("--seed", options->seed, "seed of the clustering and the held-out dots")->capture_default_str();
+  command->add_option("--threads", options->threads, "worker threads (0: all cores)")->capture_default_str();
+}
+
+void AddFitCommand(CLI::App& app) {
+  auto options = std::make_shared<FitCommandOptions>();
+  CLI::App* fit = app.add_subcommand("fit", "Fit the dual-microfacet material to a processed session");
+  fit->add_option("processed", options->processed, "output folder of 'svbtdf process'")->required();
+  fit->add_option("--out", options->out, "new material folder")->required();
+  AddFitOptions(fit, &options->fit, &options->representatives);
+  fit->callback([options] {
+    fit::FitMaterialOptions fit_options = options->fit;
+    fit_options.representative_fraction = ParseRepresentatives(options->representatives);
+    FitAndWriteMaterial(options->processed, options->out, fit_options);
+  });
+}
+
+}  // namespace svbtdf::cli

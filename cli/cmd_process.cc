@@ -1,0 +1,63 @@
+// svbtdf process SESSION --out DIR: a calibrated session to the slice store (docs/slice-store.md).
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "commands.h"
+#include "svbtdf/calib/session_calibration.h"
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/session.h"
+#include "svbtdf/fit/process_session.h"
+
+namespace svbtdf::cli {
+namespace {
+
+struct ProcessCommandOptions {
+  std::string session, out;
+  std::string texels;  // "WxH"
+  fit::ProcessOptions process;
+};
+
+void ParseTexels(const std::string& text, fit::ProcessOptions* options) {
+  if (text.empty()) return;
+  int w = 0, h = 0;
+  char x = 0, extra = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || x != 'x' || w <= 0 || h <= 0) {
+    ThrowInvalidInput("--texels", "must be WIDTHxHEIGHT with positive numbers, got '" + text + "'");
+  }
+  options->texels_x = w;
+  options->texels_y = h;
+}
+
+void RunProcess(ProcessCommandOptions options) {
+  ParseTexels(options.texels, &options.process);
+  const Session session = Session::Open(options.session);
+  const std::filesystem::path calibration_path = std::filesystem::path(options.session) / "calibration.json";
+  if (!std::filesystem::exists(calibration_path)) {
+    ThrowInvalidInput(options.session, "has no calibration.json", "run 'svbtdf calibrate " + options.session + "' first");
+  }
+  const calib::SessionCalibration calibration = calib::ReadSessionCalibration(calibration_path);
+  const fit::ProcessReport report = fit::ProcessSession(session, calibration, options.out, options.process);
+  std::printf("processed %d dots (%d resumed) from %lld images in %.1f s: %lld of %lld texels valid\n", report.dots,
+              report.dots_resumed, static_cast<long long>(report.images_read), report.seconds,
+              static_cast<long long>(report.valid_texels), static_cast<long long>(report.texels));
+  std::printf("slice store: %s\n", options.out.c_str());
+}
+
+}  // namespace
+
+void AddProcessCommand(CLI::App& app) {
+  auto options = std::make_shared<ProcessCommandOptions>();
+  CLI::App* process = app.add_subcommand("process", "Turn a calibrated session into per-texel BTDF samples (slice store)");
+  process->add_option("session", options->session, "capture session folder (calibrated)")->required();
+  process->add_option("--out", options->out, "output folder (new, or an unfinished processing to resume)")->required();
+  process->add_option("--texels", options->texels, "texel grid WIDTHxHEIGHT (default: the session's, else ~2 px per texel)");
+  process->add_option("--light-resolution", options->process.light_resolution,
+                      "light hemicube resolution of the resampled slices (power of two)")
+      ->capture_default_str();
+  process->add_option("--threads", options->process.threads, "worker threads (0: all cores)")->capture_default_str();
+  process->callback([options] { RunProcess(*options); });
+}
+
+}  // namespace svbtdf::cli

@@ -1,0 +1,36 @@
+#pragma once
+// Fitting a whole processed session (paper Secs. 4.2-4.3; docs/fitting.md): cluster the texels'
+// resampled slices, fit the dual-microfacet model at the representatives only, and express every
+// texel as an affine combination of nearby representatives.
+//
+// Long fits are resumable: every finished representative is appended (fsync'ed) to a checkpoint
+// journal, and a rerun with the same options skips the representatives it already holds.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "svbtdf/fit/material.h"
+#include "svbtdf/fit/slice_store.h"
+
+namespace svbtdf::fit {
+
+struct FitMaterialOptions {
+  double eta = 0.0;                       // 0: the store's nominal eta (an error when unknown)
+  double representative_fraction = 0.01;  // the paper's 1%; >= 1 fits every valid texel
+  int ndf_resolution = 32;
+  double holdout = 0.0;                   // fraction of the dots withheld from the fit (random, seeded)
+  uint64_t seed = 1;
+  int threads = 0;
+  bool progress = true;
+  std::filesystem::path checkpoint;       // journal of finished fits; empty: none
+};
+
+// Throws svbtdf::Error(kInvalidInput) for bad options, kInterrupted when interrupted (the
+// checkpoint then holds the finished fits).
+Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options);
+
+// The dots withheld by `holdout` with `seed` (sorted), as recorded in the material's provenance.
+std::vector<int> HeldOutDots(int num_dots, double holdout, uint64_t seed);
+
+}  // namespace svbtdf::fit

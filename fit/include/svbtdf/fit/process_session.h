@@ -1,0 +1,40 @@
+#pragma once
+// From a calibrated capture session to the slice store (docs/slice-store.md; notes,
+// "Measurement to BTDF"): for every dot, the bracketed images are dark-subtracted, linearised,
+// rectified onto the texel grid and merged into HDR values, which the measurement equation turns
+// into R(x, i_q, o); the slice store writer then separates the diffuse term and resamples.
+//
+// Images are read once, in plan order; memory is bounded by a few images and one dot's texel
+// values, whatever the number of dots. An interrupted run resumes at the first unwritten dot.
+
+#include <cstdint>
+#include <filesystem>
+
+#include "svbtdf/calib/session_calibration.h"
+#include "svbtdf/common/session.h"
+
+namespace svbtdf::fit {
+
+struct ProcessOptions {
+  int texels_x = 0, texels_y = 0;  // 0: session.json rig.sample.texels_x/_y, else ~2 pixels per texel
+  int light_resolution = 16;       // light hemicube of the resampled slices (power of two)
+  int tile_texels = 1024;
+  int rectify_samples = 3;         // k x k points per texel, inset from its edges, are averaged
+  double diffuse_threshold = 0.05;
+  int threads = 0;
+  bool progress = true;
+};
+
+struct ProcessReport {
+  int64_t texels = 0, valid_texels = 0;
+  int dots = 0, dots_resumed = 0;
+  int64_t images_read = 0;
+  double seconds = 0.0;
+};
+
+// Writes the slice store into `out` (new, empty, or an unfinished processing of the same session
+// to resume). Throws svbtdf::Error naming the image or file for anything wrong with the input.
+ProcessReport ProcessSession(const Session& session, const calib::SessionCalibration& calibration,
+                             const std::filesystem::path& out, const ProcessOptions& options);
+
+}  // namespace svbtdf::fit

@@ -1,0 +1,318 @@
+#include "svbtdf/fit/fit_material.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <numeric>
+#include <random>
+
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/interrupt.h"
+#include "svbtdf/common/parallel.h"
+#include "svbtdf/common/progress.h"
+
+namespace svbtdf::fit {
+namespace fs = std::filesystem;
+namespace {
+
+void CheckOptions(const FitMaterialOptions& options, double eta) {
+  if (!(eta > 1.0) || !std::isfinite(eta)) {
+    ThrowInvalidInput("--eta", "must be > 1 (the sample's relative index of refraction), got " + std::to_string(eta),
+                      "give --eta; the session does not record it");
+  }
+  if (!(options.representative_fraction > 0.0)) {
+    ThrowInvalidInput("--representatives", "must be a fraction in (0, 1] or 'all'");
+  }
+  if (!(options.holdout >= 0.0 && options.holdout < 0.9)) {
+    ThrowInvalidInput("--holdout", "must be in [0, 0.9), got " + std::to_string(options.holdout));
+  }
+  const int r = options.ndf_resolution;
+  if (r < 4 || r > 128) ThrowInvalidInput("--ndf-resolution", "must be in [4, 128], got " + std::to_string(r));
+}
+
+// The texels the fit can use (mask = 1).
+std::vector<int64_t> ValidTexels(const SliceStore& store) {
+  std::vector<int64_t> valid;
+  const FloatImage& mask = store.mask();
+  for (int64_t t = 0; t < static_cast<int64_t>(mask.pixels.size()); ++t) {
+    if (mask.pixels[t] > 0) valid.push_back(t);
+  }
+  if (valid.empty()) {
+    ThrowInvalidInput(store.folder().string(), "has no texel with enough valid samples to fit",
+                      "check the session's exposures and the calibration");
+  }
+  return valid;
+}
+
+// Clusters the valid texels and extends the result to every texel: a masked-out texel takes the
+// weights of the nearest valid texel on the grid (it has no data of its own).
+Clustering ClusterTexels(const SliceStore& store, const std::vector<int64_t>& valid, const FitMaterialOptions& options) {
+  SliceSource source;
+  source.num_texels = static_cast<int64_t>(valid.size());
+  source.dimension = store.light_grid().num_cells();
+  source.read = [&](int64_t k, float* out) { store.ReadSlice(valid[k], out); };
+  ClusteringOptions clustering_options;
+  clustering_options.representative_fraction = std::min(1.0, options.representative_fraction);
+  clustering_options.seed = options.seed;
+  clustering_options.threads = options.threads;
+  const Clustering on_valid = ClusterSlices(source, clustering_options);
+
+  const int64_t texels = store.geometry().num_texels();
+  const int width = store.info().texels_x;
+  Clustering all;
+  for (int64_t r : on_valid.representatives) all.representatives.push_back(valid[r]);
+  all.explained_variance = on_valid.explained_variance;
+  all.cluster.assign(texels, 0);
+  all.weights.assign(texels, {});
+  std::vector<int64_t> source_of(texels, -1);
+  for (size_t k = 0; k < valid.size(); ++k) source_of[valid[k]] = static_cast<int64_t>(k);
+  for (int64_t t = 0; t < texels; ++t) {
+    int64_t k = source_of[t];
+    if (k < 0) {
+      int64_t best = 0;
+      double best_distance = 1e300;
+      for (size_t v = 0; v < valid.size(); ++v) {
+        const double dx = valid[v] % width - t % width, dy = valid[v] / width - t / width;
+        if (dx * dx + dy * dy < best_distance) best_distance = dx * dx + dy * dy, best = static_cast<int64_t>(v);
+      }
+      k = best;
+    }
+    all.cluster[t] = on_valid.cluster[k];
+    all.weights[t] = on_valid.weights[k];
+  }
+  return all;
+}
+
+nlohmann::json FitToJson(const TexelFitResult& f) {
+  return {{"alpha", f.alpha},       {"shadowing_roughness", f.shadowing_roughness},
+          {"k_s", f.k_s},           {"k_s_rgb", f.k_s_rgb},
+          {"ln_d", f.ln_d},         {"log_rms", f.log_rms},
+          {"relative_rmse", f.relative_rmse}, {"alternations", f.alternations},
+          {"samples_used", f.samples_used}};
+}
+
+TexelFitResult FitFromJson(const nlohmann::json& j) {
+  TexelFitResult f;
+  f.alpha = j.at("alpha").get<double>();
+  f.shadowing_roughness = j.at("shadowing_roughness").get<double>();
+  f.k_s = j.at("k_s").get<double>();
+  f.k_s_rgb = j.at("k_s_rgb").get<std::array<double, 3>>();
+  f.ln_d = j.at("ln_d").get<std::vector<double>>();
+  f.log_rms = j.at("log_rms").get<double>();
+  f.relative_rmse = j.at("relative_rmse").get<double>();
+  f.alternations = j.at("alternations").get<int>();
+  f.samples_used = j.at("samples_used").get<int>();
+  return f;
+}
+
+// The append-only journal of finished representative fits. Its first line records what the fit
+// is (store, options, representatives), so that a rerun with anything different is refused
+// rather than mixing fits.
+class Checkpoint {
+ public:
+  Checkpoint(const fs::path& path, const nlohmann::json& identity) : path_(path) {
+    if (path.empty()) return;
+    std::ifstream in(path);
+    std::string line;
+    if (in && std::getline(in, line)) {
+      nlohmann::json header;
+      try {
+        header = nlohmann::json::parse(line);
+      } catch (const nlohmann::json::exception&) {
+      }
+      if (header != nlohmann::json{{"fit", identity}}) {
+        ThrowInvalidInput(path.string(), "is the checkpoint of a fit with other inputs or options",
+                          "re-run with the same options, or delete it to start over");
+      }
+      while (std::getline(in, line)) {
+        try {  // a line cut short by a crash does not count
+          const nlohmann::json entry = nlohmann::json::parse(line);
+          done_[entry.at("representative").get<int>()] = FitFromJson(entry.at("result"));
+        } catch (const nlohmann::json::exception&) {
+        } catch (const Error&) {
+        }
+      }
+      return;
+    }
+    Append(nlohmann::json{{"fit", identity}});
+  }
+
+  const std::map<int, TexelFitResult>& done() const { return done_; }
+
+  void Record(int representative, const TexelFitResult& result) {
+    if (path_.empty()) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    Append({{"representative", representative}, {"result", FitToJson(result)}});
+  }
+
+ private:
+  void Append(const nlohmann::json& entry) {
+    const std::string line = entry.dump() + "\n";
+    const int fd = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+    if (fd < 0) ThrowIoError(path_.string(), std::string("cannot write the checkpoint: ") + std::strerror(errno));
+    const bool ok = ::write(fd, line.data(), line.size()) == static_cast<ssize_t>(line.size()) && ::fsync(fd) == 0;
+    ::close(fd);
+    if (!ok) ThrowIoError(path_.string(), "cannot write the checkpoint", "is the disk full?");
+  }
+
+  fs::path path_;
+  std::map<int, TexelFitResult> done_;
+  std::mutex mutex_;
+};
+
+// Workspaces handed to whichever thread fits next (the symbolic analysis is reused).
+class WorkspacePool {
+ public:
+  FitWorkspace Take() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (free_.empty()) return FitWorkspace();
+    FitWorkspace w = std::move(free_.back());
+    free_.pop_back();
+    return w;
+  }
+  void Give(FitWorkspace w) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    free_.push_back(std::move(w));
+  }
+
+ private:
+  std::mutex mutex_;
+  std::vector<FitWorkspace> free_;
+};
+
+// A representative whose fit failed borrows the fit of the spatially nearest successful one.
+void BorrowFailedFits(const std::vector<int64_t>& representatives, int width, const std::vector<bool>& failed,
+                      std::vector<TexelFitResult>* fits) {
+  for (size_t r = 0; r < representatives.size(); ++r) {
+    if (!failed[r]) continue;
+    double best = 1e300;
+    for (size_t s = 0; s < representatives.size(); ++s) {
+      if (failed[s]) continue;
+      const double dx = representatives[s] % width - representatives[r] % width;
+      const double dy = representatives[s] / width - representatives[r] / width;
+      if (dx * dx + dy * dy < best) best = dx * dx + dy * dy, (*fits)[r] = (*fits)[s];
+    }
+    (*fits)[r].relative_rmse = -1;  // marks "not its own fit" in the residual map
+  }
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return std::nan("");
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+}  // namespace
+
+std::vector<int> HeldOutDots(int num_dots, double holdout, uint64_t seed) {
+  std::vector<int> dots(num_dots);
+  std::iota(dots.begin(), dots.end(), 0);
+  std::mt19937_64 rng(seed ^ 0x9e3779b97f4a7c15ull);
+  std::shuffle(dots.begin(), dots.end(), rng);
+  dots.resize(static_cast<size_t>(std::lround(holdout * num_dots)));
+  std::sort(dots.begin(), dots.end());
+  return dots;
+}
+
+Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const double eta = options.eta > 0 ? options.eta : store.info().eta;
+  CheckOptions(options, eta);
+  const int num_dots = store.info().num_dots;
+  const std::vector<int> held_out = HeldOutDots(num_dots, options.holdout, options.seed);
+  std::vector<bool> use_dot(num_dots, true);
+  for (int q : held_out) use_dot[q] = false;
+
+  const std::vector<int64_t> valid = ValidTexels(store);
+  const Clustering clustering = ClusterTexels(store, valid, options);
+  const std::vector<int64_t>& reps = clustering.representatives;
+
+  const nlohmann::json identity = {{"store", fs::absolute(store.folder()).string()},
+                                   {"eta", eta},
+                                   {"ndf_resolution", options.ndf_resolution},
+                                   {"holdout", held_out},
+                                   {"representatives", reps}};
+  Checkpoint checkpoint(options.checkpoint, identity);
+  TexelFitOptions fit_options;
+  fit_options.ndf_resolution = options.ndf_resolution;
+  const TexelFitter fitter(eta, fit_options);
+
+  std::vector<TexelFitResult> fits(reps.size());
+  std::vector<bool> failed(reps.size(), false);
+  std::vector<int> todo;
+  for (size_t r = 0; r < reps.size(); ++r) {
+    const auto done = checkpoint.done().find(static_cast<int>(r));
+    if (done != checkpoint.done().end()) {
+      fits[r] = done->second;
+    } else {
+      todo.push_back(static_cast<int>(r));
+    }
+  }
+  std::unique_ptr<ProgressBar> progress;
+  if (options.progress) {
+    progress = std::make_unique<ProgressBar>("fit", static_cast<int64_t>(reps.size()), "texels");
+    progress->SkipAlreadyDone(static_cast<int64_t>(reps.size() - todo.size()));
+  }
+  WorkspacePool workspaces;
+  ParallelFor(static_cast<int64_t>(todo.size()), options.threads, 1, [&](int64_t a, int64_t b) {
+    FitWorkspace workspace = workspaces.Take();
+    for (int64_t k = a; k < b; ++k) {
+      ThrowIfInterrupted("fitting");
+      const int r = todo[k];
+      try {
+        fits[r] = fitter.Fit(store.MakeTexelSlice(reps[r], use_dot), &workspace);
+        checkpoint.Record(r, fits[r]);
+      } catch (const Error& e) {
+        if (e.kind() != ErrorKind::kNumerical) throw;
+        failed[r] = true;
+      }
+      if (progress) progress->Advance();
+    }
+    workspaces.Give(std::move(workspace));
+  });
+  if (progress) progress->Finish();
+  const int64_t failures = std::count(failed.begin(), failed.end(), true);
+  if (failures == static_cast<int64_t>(reps.size())) {
+    ThrowInvalidInput(store.folder().string(), "no representative could be fitted (too few usable samples)");
+  }
+  BorrowFailedFits(reps, store.info().texels_x, failed, &fits);
+
+  Material material = AssembleMaterial(store.info().texels_x, store.info().texels_y, eta, options.ndf_resolution,
+                                       clustering, fits, store.rho_d());
+  std::vector<double> residuals;
+  for (size_t r = 0; r < fits.size(); ++r) {
+    if (!failed[r]) residuals.push_back(fits[r].relative_rmse);
+  }
+  material.provenance = {
+      {"processed", fs::absolute(store.folder()).string()},
+      {"session", store.info().provenance.value("session", "")},
+      {"settings",
+       {{"eta", eta},
+        {"representative_fraction", options.representative_fraction},
+        {"ndf_resolution", options.ndf_resolution},
+        {"seed", options.seed}}},
+      {"statistics",
+       {{"texels", store.geometry().num_texels()},
+        {"valid_texels", valid.size()},
+        {"representatives", reps.size()},
+        {"failed_fits", failures},
+        {"resumed_fits", reps.size() - todo.size()},
+        {"median_relative_rmse", Median(residuals)},
+        {"pca_explained_variance", clustering.explained_variance},
+        {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}}},
+  };
+  // `svbtdf compare` measures the held-out error on exactly these dots.
+  if (!held_out.empty()) {
+    material.provenance["holdout"] = {{"fraction", options.holdout}, {"seed", options.seed}, {"dots", held_out}};
+  }
+  return material;
+}
+
+}  // namespace svbtdf::fit

@@ -1,0 +1,397 @@
+#include "svbtdf/fit/process_session.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <future>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <memory>
+#include <numbers>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/interrupt.h"
+#include "svbtdf/common/parallel.h"
+#include "svbtdf/common/progress.h"
+#include "svbtdf/fit/slice_store.h"
+
+namespace svbtdf::fit {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+// The captures the processing reads, from the session's plan (docs/session-format.md).
+struct CapturePlan {
+  std::map<int, std::vector<std::string>> dark_keys;  // bracket -> repeats
+  std::string flat_key;
+  std::vector<std::vector<std::pair<int, std::string>>> dot_keys;  // dot -> (bracket, key)
+};
+
+CapturePlan ParsePlan(const Session& session, int num_dots) {
+  static const std::regex dot_key(R"(dot/q(\d+)/e(\d+)/r(\d+))");
+  static const std::regex dark_key(R"(dark/e(\d+)(/r\d+)?)");
+  CapturePlan plan;
+  plan.dot_keys.resize(num_dots);
+  std::smatch m;
+  for (const std::string& key : session.planned_keys()) {
+    if (std::regex_match(key, m, dot_key)) {
+      const int q = std::stoi(m[1]);
+      if (q >= num_dots) {
+        ThrowInvalidInput(session.folder().string(), "plans dot " + std::to_string(q) + " but the calibration has " +
+                                                         std::to_string(num_dots) + " dots",
+                          "re-run 'svbtdf calibrate' on this session");
+      }
+      plan.dot_keys[q].push_back({std::stoi(m[2]), key});
+    } else if (std::regex_match(key, m, dark_key)) {
+      plan.dark_keys[std::stoi(m[1])].push_back(key);
+    } else if (key.rfind("flat_white/", 0) == 0 && plan.flat_key.empty()) {
+      plan.flat_key = key;
+    }
+  }
+  if (plan.flat_key.empty()) {
+    ThrowInvalidInput(session.folder().string(), "plans no flat_white capture", "the dots' intensity L_q is measured from it");
+  }
+  for (int q = 0; q < num_dots; ++q) {
+    if (plan.dot_keys[q].empty()) ThrowInvalidInput(session.folder().string(), "plans no image of dot " + std::to_string(q));
+  }
+  return plan;
+}
+
+// Raw digital number -> linear value, as a table over every 16-bit code.
+std::vector<float> LinearizationTable(const calib::Radiometry& radiometry) {
+  std::vector<float> table(65536);
+  for (int v = 0; v < 65536; ++v) table[v] = static_cast<float>(radiometry.Linearize(v));
+  return table;
+}
+
+// The rectification: each texel's value is the mean of k x k points inset in the texel, each
+// interpolated bilinearly in the image, so pixels straddling a texel edge barely contribute.
+class Rectifier {
+ public:
+  Rectifier(const calib::SessionCalibration& calibration, const TexelGeometry& geometry, int samples) {
+    const int64_t texels = geometry.num_texels();
+    const double pitch_x = geometry.width_m / geometry.texels_x, pitch_y = geometry.height_m / geometry.texels_y;
+    std::vector<Vec3> points;
+    points.reserve(texels * samples * samples);
+    for (int64_t t = 0; t < texels; ++t) {
+      const Vec3 centre = geometry.TexelCentre(t);
+      for (int a = 0; a < samples; ++a) {
+        for (int b = 0; b < samples; ++b) {
+          // Points at 0.2 .. 0.8 of the texel: at least a fifth of a texel from its edges.
+          const double u = samples == 1 ? 0.0 : -0.3 + 0.6 * a / (samples - 1);
+          const double v = samples == 1 ? 0.0 : -0.3 + 0.6 * b / (samples - 1);
+          points.push_back(centre + Vec3(u * pitch_x, v * pitch_y, 0.0));
+        }
+      }
+    }
+    const std::vector<Eigen::Vector2d> image = ProjectToImage(calibration, points);
+    width_ = calibration.camera.camera.width;
+    height_ = calibration.camera.camera.height;
+    const float weight = 1.0f / (samples * samples);
+    begin_.assign(texels + 1, 0);
+    for (int64_t t = 0; t < texels; ++t) {
+      bool inside = true;
+      for (int s = 0; s < samples * samples && inside; ++s) {
+        const Eigen::Vector2d& p = image[t * samples * samples + s];
+        inside = p.x() >= 0 && p.y() >= 0 && p.x() <= width_ - 1 && p.y() <= height_ - 1;
+      }
+      if (inside) {
+        for (int s = 0; s < samples * samples; ++s) AddBilinearTaps(image[t * samples * samples + s], weight);
+      }
+      begin_[t + 1] = static_cast<int64_t>(pixel_.size());
+    }
+  }
+
+  int64_t texels() const { return static_cast<int64_t>(begin_.size()) - 1; }
+  bool Covers(int64_t texel) const { return begin_[texel + 1] > begin_[texel]; }
+
+  // out[3 t + c] = rectified linear value; saturated[t] when any tap touches a saturated pixel.
+  void Apply(const std::vector<float>& linear, const std::vector<uint8_t>& saturated_pixel, int channels, int threads,
+             std::vector<float>* out, std::vector<uint8_t>* saturated) const {
+    out->assign(3 * texels(), kNaN);
+    saturated->assign(texels(), 0);
+    ParallelFor(texels(), threads, 4096, [&](int64_t a, int64_t b) {
+      for (int64_t t = a; t < b; ++t) {
+        if (!Covers(t)) continue;
+        double sum[3] = {0, 0, 0};
+        uint8_t any_saturated = 0;
+        for (int64_t k = begin_[t]; k < begin_[t + 1]; ++k) {
+          const int64_t p = pixel_[k];
+          any_saturated |= saturated_pixel[p];
+          for (int c = 0; c < 3; ++c) sum[c] += weight_[k] * linear[p * channels + std::min(c, channels - 1)];
+        }
+        for (int c = 0; c < 3; ++c) (*out)[3 * t + c] = static_cast<float>(sum[c]);
+        (*saturated)[t] = any_saturated;
+      }
+    });
+  }
+
+ private:
+  void AddBilinearTaps(const Eigen::Vector2d& p, float weight) {
+    const int x0 = std::min(static_cast<int>(p.x()), width_ - 2), y0 = std::min(static_cast<int>(p.y()), height_ - 2);
+    const float fx = static_cast<float>(p.x() - x0), fy = static_cast<float>(p.y() - y0);
+    const float w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+    const int64_t pixel[4] = {static_cast<int64_t>(y0) * width_ + x0, static_cast<int64_t>(y0) * width_ + x0 + 1,
+                              static_cast<int64_t>(y0 + 1) * width_ + x0, static_cast<int64_t>(y0 + 1) * width_ + x0 + 1};
+    for (int k = 0; k < 4; ++k) {
+      if (w[k] <= 0) continue;
+      pixel_.push_back(pixel[k]);
+      weight_.push_back(weight * w[k]);
+    }
+  }
+
+  int width_ = 0, height_ = 0;
+  std::vector<int64_t> begin_;
+  std::vector<int64_t> pixel_;
+  std::vector<float> weight_;
+};
+
+// Reads session images and turns them into linear values (dark-subtracted) with saturation flags.
+class ImageReader {
+ public:
+  ImageReader(const Session& session, const calib::SessionCalibration& calibration)
+      : session_(session), calibration_(calibration), table_(LinearizationTable(calibration.radiometry)) {}
+
+  struct Linear {
+    std::vector<float> values;
+    std::vector<uint8_t> saturated;
+    int channels = 1;
+    double exposure_s = 0.0;
+  };
+
+  Linear Read(const std::string& key, const std::vector<float>* dark) {
+    const CameraImage image = session_.ReadImage(key);
+    const calib::CameraModel& camera = calibration_.camera.camera;
+    const std::string file = (session_.folder() / session_.Entry(key).file).string();
+    if (image.width != camera.width || image.height != camera.height) {
+      ThrowFormatError(file, "is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                                 " pixels but the calibrated camera is " + std::to_string(camera.width) + "x" +
+                                 std::to_string(camera.height));
+    }
+    Linear out;
+    out.channels = image.channels;
+    out.exposure_s = session_.Entry(key).exposure_s;
+    if (!(out.exposure_s > 0) || !std::isfinite(out.exposure_s)) {
+      ThrowFormatError((session_.folder() / "journal.jsonl").string(), "records no positive exposure for '" + key + "'");
+    }
+    const size_t values = image.pixels.size();
+    if (dark && dark->size() != values) ThrowFormatError(file, "has a different number of channels than its dark frame");
+    out.values.resize(values);
+    out.saturated.assign(static_cast<size_t>(image.width) * image.height, 0);
+    const double saturation = calibration_.radiometry.saturation_dn;
+    for (size_t k = 0; k < values; ++k) {
+      const uint16_t raw = image.pixels[k];
+      out.values[k] = table_[raw] - (dark ? (*dark)[k] : 0.0f);
+      if (raw >= saturation) out.saturated[k / image.channels] = 1;
+    }
+    ++images_read_;
+    return out;
+  }
+
+  // The mean linear dark frame of one bracket (the response already removes the black offset).
+  std::vector<float> MeanDark(const std::vector<std::string>& keys) {
+    std::vector<float> mean;
+    for (const std::string& key : keys) {
+      const Linear dark = Read(key, nullptr);
+      if (mean.empty()) mean.assign(dark.values.size(), 0.0f);
+      if (dark.values.size() != mean.size()) {
+        ThrowFormatError((session_.folder() / session_.Entry(key).file).string(), "differs in size from the other dark frames");
+      }
+      for (size_t k = 0; k < mean.size(); ++k) mean[k] += dark.values[k] / keys.size();
+    }
+    return mean;
+  }
+
+  int64_t images_read() const { return images_read_; }
+
+ private:
+  const Session& session_;
+  const calib::SessionCalibration& calibration_;
+  std::vector<float> table_;
+  std::atomic<int64_t> images_read_{0};
+};
+
+// Reads the dot images in plan order one image ahead of their use, so that decoding the next
+// PNG overlaps the rectification of the current one. Read errors surface from Next().
+class ReadAhead {
+ public:
+  ReadAhead(ImageReader& reader, const std::map<int, std::vector<float>>& darks,
+            std::vector<std::pair<int, std::string>> order)
+      : reader_(reader), darks_(darks), order_(std::move(order)) {}
+
+  ImageReader::Linear Next() {
+    if (!pending_.valid()) Start(next_);
+    ImageReader::Linear image = pending_.get();
+    if (++next_ < order_.size()) Start(next_);
+    return image;
+  }
+
+ private:
+  void Start(size_t k) {
+    pending_ = std::async(std::launch::async, [this, k] {
+      const auto& [bracket, key] = order_[k];
+      const auto dark = darks_.find(bracket);
+      return reader_.Read(key, dark == darks_.end() ? nullptr : &dark->second);
+    });
+  }
+
+  ImageReader& reader_;
+  const std::map<int, std::vector<float>>& darks_;
+  std::vector<std::pair<int, std::string>> order_;  // (bracket, key)
+  size_t next_ = 0;
+  std::future<ImageReader::Linear> pending_;
+};
+
+void ResolveTexelGrid(const Session& session, const calib::SessionCalibration& calibration, ProcessOptions* options) {
+  if (options->texels_x > 0 && options->texels_y > 0) return;
+  const nlohmann::json& sample = session.rig().value("sample", nlohmann::json::object());
+  if (sample.contains("texels_x") && sample.contains("texels_y")) {
+    options->texels_x = sample["texels_x"].get<int>();
+    options->texels_y = sample["texels_y"].get<int>();
+    return;
+  }
+  // About two camera pixels per texel along the sample's wider side.
+  const double w = calibration.sample_plane.width_m, h = calibration.sample_plane.height_m;
+  const std::vector<Eigen::Vector2d> corners =
+      ProjectToImage(calibration, {Vec3(-w / 2, 0, 0), Vec3(w / 2, 0, 0)});
+  const double pixels = (corners[1] - corners[0]).norm();
+  options->texels_x = std::max(1, static_cast<int>(pixels / 2));
+  options->texels_y = std::max(1, static_cast<int>(std::lround(options->texels_x * h / w)));
+}
+
+// Per texel and channel, the monitor's white exitance times the camera's sensitivity and
+// vignetting at the pixels that see the texel, from the flat white image (sample removed):
+// a monitor point seen directly has radiance exitance * P(theta_e) / cos(theta_e).
+std::vector<float> WhiteExitance(ImageReader& reader, const std::string& flat_key, const Rectifier& rectifier,
+                                 const TexelGeometry& geometry, const calib::MonitorCalibration& monitor,
+                                 int threads) {
+  const ImageReader::Linear flat = reader.Read(flat_key, nullptr);
+  std::vector<float> exitance;
+  std::vector<uint8_t> saturated;
+  rectifier.Apply(flat.values, flat.saturated, flat.channels, threads, &exitance, &saturated);
+  for (int64_t t = 0; t < geometry.num_texels(); ++t) {
+    const double cos_e = std::max(1e-6, geometry.View(t).dot(monitor.normal));
+    const double scale = cos_e / (flat.exposure_s * monitor.Emission(cos_e));
+    for (int c = 0; c < 3; ++c) {
+      float& e = exitance[3 * t + c];
+      e = saturated[t] || !(e > 0) ? kNaN : static_cast<float>(e * scale);
+    }
+  }
+  return exitance;
+}
+
+// One dot's HDR values per texel: for each channel, the sum of the unsaturated brackets' values
+// over the sum of their exposures (the maximum-likelihood rate under shot noise).
+std::vector<float> MergeBrackets(ReadAhead& images, int brackets, const Rectifier& rectifier, int threads) {
+  const int64_t texels = rectifier.texels();
+  std::vector<double> sum(3 * texels, 0.0), time(texels, 0.0);
+  std::vector<float> rectified;
+  std::vector<uint8_t> saturated;
+  for (int b = 0; b < brackets; ++b) {
+    const ImageReader::Linear image = images.Next();
+    rectifier.Apply(image.values, image.saturated, image.channels, threads, &rectified, &saturated);
+    for (int64_t t = 0; t < texels; ++t) {
+      if (saturated[t] || !std::isfinite(rectified[3 * t])) continue;
+      for (int c = 0; c < 3; ++c) sum[3 * t + c] += rectified[3 * t + c];
+      time[t] += image.exposure_s;
+    }
+  }
+  std::vector<float> rate(3 * texels, kNaN);
+  for (int64_t t = 0; t < texels; ++t) {
+    if (time[t] <= 0) continue;
+    for (int c = 0; c < 3; ++c) rate[3 * t + c] = static_cast<float>(sum[3 * t + c] / time[t]);
+  }
+  return rate;
+}
+
+// The measurement equation (notes, "Measurement to BTDF"): R = I |p - x|^2 / (|i.z| L_q P(theta_q)),
+// with L_q = exitance * pi r^2 in the same camera units as I.
+void ToBtdf(const TexelGeometry& geometry, const calib::MonitorCalibration& monitor, int dot,
+            const std::vector<float>& exitance, std::vector<float>* values) {
+  const double dot_area = std::numbers::pi * monitor.dot_radius_m * monitor.dot_radius_m;
+  for (int64_t t = 0; t < geometry.num_texels(); ++t) {
+    const Vec3 to_dot = geometry.dots[dot] - geometry.TexelCentre(t);
+    const double r2 = to_dot.squaredNorm();
+    const Vec3 i = to_dot / std::sqrt(r2);
+    const double emission = monitor.Emission(-i.dot(monitor.normal));
+    for (int c = 0; c < 3; ++c) {
+      const double l_q = exitance[3 * t + c] * dot_area * emission;
+      float& v = (*values)[3 * t + c];
+      v = std::isfinite(v) && l_q > 0 ? static_cast<float>(v * r2 / (std::abs(i.z()) * l_q)) : kNaN;
+    }
+  }
+}
+
+}  // namespace
+
+ProcessReport ProcessSession(const Session& session, const calib::SessionCalibration& calibration, const fs::path& out,
+                             const ProcessOptions& requested) {
+  const auto start = std::chrono::steady_clock::now();
+  ProcessOptions options = requested;
+  ResolveTexelGrid(session, calibration, &options);
+  const int num_dots = static_cast<int>(calibration.monitor.dots.size());
+  const CapturePlan plan = ParsePlan(session, num_dots);
+
+  SliceStoreInfo info;
+  info.texels_x = options.texels_x;
+  info.texels_y = options.texels_y;
+  info.num_dots = num_dots;
+  info.light_resolution = options.light_resolution;
+  info.tile_texels = options.tile_texels;
+  info.eta = session.rig().value("sample", nlohmann::json::object()).value("eta", 0.0);
+  info.provenance = {{"session", fs::absolute(session.folder()).string()},
+                     {"rectify_samples", options.rectify_samples},
+                     {"diffuse_threshold", options.diffuse_threshold}};
+  SliceStoreWriter writer(out, info, calibration);
+  const TexelGeometry geometry = MakeTexelGeometry(calibration, info.texels_x, info.texels_y);
+  const Rectifier rectifier(calibration, geometry, options.rectify_samples);
+
+  ImageReader reader(session, calibration);
+  std::map<int, std::vector<float>> darks;
+  for (const auto& [bracket, keys] : plan.dark_keys) darks[bracket] = reader.MeanDark(keys);
+  const std::vector<float> exitance =
+      WhiteExitance(reader, plan.flat_key, rectifier, geometry, calibration.monitor, options.threads);
+
+  std::vector<std::pair<int, std::string>> order;
+  for (int q = 0; q < num_dots; ++q) {
+    if (!writer.HasDot(q)) order.insert(order.end(), plan.dot_keys[q].begin(), plan.dot_keys[q].end());
+  }
+  ReadAhead images(reader, darks, std::move(order));
+  ProcessReport report;
+  std::unique_ptr<ProgressBar> progress;
+  if (options.progress) progress = std::make_unique<ProgressBar>("process", num_dots, "dots");
+  for (int q = 0; q < num_dots; ++q) {
+    if (writer.HasDot(q)) {
+      ++report.dots_resumed;
+      if (progress) progress->SkipAlreadyDone(1);
+      continue;
+    }
+    ThrowIfInterrupted("processing");
+    std::vector<float> values =
+        MergeBrackets(images, static_cast<int>(plan.dot_keys[q].size()), rectifier, options.threads);
+    ToBtdf(geometry, calibration.monitor, q, exitance, &values);
+    writer.WriteDot(q, values);
+    if (progress) progress->Advance();
+  }
+  if (progress) progress->Finish();
+  SliceStoreWriter::FinishOptions finish;
+  finish.diffuse_threshold = options.diffuse_threshold;
+  finish.threads = options.threads;
+  finish.progress = options.progress;
+  writer.Finish(finish);
+
+  const SliceStore store = SliceStore::Open(out);
+  report.texels = geometry.num_texels();
+  for (float m : store.mask().pixels) report.valid_texels += m > 0;
+  report.dots = num_dots;
+  report.images_read = reader.images_read();
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return report;
+}
+
+}  // namespace svbtdf::fit

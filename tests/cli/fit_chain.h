@@ -1,0 +1,48 @@
+#pragma once
+// Test fixture: a `small` simulated session calibrated with its true rig and processed once per
+// test program; FitAndCompare runs `svbtdf fit` and `svbtdf compare` on it.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "run_command.h"
+#include "svbtdf/common/atomic_file.h"
+#include "truth_calibration.h"
+
+namespace svbtdf {
+namespace fs = std::filesystem;
+using testing::RunSvbtdf;
+
+class FitChain : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    root_ = fs::temp_directory_path() / ("svbtdf-fitchain-" + std::to_string(::getpid()));
+    fs::remove_all(root_);
+    const auto simulated = RunSvbtdf("simulate --preset small --out " + (root_ / "sim").string());
+    ASSERT_EQ(simulated.exit_code, 0) << simulated.output;
+    calib::WriteSessionCalibration(root_ / "sim" / "session" / "calibration.json", CalibrationFromTruth(root_ / "sim"));
+    const auto processed = RunSvbtdf("process " + (root_ / "sim" / "session").string() + " --out " + Processed());
+    ASSERT_EQ(processed.exit_code, 0) << processed.output;
+  }
+  static void TearDownTestSuite() { fs::remove_all(root_); }
+  static std::string Processed() { return (root_ / "processed").string(); }
+
+  static nlohmann::json FitAndCompare(const std::string& name, const std::string& fit_options) {
+    const auto fitted = RunSvbtdf("fit " + Processed() + " --out " + (root_ / name).string() + " " + fit_options);
+    EXPECT_EQ(fitted.exit_code, 0) << fitted.output;
+    const fs::path json = root_ / (name + ".json");
+    const auto compared = RunSvbtdf("compare " + (root_ / name).string() + " " + (root_ / "sim" / "truth").string() +
+                                    " --json " + json.string());
+    EXPECT_EQ(compared.exit_code, 0) << compared.output;
+    const nlohmann::json metrics = nlohmann::json::parse(ReadTextFile(json));
+    std::printf("%s: %s\n", name.c_str(), metrics.dump().c_str());
+    return metrics;
+  }
+
+  static inline fs::path root_;
+};
+
+}  // namespace svbtdf

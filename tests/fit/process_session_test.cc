@@ -1,0 +1,202 @@
+// Processing simulated sessions: the measured R(x, i_q, o) at every texel's sampled directions
+// against the simulator's ground truth (issue 4's acceptance), resuming, and input errors.
+//
+// The calibration is built from the simulator's true rig here, so that these tests measure the
+// processing alone; tests/calib checks the calibration against the same truth.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <vector>
+
+#include "svbtdf/calib/session_calibration.h"
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/interrupt.h"
+#include "svbtdf/common/progress.h"
+#include "svbtdf/common/session.h"
+#include "svbtdf/fit/process_session.h"
+#include "svbtdf/fit/slice_store.h"
+#include "svbtdf/simulate/session_writer.h"
+#include "svbtdf/simulate/truth_io.h"
+#include "truth_calibration.h"
+
+namespace svbtdf::fit {
+namespace {
+namespace fs = std::filesystem;
+
+fs::path TestFolder(const std::string& name) {
+  const fs::path folder = fs::temp_directory_path() / ("svbtdf_process_test_" + std::to_string(::getpid())) / name;
+  fs::remove_all(folder);
+  fs::create_directories(folder.parent_path());
+  return folder;
+}
+
+struct Simulation {
+  fs::path folder;
+  calib::SessionCalibration calibration;
+};
+
+Simulation Simulate(const std::string& name, bool noise) {
+  ProgressBar::SetEnabled(false);
+  Simulation s{TestFolder(name), {}};
+  SimulationOptions options;
+  options.preset = "tiny";
+  options.noise = noise;
+  options.progress = false;
+  SimulateSession(s.folder, options);
+  s.calibration = CalibrationFromTruth(s.folder);
+  return s;
+}
+
+struct Accuracy {
+  double median_relative_error = 0;
+  double rho_d_median_relative_error = 0;
+  int64_t samples = 0, texels = 0;
+};
+
+double Median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Compares every valid sample of every valid texel with the truth R (refractive + diffuse), over
+// the samples whose truth is at least 5% of the texel's brightest (the directions the fit uses;
+// fainter ones are dominated by noise by design).
+Accuracy MeasureAccuracy(const SliceStore& store, const fs::path& truth_folder) {
+  const MaterialTruth truth = ReadMaterialTruth(truth_folder);
+  const TexelGeometry& g = store.geometry();
+  std::vector<double> errors, rho_d_errors;
+  Accuracy a;
+  std::vector<float> samples;
+  for (int64_t t = 0; t < g.num_texels(); ++t) {
+    const int col = static_cast<int>(t % g.texels_x), row = static_cast<int>(t / g.texels_x);
+    if (store.mask().at(col, row) == 0) continue;
+    ++a.texels;
+    const auto ndf = truth.TexelNdf(col, row);
+    const DualMicrofacetParams params = truth.Params(col, row);
+    store.ReadSamples(t, &samples);
+    std::vector<double> expected(g.dots.size()), measured(g.dots.size());
+    double peak = 0;
+    for (size_t q = 0; q < g.dots.size(); ++q) {
+      expected[q] = Luminance(EvaluateMaterial(*ndf, params, g.Light(t, static_cast<int>(q)), g.View(t)));
+      measured[q] = (samples[3 * q] + samples[3 * q + 1] + samples[3 * q + 2]) / 3.0;
+      peak = std::max(peak, expected[q]);
+    }
+    for (size_t q = 0; q < g.dots.size(); ++q) {
+      if (expected[q] < 0.05 * peak || !std::isfinite(measured[q])) continue;
+      errors.push_back(std::abs(measured[q] / expected[q] - 1.0));
+    }
+    const double true_rho_d = Luminance(params.rho_d);
+    const double rho_d = (store.rho_d().at(col, row, 0) + store.rho_d().at(col, row, 1) + store.rho_d().at(col, row, 2)) / 3;
+    rho_d_errors.push_back(std::abs(rho_d / true_rho_d - 1.0));
+  }
+  a.samples = static_cast<int64_t>(errors.size());
+  a.median_relative_error = Median(errors);
+  a.rho_d_median_relative_error = Median(rho_d_errors);
+  return a;
+}
+
+ProcessOptions QuietOptions() {
+  ProcessOptions options;
+  options.progress = false;
+  return options;
+}
+
+TEST(ProcessSession, NoiseFreeSessionGivesTheTrueBtdfWithinOnePercent) {
+  const Simulation sim = Simulate("noise_free", /*noise=*/false);
+  const fs::path out = sim.folder / "processed";
+  const ProcessReport report =
+      ProcessSession(Session::Open(sim.folder / "session"), sim.calibration, out, QuietOptions());
+  EXPECT_EQ(report.dots, 36);
+  const SliceStore store = SliceStore::Open(out);
+  const Accuracy a = MeasureAccuracy(store, sim.folder / "truth");
+  std::printf("noise-free: %lld texels valid of %lld, %lld samples, median |R/R_true - 1| = %.4f, rho_d %.4f\n",
+              static_cast<long long>(a.texels), static_cast<long long>(report.texels),
+              static_cast<long long>(a.samples), a.median_relative_error, a.rho_d_median_relative_error);
+  EXPECT_GT(a.texels, 0.9 * report.texels);
+  EXPECT_LT(a.median_relative_error, 0.01);
+  EXPECT_LT(a.rho_d_median_relative_error, 0.02);
+}
+
+std::string FileBytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+TEST(ProcessSession, DefaultNoiseWithinThreePercentAndResumesWhereItStopped) {
+  const Simulation sim = Simulate("noisy", /*noise=*/true);
+  const Session session = Session::Open(sim.folder / "session");
+  const fs::path out = sim.folder / "processed";
+  const ProcessReport report = ProcessSession(session, sim.calibration, out, QuietOptions());
+  EXPECT_EQ(report.dots, 36);
+  const SliceStore store = SliceStore::Open(out);
+  const Accuracy a = MeasureAccuracy(store, sim.folder / "truth");
+  std::printf("noisy: %lld samples, median |R/R_true - 1| = %.4f, rho_d %.4f\n", static_cast<long long>(a.samples),
+              a.median_relative_error, a.rho_d_median_relative_error);
+  EXPECT_LT(a.median_relative_error, 0.03);
+  EXPECT_LT(a.rho_d_median_relative_error, 0.02);
+
+  // An interruption before it started is a clean, resumable stop.
+  const fs::path resumed = sim.folder / "resumed";
+  SetInterruptRequested(true);
+  EXPECT_THROW(ProcessSession(session, sim.calibration, resumed, QuietOptions()), Error);
+  SetInterruptRequested(false);
+  EXPECT_THROW(SliceStore::Open(resumed), Error);  // unfinished: refused
+  // The state a crash after 20 dots leaves: the first 20 dots journalled (the rest of the file
+  // holds whatever was there), the manifest not complete.
+  fs::remove_all(resumed);
+  fs::copy(out, resumed);
+  fs::remove(resumed / "slices.f16");
+  {
+    std::ofstream progress(resumed / "progress.jsonl", std::ios::trunc);
+    for (int q = 0; q < 20; ++q) progress << "{\"dot\":" << q << "}\n";
+    progress << "{\"dot\":2";  // a line cut short by the crash
+  }
+  nlohmann::json manifest = nlohmann::json::parse(FileBytes(resumed / "processed.json"));
+  manifest["complete"] = false;
+  std::ofstream(resumed / "processed.json", std::ios::trunc) << manifest.dump();
+  const ProcessReport second = ProcessSession(session, sim.calibration, resumed, QuietOptions());
+  EXPECT_EQ(second.dots_resumed, 20);
+  EXPECT_EQ(FileBytes(resumed / "samples.f16"), FileBytes(out / "samples.f16"));
+  EXPECT_EQ(FileBytes(resumed / "slices.f16"), FileBytes(out / "slices.f16"));
+}
+
+TEST(ProcessSession, ErrorsNameTheFile) {
+  const Simulation sim = Simulate("errors", /*noise=*/true);
+  const Session session = Session::Open(sim.folder / "session");
+  // A finished store is never overwritten.
+  const fs::path out = sim.folder / "processed";
+  ProcessSession(session, sim.calibration, out, QuietOptions());
+  try {
+    ProcessSession(session, sim.calibration, out, QuietOptions());
+    FAIL() << "a finished store was processed again";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(out.string()), std::string::npos) << e.what();
+  }
+  // A calibrated camera of another size than the images.
+  calib::SessionCalibration wrong = sim.calibration;
+  wrong.camera.camera.width += 8;
+  try {
+    ProcessSession(session, wrong, sim.folder / "processed_wrong", QuietOptions());
+    FAIL() << "mismatched image size accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(".png"), std::string::npos) << e.what();
+  }
+  // A corrupt image: the reader names it.
+  const fs::path image = sim.folder / "session" / "images" / "dot" / "q0007" / "e0" / "r0.png";
+  ASSERT_TRUE(fs::exists(image));
+  { std::ofstream(image, std::ios::binary | std::ios::trunc) << "not a png"; }
+  try {
+    ProcessSession(session, sim.calibration, sim.folder / "processed_corrupt", QuietOptions());
+    FAIL() << "corrupt image accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("q0007"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace svbtdf::fit

@@ -1,0 +1,51 @@
+#pragma once
+// Test and benchmark support: the calibration a perfect `svbtdf calibrate` would write for a
+// session made by `svbtdf simulate`, built from its ground truth (DIR/truth/rig.json). It lets the
+// processing and fitting be measured apart from the calibration's own errors.
+
+#include <cmath>
+#include <filesystem>
+
+#include "svbtdf/calib/session_calibration.h"
+#include "svbtdf/common/session.h"
+#include "svbtdf/simulate/truth_io.h"
+
+namespace svbtdf {
+
+// `simulation` is the folder holding session/ and truth/.
+inline calib::SessionCalibration CalibrationFromTruth(const std::filesystem::path& simulation) {
+  const RigTruth truth = ReadRigTruth(simulation / "truth" / "rig.json");
+  const Session session = Session::Open(simulation / "session");
+  calib::SessionCalibration c;
+  calib::CameraModel& camera = c.camera.camera;
+  camera.width = truth.camera.width;
+  camera.height = truth.camera.height;
+  camera.fx = truth.camera.fx;
+  camera.fy = truth.camera.fy;
+  camera.cx = truth.camera.cx;
+  camera.cy = truth.camera.cy;
+  camera.distortion = truth.camera.distortion;
+  c.sample_plane.rotation = truth.pose.rotation;
+  c.sample_plane.translation = truth.pose.translation;
+  c.sample_plane.width_m = truth.sample.width;
+  c.sample_plane.height_m = truth.sample.height();
+  c.monitor.normal = Vec3::UnitZ();
+  c.monitor.distance_m = truth.monitor.distance;
+  c.monitor.pixel_pitch_m = truth.monitor.pixel_pitch;
+  c.monitor.dot_radius_m = truth.dots.front().radius;
+  c.monitor.emission = truth.monitor.emission.kind;
+  c.monitor.emission_exponent = truth.monitor.emission.exponent;
+  for (const Dot& dot : truth.dots) {
+    calib::DotPosition p;
+    p.position = dot.position;
+    p.monitor_px = {dot.monitor_x, dot.monitor_y};
+    c.monitor.dots.push_back(p);
+  }
+  const int bits = session.rig().at("camera").at("bit_depth").get<int>();
+  c.radiometry.bit_depth = bits;
+  c.radiometry.saturation_dn = std::ldexp(1.0, bits) - 1.0;  // the simulator clips at full scale
+  return c;
+}
+
+
+}  // namespace svbtdf
