@@ -1,7 +1,6 @@
-// `svbtdf compare` end to end against both kinds of truth: the same uniform fitted material is
-// compared with a `--truth model` and a `--truth montecarlo` simulation of the tiny preset. The
-// Monte Carlo truth has no alpha or NDF, so those metrics are null, while the BTDF errors are
-// reported against its rho(x, i, o).
+// `svbtdf compare` end to end against a Monte Carlo truth: a uniform fitted material is compared
+// with a `--truth montecarlo` simulation of the tiny preset. The Monte Carlo truth has no alpha or
+// NDF, so those metrics are null, while the BTDF errors are reported against its rho(x, i, o).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -45,45 +44,35 @@ nlohmann::json Compare(const fs::path& material, const fs::path& truth, const fs
   return nlohmann::json::parse(ReadTextFile(json));
 }
 
-TEST(CompareTruthKinds, ReportsBtdfErrorsAgainstEitherTruthKind) {
-  const fs::path root = fs::temp_directory_path() / ("svbtdf-compare-" + std::to_string(::getpid()));
+TEST(CompareTruthKinds, ReportsBtdfErrorsAgainstAMonteCarloTruth) {
+  const fs::path root = fs::temp_directory_path() / ("svbtdf-compare-mc-" + std::to_string(::getpid()));
   fs::remove_all(root);
   fs::create_directories(root);
   WriteUniformMaterial(root / "material");
-  for (const char* kind : {"model", "montecarlo"}) {
-    const auto run = RunSvbtdf(std::string("-q simulate --preset tiny --threads 2 --truth ") + kind + " --out " +
-                               (root / kind).string());
-    ASSERT_EQ(run.exit_code, 0) << run.output;
-  }
-  const nlohmann::json model = Compare(root / "material", root / "model" / "truth", root / "model.json");
-  const nlohmann::json mc = Compare(root / "material", root / "montecarlo" / "truth", root / "mc.json");
+  const auto run = RunSvbtdf("-q simulate --preset tiny --threads 2 --truth montecarlo --out " + (root / "mc").string());
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const nlohmann::json mc = Compare(root / "material", root / "mc" / "truth", root / "mc.json");
+  std::printf("Monte Carlo truth: held-out rel. RMSE %s, rho_d rel. error %s\n", mc["heldout_rel_rmse"].dump().c_str(),
+              mc["rho_d_rel_error_median"].dump().c_str());
 
-  std::printf("analytic truth: held-out rel. RMSE %s, alpha error median %s; Monte Carlo truth: %s, rho_d %s\n",
-              model["heldout_rel_rmse"].dump().c_str(), model["alpha_error_median"].dump().c_str(),
-              mc["heldout_rel_rmse"].dump().c_str(), mc["rho_d_rel_error_median"].dump().c_str());
-  EXPECT_EQ(model["truth_kind"], "analytic");
-  EXPECT_TRUE(model["alpha_error_median"].is_number());
-  EXPECT_TRUE(model["ndf_rel_l2_median"].is_number());
   EXPECT_EQ(mc["truth_kind"], "montecarlo");
   for (const char* key : {"alpha_within_0_05", "alpha_error_median", "ndf_rel_l2_median"}) {
     EXPECT_TRUE(mc[key].is_null()) << key << ": " << mc[key];
   }
-  // rho_d of the truth's slab materials is 0.005-0.02 against the material's 0.01.
-  EXPECT_TRUE(mc["rho_d_rel_error_median"].is_number());
-  for (const nlohmann::json* out : {&model, &mc}) {
-    // No holdout recorded: every dot is held out, so both RMSEs are the same number.
-    EXPECT_EQ((*out)["holdout_recorded"], false);
-    ASSERT_TRUE((*out)["heldout_rel_rmse"].is_number()) << out->dump();
-    EXPECT_DOUBLE_EQ((*out)["heldout_rel_rmse"].get<double>(), (*out)["all_dots_rel_rmse"].get<double>());
-    // A uniform GGX 0.2 texel is a rough stand-in for either truth: wrong, but not wildly.
-    EXPECT_GT((*out)["heldout_rel_rmse"].get<double>(), 0.02);
-    EXPECT_LT((*out)["heldout_rel_rmse"].get<double>(), 3.0);
-  }
-  // The two truths are different samples: the errors differ.
-  EXPECT_NE(model["heldout_rel_rmse"], mc["heldout_rel_rmse"]);
+  // rho_d of the truth's slab materials is 0.005, 0.01 or about 0.015 against the material's 0.01.
+  ASSERT_TRUE(mc["rho_d_rel_error_median"].is_number());
+  EXPECT_LT(mc["rho_d_rel_error_median"].get<double>(), 1.0);
+  // No holdout recorded: every dot is held out, so both RMSEs are the same number.
+  EXPECT_EQ(mc["holdout_recorded"], false);
+  ASSERT_TRUE(mc["heldout_rel_rmse"].is_number()) << mc.dump();
+  EXPECT_DOUBLE_EQ(mc["heldout_rel_rmse"].get<double>(), mc["all_dots_rel_rmse"].get<double>());
+  // A uniform GGX 0.2 dual-microfacet texel is a poor stand-in for two rough interfaces (about
+  // 1.0 measured): wrong, but finite and not wildly so.
+  EXPECT_GT(mc["heldout_rel_rmse"].get<double>(), 0.1);
+  EXPECT_LT(mc["heldout_rel_rmse"].get<double>(), 3.0);
   // A truth folder that is neither kind is named.
-  WriteTextAtomically(root / "montecarlo" / "truth" / "material.json", "{}", /*overwrite=*/true);
-  const auto bad = RunSvbtdf("compare " + (root / "material").string() + " " + (root / "montecarlo" / "truth").string());
+  WriteTextAtomically(root / "mc" / "truth" / "material.json", "{}", /*overwrite=*/true);
+  const auto bad = RunSvbtdf("compare " + (root / "material").string() + " " + (root / "mc" / "truth").string());
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("material.json"), std::string::npos) << bad.output;
   fs::remove_all(root);

@@ -102,12 +102,6 @@ TEST_F(SimulateCommand, AnInterruptedRunResumesToTheSameImages) {
   ExpectInterruptedRunResumes(root_, {"--preset", "tiny", "--seed", "5"}, "alpha.exr");
 }
 
-// The Monte Carlo truth is read back from OUT/truth on resuming, not traced again: the resumed
-// images are rendered from exactly the values the first run used.
-TEST_F(SimulateCommand, MonteCarloTruthRunResumesToTheSameImages) {
-  ExpectInterruptedRunResumes(root_, {"--preset", "tiny", "--seed", "5", "--truth", "montecarlo"}, "slices.exr");
-}
-
 TEST_F(SimulateCommand, BadArgumentsAndFoldersAreClearErrors) {
   fs::create_directories(root_ / "busy");
   WriteTextAtomically(root_ / "busy" / "notes.txt", "mine");

@@ -265,7 +265,8 @@ TEST_F(MonteCarloTruthFiles, MalformedFilesAreRejectedNamingTheFile) {
 }
 
 // `svbtdf simulate --truth montecarlo --preset tiny`: a complete session whose truth reads back
-// as the Monte Carlo truth of the preset, with every material in view.
+// as the Monte Carlo truth of the preset, with every material in view; rerun from its truth, the
+// same images.
 TEST(SimulateMonteCarlo, TinyPresetWritesAReadableTruth) {
   const fs::path out = fs::temp_directory_path() / ("svbtdf-simulate-mc-" + std::to_string(::getpid()));
   fs::remove_all(out);
@@ -290,7 +291,24 @@ TEST(SimulateMonteCarlo, TinyPresetWritesAReadableTruth) {
   for (int c : count) EXPECT_GT(c, 50);
   // A complete simulation is never redone.
   EXPECT_THROW(SimulateSession(out, options), Error);
+  // Without its session, the folder is an unfinished simulation: the truth is read back, not
+  // traced again, and renders exactly the same images (what resuming an interrupted run relies on).
+  const fs::path first_folder = out.string() + "-first";
+  fs::remove_all(first_folder);
+  fs::rename(result.session, first_folder);
+  const Session first = Session::Open(first_folder);
+  const std::string manifest = ReadTextFile(result.truth / "material.json");
+  SimulateSession(out, options);
+  EXPECT_EQ(ReadTextFile(result.truth / "material.json"), manifest);
+  const Session second = Session::Open(result.session);
+  ASSERT_EQ(first.entries().size(), second.entries().size());
+  for (const SessionEntry& entry : first.entries()) EXPECT_EQ(entry.crc32, second.Entry(entry.key).crc32) << entry.key;
+  // A truth of other settings in the folder is refused rather than rendered.
+  fs::remove_all(result.session);
+  options.seed = 3;
+  EXPECT_THROW(SimulateSession(out, options), Error);
   fs::remove_all(out);
+  fs::remove_all(first_folder);
 }
 
 }  // namespace
