@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <spdlog/spdlog.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -30,6 +31,7 @@ struct CalibrateOptions {
   std::string board = "chessboard:9x6:25";
   std::string json_path;
   bool fix_k3 = false;
+  bool full_lens_model = false;
 };
 
 std::vector<std::string> ExpandGlob(const std::string& pattern) {
@@ -56,6 +58,10 @@ void PrintSummary(const calib::CalibrationReport& report) {
               c.distortion[2], c.distortion[3], c.distortion[4]);
   std::printf("reprojection RMS %.3f px over %d of %zu views\n", report.rms_px, report.used_views(),
               report.views.size());
+  if (!report.narrow_lens_because.empty()) {
+    spdlog::warn("narrow-lens model (square pixels, centred principal point, k1 only): {}; "
+                 "--full-lens-model keeps the full one", report.narrow_lens_because);
+  }
   for (const calib::ViewReport& view : report.views) {
     if (!view.used) std::printf("  dropped %s: %s\n", view.source.c_str(), view.dropped_because.c_str());
   }
@@ -90,6 +96,7 @@ void RunCalibrateImages(const CalibrateOptions& options) {
   progress.Finish();
   calib::CalibrationOptions calibration_options;
   calibration_options.fix_k3 = options.fix_k3;
+  if (options.full_lens_model) calibration_options.max_principal_point_std_fraction = 0;
   const calib::CalibrationReport report = calib::CalibrateCamera(detections, image_size, calibration_options);
   PrintSummary(report);
   if (!options.json_path.empty()) {
@@ -107,6 +114,7 @@ void RunCalibrateSession(const CalibrateOptions& options) {
   const Session session = Session::Open(options.session);
   calib::CalibrateSessionOptions calibrate_options;
   calibrate_options.camera.fix_k3 = options.fix_k3;
+  if (options.full_lens_model) calibrate_options.camera.max_principal_point_std_fraction = 0;
   const calib::SessionCalibration c = calib::CalibrateSession(session, calibrate_options);
   PrintSummary(c.camera);
   const Vec3 centre = c.sample_plane.CameraCentre();
@@ -140,6 +148,9 @@ void AddCalibrateCommand(CLI::App& app) {
       ->capture_default_str();
   calibrate->add_option("--json", options->json_path, "write the calibration to this JSON file");
   calibrate->add_flag("--fix-k3", options->fix_k3, "hold the k3 distortion coefficient at zero");
+  calibrate->add_flag("--full-lens-model", options->full_lens_model,
+                      "estimate the principal point and all distortion terms even when the views cannot "
+                      "determine them (by default a long lens falls back to the narrow-lens model)");
   calibrate->callback([options] {
     if (!options->session.empty()) return RunCalibrateSession(*options);
     if (options->images_glob.empty()) {

@@ -39,6 +39,17 @@ double Median(std::vector<double> values) {
   return values[values.size() / 2];
 }
 
+// Square pixels, the principal point at the image centre (OpenCV starts it there), k1 only.
+constexpr int kNarrowLensFlags = cv::CALIB_FIX_ASPECT_RATIO | cv::CALIB_FIX_PRINCIPAL_POINT |
+                                 cv::CALIB_ZERO_TANGENT_DIST | cv::CALIB_FIX_K2 | cv::CALIB_FIX_K3;
+
+bool PrincipalPointIsUnobservable(const CalibrationReport& report, const CalibrationOptions& options) {
+  const double limit = options.max_principal_point_std_fraction;
+  if (limit <= 0) return false;
+  return report.intrinsics_std[2] > limit * report.camera.width ||
+         report.intrinsics_std[3] > limit * report.camera.height;
+}
+
 }  // namespace
 
 BoardSpec BoardSpec::Parse(const std::string& text, const std::string& argument) {
@@ -178,7 +189,7 @@ CalibrationReport CalibrateCamera(const std::vector<BoardDetection>& detections,
     }
     report.views.push_back(view);
   }
-  const int flags = options.fix_k3 ? cv::CALIB_FIX_K3 : 0;
+  int flags = options.fix_k3 ? cv::CALIB_FIX_K3 : 0;
   for (int round = 0;; ++round) {
     if (static_cast<int>(candidates.size()) < options.min_views) {
       ThrowInvalidInput("calibration images",
@@ -225,6 +236,18 @@ CalibrationReport CalibrateCamera(const std::vector<BoardDetection>& detections,
       for (int c = 0; c < 5; ++c) camera.distortion[c] = distortion.at<double>(0, c);
       for (int c = 0; c < 4; ++c) report.intrinsics_std[c] = std_intrinsics.at<double>(c, 0);
       for (int c = 0; c < 5; ++c) report.distortion_std[c] = std_intrinsics.at<double>(4 + c, 0);
+      // With the aspect ratio fixed OpenCV estimates fy alone (fx = fy) and reports no spread for fx.
+      if (flags & cv::CALIB_FIX_ASPECT_RATIO) report.intrinsics_std[0] = report.intrinsics_std[1];
+      if (report.narrow_lens_because.empty() && PrincipalPointIsUnobservable(report, options)) {
+        std::ostringstream reason;
+        reason.precision(3);
+        reason << "the full model's principal point is uncertain by (" << report.intrinsics_std[2] << ", "
+               << report.intrinsics_std[3] << ") px, over " << 100 * options.max_principal_point_std_fraction
+               << "% of the image";
+        report.narrow_lens_because = reason.str();
+        flags = kNarrowLensFlags;
+        continue;  // refit the same views with the narrow-lens model
+      }
       return report;
     }
     candidates = kept;
@@ -254,6 +277,8 @@ nlohmann::json ToJson(const CalibrationReport& report) {
           {"std", {{"fx", report.intrinsics_std[0]}, {"fy", report.intrinsics_std[1]},
                    {"cx", report.intrinsics_std[2]}, {"cy", report.intrinsics_std[3]},
                    {"distortion", report.distortion_std}}},
+          {"lens_model", report.narrow_lens_because.empty() ? "full" : "narrow"},
+          {"lens_model_because", report.narrow_lens_because},
           {"views_used", report.used_views()},
           {"views", views}};
 }

@@ -66,6 +66,9 @@ struct CalibrationReport {
   std::array<double, 4> intrinsics_std = {0, 0, 0, 0};  // fx, fy, cx, cy
   std::array<double, 5> distortion_std = {0, 0, 0, 0, 0};
   std::vector<ViewReport> views;
+  // Empty when the full lens model was estimated; otherwise why the narrow-lens model was used
+  // instead (see CalibrationOptions::max_principal_point_std_fraction).
+  std::string narrow_lens_because;
   int used_views() const;
 };
 
@@ -75,6 +78,15 @@ struct CalibrationOptions {
   double outlier_floor_px = 0.5;
   int min_views = 3;
   bool fix_k3 = false;  // hold k3 at 0 (wise with few views or a narrow lens)
+  // A long lens cannot tell a shifted principal point from a rotated camera, nor a changed focal
+  // length from a board further away: the full model (fx, fy, cx, cy, k1, k2, p1, p2, k3) is then
+  // ill-determined, its principal point drifting by tens of pixels and dragging the poses with
+  // it. When the principal point's standard deviation exceeds this fraction of the image size,
+  // the views are refitted with the narrow-lens model instead: square pixels, the principal point
+  // at the image centre, k1 only (COLMAP's SIMPLE_RADIAL, what it uses for such lenses). A real
+  // lens's principal point is a few pixels from the centre; the free estimate was further off.
+  // 0 keeps the full model whatever the views.
+  double max_principal_point_std_fraction = 0.02;
 };
 
 // Calibrates from the detections (failed ones are reported as dropped). Throws
