@@ -268,7 +268,15 @@ Material ReadMaterial(const fs::path& folder) {
   return m;
 }
 
-MaterialEvaluator::MaterialEvaluator(const Material& material) : material_(material), grid_(material.ndf_resolution) {}
+MaterialEvaluator::MaterialEvaluator(const Material& material) : material_(material), grid_(material.ndf_resolution) {
+  // A representative's texel holds its own fit (weight 1 on itself).
+  for (const int64_t texel : material.representative_texels) {
+    const int x = static_cast<int>(texel % material.width), y = static_cast<int>(texel / material.width);
+    double scale = 0;
+    for (int c = 0; c < 3; ++c) scale += material.k_s.at(x, y, c) / 3.0;
+    representative_scale_.push_back(scale);
+  }
+}
 
 Rgb TexelBtdf::Evaluate(const Vec3& i, const Vec3& o) const {
   if (!baseline_) return EvaluateMaterial(ndf_, params_, i, o);
@@ -287,17 +295,32 @@ std::optional<BaselineLobe> MaterialEvaluator::Lobe(int x, int y) const {
 TabulatedNdf MaterialEvaluator::TexelNdf(int x, int y) const {
   // The baseline's texel NDF is its own interpolated lobe, the one Evaluate uses.
   if (const std::optional<BaselineLobe> lobe = Lobe(x, y)) return TabulatedNdf(grid_, BaselineLnD(grid_, *lobe));
+  // The representatives' D are blended scaled by their k_s, so that k_s D (what the data
+  // constrain) is blended rather than each factor on its own: a representative whose fit put
+  // much of D's mass where no dot looks, and a large k_s to compensate, then weighs in by what it
+  // predicts. Blending D and k_s separately multiplied one representative's k_s with another's
+  // D (held-out errors of 500% on a Monte Carlo truth, docs/validation.md).
   const int cells = grid_.num_cells();
-  std::vector<double> d(cells, 0.0);
+  std::vector<double> d(cells, 0.0), unscaled(cells, 0.0);
+  double total_scale = 0;
   for (int k = 0; k < material_.weight_index.channels; ++k) {
     const double w = material_.weight_value.at(x, y, k);
     if (w == 0.0) continue;
-    const auto& table = material_.representative_ln_d[static_cast<size_t>(material_.weight_index.at(x, y, k))];
-    for (int c = 0; c < cells; ++c) d[c] += w * std::exp(table[c]);
+    const size_t rep = static_cast<size_t>(material_.weight_index.at(x, y, k));
+    const auto& table = material_.representative_ln_d[rep];
+    const double scale = rep < representative_scale_.size() ? representative_scale_[rep] : 0.0;
+    total_scale += w * scale;
+    for (int c = 0; c < cells; ++c) {
+      const double value = std::exp(table[c]);
+      d[c] += w * scale * value;
+      unscaled[c] += w * value;
+    }
   }
+  // Representatives that transmit nothing (k_s = 0) leave the plain blend.
+  if (!(total_scale > 0)) d = std::move(unscaled);
   // Affine weights may be negative: keep D positive where the combination undershoots.
   std::vector<double> ln_d(cells);
-  for (int c = 0; c < cells; ++c) ln_d[c] = std::log(std::max(d[c], 1e-12));
+  for (int c = 0; c < cells; ++c) ln_d[c] = std::log(std::max(d[c], 1e-12 * std::max(total_scale, 1.0)));
   TabulatedNdf ndf(grid_, std::move(ln_d));
   ndf.Normalize();
   return ndf;

@@ -164,3 +164,42 @@ TEST(BaselineLobes, BlendThroughSlopeMomentsAndWrapAzimuths) {
 
 }  // namespace
 }  // namespace svbtdf::fit
+
+namespace svbtdf::fit {
+namespace {
+
+// A blended texel's k_s D is the weighted sum of its representatives' k_s D (what their data
+// constrain), not one representative's k_s times another's D: with a sharp representative of
+// k_s 20 and a broad one of k_s 1, half and half.
+TEST(MaterialBlend, ScaledNdfsBlendAsTheirPredictions) {
+  const Hemicube grid(32);
+  std::vector<TexelFitResult> fits(2);
+  const std::array<double, 2> scales = {20.0, 1.0};
+  const std::array<double, 2> roughness = {0.1, 0.4};
+  std::vector<TabulatedNdf> ndfs;
+  for (int r = 0; r < 2; ++r) {
+    TabulatedNdf ndf(grid, GgxNdf(roughness[r]));
+    ndf.Normalize();
+    fits[r].ln_d = ndf.ln_d();
+    fits[r].k_s = scales[r];
+    fits[r].k_s_rgb = {scales[r], scales[r], scales[r]};
+    ndfs.push_back(ndf);
+  }
+  Clustering clustering;
+  clustering.representatives = {0, 1};
+  clustering.cluster = {0, 1, 0};
+  clustering.weights = {{{{0, 1.0f}}}, {{{1, 1.0f}}}, {{{0, 0.5f}, {1, 0.5f}}}};
+  const Material material = AssembleMaterial(3, 1, 1.5, 32, clustering, fits, FloatImage(3, 1, 3, 0.0f));
+  const MaterialEvaluator evaluator(material);
+  const TabulatedNdf blended = evaluator.TexelNdf(2, 0);
+  const double k_s = material.k_s.at(2, 0, 0);
+  EXPECT_NEAR(k_s, 10.5, 1e-5);
+  for (double theta : {0.0, 0.1, 0.3, 0.6, 1.0}) {
+    const Vec3 h(std::sin(theta), 0.0, std::cos(theta));
+    const double expected = 0.5 * scales[0] * ndfs[0].D(h) + 0.5 * scales[1] * ndfs[1].D(h);
+    EXPECT_NEAR(k_s * blended.D(h) / expected, 1.0, 0.01) << "theta " << theta;
+  }
+}
+
+}  // namespace
+}  // namespace svbtdf::fit

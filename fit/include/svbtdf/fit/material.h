@@ -104,7 +104,8 @@ class MaterialEvaluator {
   TexelBtdf Texel(int x, int y) const;
   // One-off evaluation (builds the texel each call).
   Rgb Evaluate(int x, int y, const Vec3& i, const Vec3& o) const { return Texel(x, y).Evaluate(i, o); }
-  // The texel's own NDF table (ln of the weighted sum of the representatives' D).
+  // The texel's own NDF table: the weighted sum of the representatives' D, each scaled by its
+  // transmission scale k_s (docs/material-format.md), normalised.
   TabulatedNdf TexelNdf(int x, int y) const;
 
  private:
@@ -112,6 +113,7 @@ class MaterialEvaluator {
 
   const Material& material_;
   Hemicube grid_;
+  std::vector<double> representative_scale_;  // mean k_s of each representative's own fit
 };
 
 }  // namespace svbtdf::fit
