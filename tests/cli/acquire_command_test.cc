@@ -44,6 +44,23 @@ class AcquireCommand : public ::testing::Test {
     const std::string text = ReadTextFile(session / "journal.jsonl");
     return static_cast<size_t>(std::count(text.begin(), text.end(), '\n'));
   }
+  // The number of images the tiny plan captures (the simulated session holds all of them).
+  size_t PlannedImages() const { return Session::Open(Sim() / "session").planned_keys().size(); }
+  // Starts `svbtdf acquire` into `out` in a child process and returns once `lines` captures are
+  // journalled (or after 8 s), for the test to stop it.
+  pid_t StartAcquisitionUntilJournalled(const fs::path& out, size_t lines) const {
+    const std::string sim_camera = "sim:" + Sim().string();
+    const pid_t child = ::fork();
+    if (child == 0) {
+      ::execl(SVBTDF_CLI_PATH, SVBTDF_CLI_PATH, "-q", "acquire", "--plan-preset", "tiny", "--camera",
+              sim_camera.c_str(), "--display", "sim", "--out", out.c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    for (int wait = 0; wait < 4000 && JournalLines(out) < lines; ++wait) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    return child;
+  }
   fs::path root_;
 };
 
@@ -53,8 +70,7 @@ TEST_F(AcquireCommand, TinyAcquireIsACompleteSessionWithTheSimulatorsImages) {
   const auto result = RunSvbtdf(AcquireArgs(out));
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   ASSERT_EQ(result.exit_code, 0) << result.output;
-  const size_t planned = Session::Open(Sim() / "session").planned_keys().size();
-  EXPECT_NE(result.output.find("acquired " + std::to_string(planned) + " images"), std::string::npos)
+  EXPECT_NE(result.output.find("acquired " + std::to_string(PlannedImages()) + " images"), std::string::npos)
       << result.output;
   const auto verify = RunSvbtdf("session verify " + out.string());
   EXPECT_EQ(verify.exit_code, 0) << verify.output;
@@ -95,24 +111,15 @@ TEST_F(AcquireCommand, AnAcquiredSessionIsFittedByRun) {
 
 TEST_F(AcquireCommand, KilledMidCaptureResumesWithNoMissingDuplicatedOrCorruptImage) {
   const fs::path out = root_ / "killed";
-  const std::string sim_camera = "sim:" + Sim().string();
-  const pid_t child = ::fork();
-  if (child == 0) {
-    ::execl(SVBTDF_CLI_PATH, SVBTDF_CLI_PATH, "-q", "acquire", "--plan-preset", "tiny", "--camera", sim_camera.c_str(),
-            "--display", "sim", "--out", out.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
   // Kill it once a good part of the session is journalled, with no chance to clean up.
-  for (int wait = 0; wait < 4000 && JournalLines(out) < 30; ++wait) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
+  const pid_t child = StartAcquisitionUntilJournalled(out, 30);
   ::kill(child, SIGKILL);
   int status = 0;
   ::waitpid(child, &status, 0);
   ASSERT_TRUE(WIFSIGNALED(status)) << "the acquisition ended before it was killed";
   const size_t before = Session::Open(out).entries().size();
   EXPECT_GE(before, 30u);
-  EXPECT_LT(before, Session::Open(Sim() / "session").planned_keys().size());
+  EXPECT_LT(before, PlannedImages());
   const auto resume = RunSvbtdf(AcquireArgs(out));
   ASSERT_EQ(resume.exit_code, 0) << resume.output;
   EXPECT_NE(resume.output.find(std::to_string(before) + " were already there"), std::string::npos) << resume.output;
@@ -130,23 +137,14 @@ TEST_F(AcquireCommand, KilledMidCaptureResumesWithNoMissingDuplicatedOrCorruptIm
 
 TEST_F(AcquireCommand, CtrlCStopsCleanlyWithExitCode130AndTheRunResumes) {
   const fs::path out = root_ / "interrupted";
-  const std::string sim_camera = "sim:" + Sim().string();
-  const pid_t child = ::fork();
-  if (child == 0) {
-    ::execl(SVBTDF_CLI_PATH, SVBTDF_CLI_PATH, "-q", "acquire", "--plan-preset", "tiny", "--camera", sim_camera.c_str(),
-            "--display", "sim", "--out", out.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  for (int wait = 0; wait < 4000 && JournalLines(out) < 20; ++wait) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
+  const pid_t child = StartAcquisitionUntilJournalled(out, 20);
   ::kill(child, SIGINT);
   int status = 0;
   ::waitpid(child, &status, 0);
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 130);
   const Session stopped = Session::Open(out);
-  EXPECT_LT(stopped.entries().size(), Session::Open(Sim() / "session").planned_keys().size());
+  EXPECT_LT(stopped.entries().size(), PlannedImages());
   EXPECT_TRUE(stopped.Verify().corrupt.empty());
   const auto resume = RunSvbtdf(AcquireArgs(out));
   ASSERT_EQ(resume.exit_code, 0) << resume.output;
