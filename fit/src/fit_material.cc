@@ -17,6 +17,7 @@
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/common/parallel.h"
 #include "svbtdf/common/progress.h"
+#include "svbtdf/fit/refine_texels.h"
 
 namespace svbtdf::fit {
 namespace fs = std::filesystem;
@@ -390,6 +391,13 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
   fits.Lend(LenderOfFailed(reps, store.info().texels_x, failed));
 
   Material material = fits.Assemble(store, eta, options.ndf_resolution, clustering);
+  RefineStatistics refined;
+  if (options.refine_interpolated && reps.size() < valid.size()) {
+    RefineOptions refine_options;
+    refine_options.threads = options.threads;
+    refine_options.progress = options.progress;
+    refined = RefineInterpolatedTexels(store, use_dot, valid, refine_options, &material);
+  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   material.provenance = {
       {"processed", fs::absolute(store.folder()).string()},
@@ -399,6 +407,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
         {"eta", eta},
         {"representative_fraction", options.representative_fraction},
         {"ndf_resolution", options.ndf_resolution},
+        {"refine_interpolated", options.refine_interpolated},
         {"seed", options.seed}}},
       {"statistics",
        {{"texels", store.geometry().num_texels()},
@@ -408,6 +417,10 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
         {"failed_representatives", FailedTexels(reps, failed)},
         {"resumed_fits", resumed},
         {"median_relative_rmse", Median(residuals)},
+        // The interpolated texels' residuals on their own samples, before and after refinement.
+        {"refined_texels", refined.texels},
+        {"median_relative_rmse_blended", refined.texels > 0 ? refined.median_rmse_blended : -1.0},
+        {"median_relative_rmse_refined", refined.texels > 0 ? refined.median_rmse_refined : -1.0},
         {"pca_explained_variance", clustering.explained_variance},
         {"seconds", seconds},
         {"fit_seconds", fit_seconds},

@@ -91,16 +91,30 @@ double TabulatedNdf::D(const Vec3& h) const {
 }
 
 double TabulatedNdf::ProjectedIntegral() const {
-  // The nodes depend only on the resolution; fits normalise thousands of tables of one size.
-  static thread_local int cached_resolution = 0;
-  static thread_local Quadrature quadrature;
-  if (cached_resolution != grid_.resolution()) {
-    quadrature = CellQuadrature(grid_, kSubCells);
-    cached_resolution = grid_.resolution();
+  // The nodes, their interpolation weights and h.z w depend only on the resolution; fits and
+  // material evaluation normalise many thousands of tables of one size, so only D's exp is left.
+  struct Nodes {
+    int resolution = 0;
+    std::vector<Hemicube::Weights> interpolation;
+    std::vector<double> projected_weight;
+  };
+  static thread_local Nodes nodes;
+  if (nodes.resolution != grid_.resolution()) {
+    const Quadrature quadrature = CellQuadrature(grid_, kSubCells);
+    nodes.interpolation.clear();
+    nodes.projected_weight.clear();
+    for (size_t k = 0; k < quadrature.directions.size(); ++k) {
+      if (quadrature.directions[k].z() <= 0) continue;  // D is 0 there
+      nodes.interpolation.push_back(grid_.Interpolation(quadrature.directions[k]));
+      nodes.projected_weight.push_back(quadrature.directions[k].z() * quadrature.weights[k]);
+    }
+    nodes.resolution = grid_.resolution();
   }
   double integral = 0;
-  for (size_t k = 0; k < quadrature.directions.size(); ++k) {
-    integral += D(quadrature.directions[k]) * quadrature.directions[k].z() * quadrature.weights[k];
+  for (size_t k = 0; k < nodes.interpolation.size(); ++k) {
+    double ln = 0;
+    for (const auto& [cell, w] : nodes.interpolation[k]) ln += w * ln_d_[cell];
+    integral += std::exp(ln) * nodes.projected_weight[k];
   }
   return integral;
 }

@@ -26,10 +26,19 @@ TEST_F(FitChain, RecoversTheTruthOnHeldOutDots) {
   const nlohmann::json m = FitAndCompare("material", "--holdout 0.1 --representatives 0.05");
   EXPECT_TRUE(m["holdout_recorded"].get<bool>());
   EXPECT_EQ(m["heldout_dots"].get<int>(), 40);
-  EXPECT_GE(m["alpha_within_0_05"].get<double>(), 0.85);
+  EXPECT_GE(m["alpha_within_0_05"].get<double>(), 0.9);
   EXPECT_LT(m["ndf_rel_l2_median"].get<double>(), 0.10);
   EXPECT_LT(m["heldout_rel_rmse"].get<double>(), 0.05);
   EXPECT_LT(m["rho_d_rel_error_median"].get<double>(), 0.02);
+}
+
+// The paper's 1% (10 representatives here): the interpolated texels, refined against their own
+// samples, still meet the held-out bound (measured 3.6%, alpha within 0.05 on 94%).
+TEST_F(FitChain, OnePercentRepresentativesMeetTheHeldOutBound) {
+  const nlohmann::json m = FitAndCompare("one_percent", "--holdout 0.1 --representatives 0.01");
+  EXPECT_GE(m["alpha_within_0_05"].get<double>(), 0.9);
+  EXPECT_LT(m["ndf_rel_l2_median"].get<double>(), 0.10);
+  EXPECT_LT(m["heldout_rel_rmse"].get<double>(), 0.05);
 }
 
 TEST_F(FitChain, AnInterruptedFitResumesFromItsCheckpoint) {

@@ -143,6 +143,45 @@ TEST_F(FitMaterialTest, OnePercentRepresentativesPredictHeldOutDotsNearlyAsWellA
   EXPECT_LT(error_reps, 1.2 * error_all);
 }
 
+// The interpolated texels' refinement (refine_texels.h): with the blended NDF's weights refitted
+// and alpha and k_s fitted to each texel's own samples, the held-out dots (which the refinement
+// never sees) are predicted better than by the plain interpolation, and better alphas come out.
+// The weights still sum to 1 (refitted ones are >= 0; a texel whose refit does not improve on the
+// clustering's affine weights keeps them), and the representatives keep their own fits.
+// Measured: 0.1145 -> 0.0968 (0.85x), alpha within 0.05 0.49 -> 0.67.
+TEST_F(FitMaterialTest, RefiningTheInterpolatedTexelsBeatsThePlainInterpolationOnHeldOutDots) {
+  FitMaterialOptions plain = Options(0.01), refined = Options(0.01);
+  plain.ndf_resolution = refined.ndf_resolution = 16;
+  plain.refine_interpolated = false;
+  const Material interpolated = FitMaterial(Store(), plain);
+  const Material material = FitMaterial(Store(), refined);
+  const Scores before = Score(interpolated, truth_, Store()), after = Score(material, truth_, Store());
+  const nlohmann::json& statistics = material.provenance.at("statistics");
+  std::printf("held-out rel. RMSE %.4f -> %.4f, alpha within 0.05 %.3f -> %.3f; own samples %.4f -> %.4f\n",
+              before.heldout_rel_rmse, after.heldout_rel_rmse, before.alpha_within_0_05, after.alpha_within_0_05,
+              statistics.at("median_relative_rmse_blended").get<double>(),
+              statistics.at("median_relative_rmse_refined").get<double>());
+  EXPECT_EQ(statistics.at("refined_texels").get<int>(), 256 - 3);
+  EXPECT_EQ(interpolated.provenance.at("statistics").at("refined_texels").get<int>(), 0);
+  EXPECT_LT(statistics.at("median_relative_rmse_refined").get<double>(),
+            statistics.at("median_relative_rmse_blended").get<double>());
+  EXPECT_LT(after.heldout_rel_rmse, 0.9 * before.heldout_rel_rmse);
+  EXPECT_GE(after.alpha_within_0_05, before.alpha_within_0_05);
+  for (int y = 0; y < material.height; ++y) {
+    for (int x = 0; x < material.width; ++x) {
+      double sum = 0;
+      for (int c = 0; c < material.weight_value.channels; ++c) sum += material.weight_value.at(x, y, c);
+      EXPECT_NEAR(sum, 1.0, 1e-5) << x << ", " << y;
+      EXPECT_GE(material.residual.at(x, y), 0.0f) << x << ", " << y;  // every texel has its own residual now
+    }
+  }
+  for (const int64_t t : material.representative_texels) {
+    const int x = static_cast<int>(t % material.width), y = static_cast<int>(t / material.width);
+    EXPECT_EQ(material.alpha.at(x, y), interpolated.alpha.at(x, y));
+    EXPECT_EQ(material.k_s.at(x, y, 1), interpolated.k_s.at(x, y, 1));
+  }
+}
+
 // The paper's comparison: on a dual-microfacet truth, the single-interface GGX baseline predicts
 // held-out dots worse than the dual-microfacet fit with the same representatives; its material
 // says what it is and evaluates through the same MaterialEvaluator after a round trip on disk.

@@ -1,7 +1,8 @@
 #pragma once
 // Fitting a whole processed session (paper Secs. 4.2-4.3; docs/fitting.md): cluster the texels'
 // resampled slices, fit the dual-microfacet model at the representatives only, and express every
-// texel as an affine combination of nearby representatives.
+// texel as an affine combination of nearby representatives, whose alpha and k_s are then refined
+// against the texel's own samples.
 //
 // Long fits are resumable: every finished representative is appended (fsync'ed) to a checkpoint
 // journal, and a rerun with the same options skips the representatives it already holds.
@@ -26,6 +27,9 @@ struct FitMaterialOptions {
   int threads = 0;
   bool progress = true;
   std::filesystem::path checkpoint;       // journal of finished fits; empty: none
+  // Fit alpha and k_s of every interpolated texel to its own samples, the blended NDF held fixed
+  // (refine_texels.h); false keeps the paper's plain interpolation.
+  bool refine_interpolated = true;
 };
 
 // A representative whose fit fails (kNumerical) takes the fit of the nearest one that succeeded

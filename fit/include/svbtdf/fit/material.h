@@ -107,6 +107,8 @@ class MaterialEvaluator {
   // The texel's own NDF table: the weighted sum of the representatives' D, each scaled by its
   // transmission scale k_s (docs/material-format.md), normalised.
   TabulatedNdf TexelNdf(int x, int y) const;
+  // The scale a representative's D is weighted by in TexelNdf (its own k_s, channel mean).
+  double RepresentativeScale(int representative) const { return representative_scale_.at(representative); }
 
  private:
   std::optional<BaselineLobe> Lobe(int x, int y) const;  // the texel's lobe, for a walter-ggx material

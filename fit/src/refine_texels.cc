@@ -1,0 +1,365 @@
+#include "svbtdf/fit/refine_texels.h"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <numeric>
+#include <optional>
+
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/interrupt.h"
+#include "svbtdf/common/minimize.h"
+#include "svbtdf/common/parallel.h"
+#include "svbtdf/common/progress.h"
+
+namespace svbtdf::fit {
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Alpha and k_s with the texel's NDF fixed.
+
+// The texel's samples against the model's shape m (its BTDF with k_s = 1): the best scale is
+// k = sum(rho m) / sum(m^2), and the relative squared error at that scale is
+// 1 - sum(rho m)^2 / (sum(m^2) sum(rho^2)).
+struct ScaledFit {
+  double scale = 0.0;
+  double relative_squared_error = 1.0;
+};
+
+ScaledFit BestScale(const std::vector<double>& shape, const std::vector<double>& rho, double sum_rho_squared) {
+  double dot = 0, shape_squared = 0;
+  for (size_t k = 0; k < rho.size(); ++k) {
+    dot += rho[k] * shape[k];
+    shape_squared += shape[k] * shape[k];
+  }
+  ScaledFit fit;
+  if (!(shape_squared > 0) || !(sum_rho_squared > 0)) return fit;
+  fit.scale = std::max(0.0, dot / shape_squared);
+  fit.relative_squared_error = std::max(0.0, 1.0 - dot * dot / (shape_squared * sum_rho_squared));
+  return fit;
+}
+
+double SumOfSquares(const std::vector<double>& v) {
+  double sum = 0;
+  for (double x : v) sum += x * x;
+  return sum;
+}
+
+class ScalarRefiner {
+ public:
+  // The two virtual configurations do not depend on alpha (the model blends them in log space),
+  // so each sample costs two NDF lookups however long the search for alpha runs.
+  ScalarRefiner(const TexelBtdf& texel, const TexelSlice& slice) : slice_(slice), sum_rho_squared_(SumOfSquares(slice.rho)) {
+    const size_t n = slice_.light.size();
+    if (texel.model() == MaterialModel::kWalterGgx) {
+      DualMicrofacetParams unit = texel.params();
+      unit.k_s = {1.0, 1.0, 1.0};
+      unit.rho_d = {0.0, 0.0, 0.0};
+      const TexelBtdf shape(texel.ndf(), unit, texel.baseline());
+      for (size_t k = 0; k < n; ++k) fixed_shape_.push_back(shape.Evaluate(slice_.light[k], slice_.view)[0]);
+      return;
+    }
+    const DualMicrofacetModel model(texel.params().eta, texel.params().shadowing);
+    rho_t_.resize(n);
+    rho_b_.resize(n);
+    for (size_t k = 0; k < n; ++k) {
+      rho_t_[k] = model.RhoT(texel.ndf(), slice_.light[k], slice_.view);
+      rho_b_[k] = model.RhoB(texel.ndf(), slice_.light[k], slice_.view);
+    }
+  }
+
+  // The shape of the model (its BTDF with k_s = 1) at blend weight `alpha` at every sample.
+  const std::vector<double>& Shape(double alpha) {
+    if (rho_t_.empty()) {
+      shape_ = fixed_shape_;
+      return shape_;
+    }
+    shape_.resize(rho_t_.size());
+    for (size_t k = 0; k < rho_t_.size(); ++k) shape_[k] = LogBlend(rho_t_[k], rho_b_[k], alpha);
+    return shape_;
+  }
+
+  ScaledFit FitAt(double alpha) { return BestScale(Shape(alpha), slice_.rho, sum_rho_squared_); }
+
+  // Relative RMSE of the model at `alpha` with the luminance scale `scale`.
+  double RelativeRmse(double alpha, double scale) {
+    const std::vector<double>& shape = Shape(alpha);
+    double squared_error = 0;
+    for (size_t k = 0; k < shape.size(); ++k) squared_error += Square(scale * shape[k] - slice_.rho[k]);
+    return std::sqrt(squared_error / sum_rho_squared_);
+  }
+
+  // Per-channel scales for the shape last evaluated.
+  std::array<double, 3> ChannelScales(double luminance_scale) const {
+    std::array<double, 3> scales;
+    scales.fill(luminance_scale);
+    if (slice_.rho_rgb.size() != shape_.size()) return scales;
+    const double shape_squared = SumOfSquares(shape_);
+    if (!(shape_squared > 0)) return scales;
+    for (int c = 0; c < 3; ++c) {
+      double dot = 0;
+      for (size_t k = 0; k < shape_.size(); ++k) dot += slice_.rho_rgb[k][c] * shape_[k];
+      scales[c] = std::max(0.0, dot / shape_squared);
+    }
+    return scales;
+  }
+
+ private:
+  const TexelSlice& slice_;
+  double sum_rho_squared_ = 0.0;
+  std::vector<double> rho_t_, rho_b_;  // dual-microfacet: the two configurations (k_s = 1)
+  std::vector<double> fixed_shape_;    // walter-ggx: the shape, which has no alpha
+  std::vector<double> shape_;
+};
+
+struct RefinedScalars {
+  double alpha = 0.5;
+  std::array<double, 3> k_s = {0, 0, 0};
+  double relative_rmse = 1.0;
+};
+
+// Alpha by golden-section search (never ending worse than `texel`'s own), then k_s per channel.
+RefinedScalars RefineScalars(const TexelBtdf& texel, const TexelSlice& slice, bool refine_alpha, double tolerance) {
+  ScalarRefiner refiner(texel, slice);
+  RefinedScalars result;
+  result.alpha = texel.params().alpha;
+  if (refine_alpha) {
+    const double searched = GoldenSectionSearch([&](double a) { return refiner.FitAt(a).relative_squared_error; },
+                                                0.0, 1.0, tolerance);
+    if (refiner.FitAt(searched).relative_squared_error < refiner.FitAt(result.alpha).relative_squared_error) {
+      result.alpha = searched;
+    }
+  }
+  const ScaledFit best = refiner.FitAt(result.alpha);  // leaves the shape at alpha for the channels
+  result.k_s = refiner.ChannelScales(best.scale);
+  result.relative_rmse = std::sqrt(best.relative_squared_error);
+  return result;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The weights over the representatives, refitted to the texel's samples.
+
+// Each representative's two configurations at the texel's samples: T[j][k] and B[j][k] with
+// representative j's own (normalised) D, under the texel's shadowing.
+struct RepresentativeTerms {
+  std::vector<std::vector<double>> t, b;
+};
+
+RepresentativeTerms TermsOf(const Material& material, const Hemicube& grid, const std::vector<int>& reps,
+                            const DualMicrofacetModel& model, const TexelSlice& slice) {
+  RepresentativeTerms terms;
+  terms.t.assign(reps.size(), std::vector<double>(slice.light.size(), 0.0));
+  terms.b = terms.t;
+  for (size_t k = 0; k < slice.light.size(); ++k) {
+    // The configurations (half vector, factor) do not depend on D: one per sample for all.
+    const VirtualConfiguration entry = model.RoughEntry(slice.light[k], slice.view);
+    const VirtualConfiguration exit = model.RoughExit(slice.light[k], slice.view);
+    const auto add = [&](const VirtualConfiguration& c, std::vector<std::vector<double>>* into) {
+      if (!c.valid || c.factor <= 0) return;
+      const Hemicube::Weights weights = grid.Interpolation(c.h);
+      for (size_t j = 0; j < reps.size(); ++j) {
+        const std::vector<double>& ln_d = material.representative_ln_d[reps[j]];
+        double ln = 0;
+        for (const auto& [cell, w] : weights) ln += w * ln_d[cell];
+        (*into)[j][k] = c.factor * std::exp(ln);
+      }
+    };
+    add(entry, &terms.t);
+    add(exit, &terms.b);
+  }
+  return terms;
+}
+
+// Residuals (S_T^alpha S_B^(1-alpha) - rho) / |rho| with S = sum_j a_j T_j (resp. B_j), for the
+// unnormalised blend amounts a (block 0) and alpha (block 1).
+class BlendCost final : public ceres::CostFunction {
+ public:
+  BlendCost(const RepresentativeTerms& terms, const std::vector<double>& rho)
+      : terms_(terms), rho_(rho), inverse_norm_(1.0 / std::sqrt(std::max(SumOfSquares(rho), 1e-300))) {
+    set_num_residuals(static_cast<int>(rho.size()));
+    mutable_parameter_block_sizes()->push_back(static_cast<int>(terms.t.size()));
+    mutable_parameter_block_sizes()->push_back(1);
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const double* a = parameters[0];
+    const double alpha = parameters[1][0];
+    const size_t m = terms_.t.size();
+    for (size_t k = 0; k < rho_.size(); ++k) {
+      double st = 0, sb = 0;
+      for (size_t j = 0; j < m; ++j) {
+        st += a[j] * terms_.t[j][k];
+        sb += a[j] * terms_.b[j][k];
+      }
+      const double shape = LogBlend(std::max(st, 0.0), std::max(sb, 0.0), alpha);
+      residuals[k] = (shape - rho_[k]) * inverse_norm_;
+      if (!jacobians) continue;
+      // Where a configuration is empty the blend is flat zero: no gradient to follow.
+      const bool smooth = st > 0 && sb > 0 && shape > 0;
+      if (jacobians[0]) {
+        for (size_t j = 0; j < m; ++j) {
+          jacobians[0][k * m + j] =
+              smooth ? shape * (alpha * terms_.t[j][k] / st + (1 - alpha) * terms_.b[j][k] / sb) * inverse_norm_ : 0.0;
+        }
+      }
+      if (jacobians[1]) jacobians[1][k] = smooth ? shape * (std::log(st) - std::log(sb)) * inverse_norm_ : 0.0;
+    }
+    return true;
+  }
+
+ private:
+  const RepresentativeTerms& terms_;
+  const std::vector<double>& rho_;
+  double inverse_norm_;
+};
+
+// The texel's representatives and weights as stored (terms with weight 0 are unused slots).
+struct TexelWeights {
+  std::vector<int> reps;
+  std::vector<double> weights;
+};
+
+TexelWeights ReadWeights(const Material& material, int x, int y) {
+  TexelWeights w;
+  for (int c = 0; c < material.weight_index.channels; ++c) {
+    if (material.weight_value.at(x, y, c) == 0.0f) continue;
+    w.reps.push_back(static_cast<int>(material.weight_index.at(x, y, c)));
+    w.weights.push_back(material.weight_value.at(x, y, c));
+  }
+  return w;
+}
+
+void WriteWeights(const TexelWeights& w, int x, int y, Material* material) {
+  for (int c = 0; c < material->weight_index.channels; ++c) {
+    const bool used = c < static_cast<int>(w.reps.size());
+    material->weight_index.at(x, y, c) = used ? static_cast<float>(w.reps[c]) : 0.0f;
+    material->weight_value.at(x, y, c) = used ? static_cast<float>(w.weights[c]) : 0.0f;
+  }
+}
+
+// Fits non-negative blend amounts a_j of the texel's representatives (and alpha) to its samples,
+// starting from the clustering's weights; returns the weights w_j (sum 1) that make TexelNdf
+// blend a_j D_j, or nothing when the fit does not run.
+std::optional<TexelWeights> RefitWeights(const Material& material, const MaterialEvaluator& evaluator,
+                                         const Hemicube& grid, const TexelBtdf& blended, const TexelWeights& start,
+                                         const TexelSlice& slice) {
+  const size_t m = start.reps.size();
+  if (m < 2) return std::nullopt;
+  std::vector<double> scale(m);
+  for (size_t j = 0; j < m; ++j) {
+    scale[j] = evaluator.RepresentativeScale(start.reps[j]);
+    if (!(scale[j] > 0)) return std::nullopt;
+  }
+  const DualMicrofacetModel model(blended.params().eta, blended.params().shadowing);
+  const RepresentativeTerms terms = TermsOf(material, grid, start.reps, model, slice);
+  // TexelNdf blends w_j s_j D_j; start there (negative weights clipped), at the texel's k_s.
+  std::vector<double> amount(m);
+  for (size_t j = 0; j < m; ++j) amount[j] = std::max(0.0, start.weights[j]) * scale[j];
+  double total = std::accumulate(amount.begin(), amount.end(), 0.0);
+  if (!(total > 0)) return std::nullopt;
+  for (double& a : amount) a *= Luminance(blended.params().k_s) / total;
+  double alpha = blended.params().alpha;
+
+  ceres::Problem problem;
+  problem.AddResidualBlock(new BlendCost(terms, slice.rho), nullptr, amount.data(), &alpha);
+  for (size_t j = 0; j < m; ++j) problem.SetParameterLowerBound(amount.data(), static_cast<int>(j), 0.0);
+  problem.SetParameterLowerBound(&alpha, 0, 0.0);
+  problem.SetParameterUpperBound(&alpha, 0, 1.0);
+  ceres::Solver::Options options;
+  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.max_num_iterations = 25;
+  options.logging_type = ceres::SILENT;
+  options.num_threads = 1;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  if (!summary.IsSolutionUsable()) return std::nullopt;
+
+  TexelWeights refitted = start;
+  total = 0;
+  for (size_t j = 0; j < m; ++j) total += amount[j] / scale[j];
+  if (!(total > 0)) return std::nullopt;
+  for (size_t j = 0; j < m; ++j) refitted.weights[j] = amount[j] / scale[j] / total;
+  return refitted;
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return std::nan("");
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+}  // namespace
+
+RefineStatistics RefineInterpolatedTexels(const SliceStore& store, const std::vector<bool>& use_dot,
+                                          const std::vector<int64_t>& texels, const RefineOptions& options,
+                                          Material* material) {
+  const int width = material->width;
+  if (store.info().texels_x != width || store.info().texels_y != material->height) {
+    ThrowInvalidInput(store.folder().string(), "does not match the material's texel grid");
+  }
+  std::vector<uint8_t> is_representative(static_cast<size_t>(width) * material->height, 0);
+  for (int64_t t : material->representative_texels) is_representative[t] = 1;
+  std::vector<int64_t> todo;
+  for (int64_t t : texels) {
+    if (t < 0 || t >= static_cast<int64_t>(is_representative.size())) {
+      ThrowInvalidInput("refinement", "texel " + std::to_string(t) + " is outside the material");
+    }
+    if (!is_representative[t]) todo.push_back(t);
+  }
+  const bool dual = material->model == MaterialModel::kDualMicrofacet;
+  const bool refine_alpha = options.refine_alpha && dual;
+  const bool refit_weights = options.refit_weights && dual;
+  const MaterialEvaluator evaluator(*material);
+  const Hemicube grid(material->ndf_resolution);
+  std::vector<double> before(todo.size(), -1.0), after(todo.size(), -1.0);
+  std::unique_ptr<ProgressBar> progress;
+  if (options.progress) progress = std::make_unique<ProgressBar>("refine", static_cast<int64_t>(todo.size()), "texels");
+  // Each texel writes only its own pixels of the maps; the evaluator reads the representatives'.
+  ParallelFor(static_cast<int64_t>(todo.size()), options.threads, 64, [&](int64_t a, int64_t b) {
+    for (int64_t k = a; k < b; ++k) {
+      ThrowIfInterrupted("refining");
+      const int64_t t = todo[k];
+      const int x = static_cast<int>(t % width), y = static_cast<int>(t / width);
+      const TexelSlice slice = store.MakeTexelSlice(t, use_dot);
+      if (!(SumOfSquares(slice.rho) > 0)) continue;
+      const TexelWeights blended_weights = ReadWeights(*material, x, y);
+      const TexelBtdf blended = evaluator.Texel(x, y);
+      before[k] = ScalarRefiner(blended, slice).RelativeRmse(blended.params().alpha, Luminance(blended.params().k_s));
+      RefinedScalars best = RefineScalars(blended, slice, refine_alpha, options.alpha_tolerance);
+      if (refit_weights) {
+        if (const auto refitted = RefitWeights(*material, evaluator, grid, blended, blended_weights, slice)) {
+          WriteWeights(*refitted, x, y, material);
+          const RefinedScalars with_refitted =
+              RefineScalars(evaluator.Texel(x, y), slice, refine_alpha, options.alpha_tolerance);
+          if (with_refitted.relative_rmse < best.relative_rmse) {
+            best = with_refitted;
+          } else {
+            WriteWeights(blended_weights, x, y, material);
+          }
+        }
+      }
+      after[k] = best.relative_rmse;
+      material->alpha.at(x, y) = static_cast<float>(best.alpha);
+      for (int c = 0; c < 3; ++c) material->k_s.at(x, y, c) = static_cast<float>(best.k_s[c]);
+      material->residual.at(x, y) = static_cast<float>(best.relative_rmse);
+      if (progress) progress->Advance();
+    }
+  });
+  if (progress) progress->Finish();
+  RefineStatistics statistics;
+  std::vector<double> refined_before, refined_after;
+  for (size_t k = 0; k < todo.size(); ++k) {
+    if (after[k] < 0) continue;
+    refined_before.push_back(before[k]);
+    refined_after.push_back(after[k]);
+  }
+  statistics.texels = static_cast<int64_t>(refined_after.size());
+  statistics.median_rmse_blended = Median(refined_before);
+  statistics.median_rmse_refined = Median(refined_after);
+  return statistics;
+}
+
+}  // namespace svbtdf::fit
