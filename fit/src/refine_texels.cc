@@ -239,8 +239,12 @@ void WriteWeights(const TexelWeights& w, int x, int y, Material* material) {
   }
 }
 
-// Fits non-negative blend amounts a_j of the texel's representatives (and alpha) to its samples,
-// starting from the clustering's weights; returns the weights w_j (sum 1) that make TexelNdf
+// How far below zero a blend amount may go, as a fraction of the texel's total: a texel outside
+// the representatives' hull (sharper than the sharpest, say) needs a negative one.
+constexpr double kExtrapolation = 3.0;
+
+// Fits blend amounts a_j (each >= -kExtrapolation times their starting total) of the texel's
+// representatives, and alpha, to its samples, starting from the clustering's weights; returns the weights w_j (sum 1) that make TexelNdf
 // blend a_j D_j, or nothing when the fit does not run.
 std::optional<TexelWeights> RefitWeights(const Material& material, const MaterialEvaluator& evaluator,
                                          const Hemicube& grid, const TexelBtdf& blended, const TexelWeights& start,
@@ -259,12 +263,14 @@ std::optional<TexelWeights> RefitWeights(const Material& material, const Materia
   for (size_t j = 0; j < m; ++j) amount[j] = std::max(0.0, start.weights[j]) * scale[j];
   double total = std::accumulate(amount.begin(), amount.end(), 0.0);
   if (!(total > 0)) return std::nullopt;
-  for (double& a : amount) a *= Luminance(blended.params().k_s) / total;
+  const double total_amount = Luminance(blended.params().k_s);
+  for (double& a : amount) a *= total_amount / total;
   double alpha = blended.params().alpha;
 
   ceres::Problem problem;
   problem.AddResidualBlock(new BlendCost(terms, slice.rho), nullptr, amount.data(), &alpha);
-  for (size_t j = 0; j < m; ++j) problem.SetParameterLowerBound(amount.data(), static_cast<int>(j), 0.0);
+  const double floor = -kExtrapolation * total_amount;
+  for (size_t j = 0; j < m; ++j) problem.SetParameterLowerBound(amount.data(), static_cast<int>(j), floor);
   problem.SetParameterLowerBound(&alpha, 0, 0.0);
   problem.SetParameterUpperBound(&alpha, 0, 1.0);
   ceres::Solver::Options options;
@@ -281,6 +287,9 @@ std::optional<TexelWeights> RefitWeights(const Material& material, const Materia
   total = 0;
   for (size_t j = 0; j < m; ++j) total += amount[j] / scale[j];
   if (!(total > 0)) return std::nullopt;
+  double total_scaled = 0;
+  for (size_t j = 0; j < m; ++j) total_scaled += amount[j];
+  if (!(total_scaled > 0)) return std::nullopt;
   for (size_t j = 0; j < m; ++j) refitted.weights[j] = amount[j] / scale[j] / total;
   return refitted;
 }

@@ -10,13 +10,14 @@ TEST_F(FitChain, SlowEveryTexelMeetsTheAcceptanceAndClusteringCostsLittle) {
   EXPECT_GE(all["alpha_within_0_05"].get<double>(), 0.9);
   EXPECT_LT(all["ndf_rel_l2_median"].get<double>(), 0.10);
   EXPECT_LT(all["heldout_rel_rmse"].get<double>(), 0.05);
-  // Clustering with the interpolated texels refined (refine_texels.h). Measured on this session:
-  // every texel 2.72%; 5% representatives 3.07% (1.13x), 1% (10 representatives) 3.61% (1.33x;
-  // the issue asks 1.2x) in 5 s instead of 170 s.
+  // Clustering with the interpolated texels refined (refine_texels.h): the issue asks 1% within
+  // 1.2x of fitting every texel. Measured on this session: every texel 2.72%; 5% representatives
+  // 1.45%, 1% (10 representatives) 1.42%, in 5 s instead of 170 s. The refined blends of the
+  // representatives' tables are less noisy than each texel's own fit.
   const nlohmann::json five = FitAndCompare("five", "--holdout 0.1 --representatives 0.05");
-  EXPECT_LT(five["heldout_rel_rmse"].get<double>(), 1.3 * all["heldout_rel_rmse"].get<double>());
+  EXPECT_LT(five["heldout_rel_rmse"].get<double>(), 1.2 * all["heldout_rel_rmse"].get<double>());
   const nlohmann::json one = FitAndCompare("one", "--holdout 0.1 --representatives 0.01");
-  EXPECT_LT(one["heldout_rel_rmse"].get<double>(), 1.5 * all["heldout_rel_rmse"].get<double>());
+  EXPECT_LT(one["heldout_rel_rmse"].get<double>(), 1.2 * all["heldout_rel_rmse"].get<double>());
   EXPECT_GE(one["alpha_within_0_05"].get<double>(), 0.9);
 }
 

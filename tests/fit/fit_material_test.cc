@@ -165,7 +165,7 @@ TEST_F(FitMaterialTest, RefiningTheInterpolatedTexelsBeatsThePlainInterpolationO
   EXPECT_EQ(interpolated.provenance.at("statistics").at("refined_texels").get<int>(), 0);
   EXPECT_LT(statistics.at("median_relative_rmse_refined").get<double>(),
             statistics.at("median_relative_rmse_blended").get<double>());
-  EXPECT_LT(after.heldout_rel_rmse, 0.9 * before.heldout_rel_rmse);
+  EXPECT_LT(after.heldout_rel_rmse, 0.8 * before.heldout_rel_rmse);  // measured 0.65x
   EXPECT_GE(after.alpha_within_0_05, before.alpha_within_0_05);
   for (int y = 0; y < material.height; ++y) {
     for (int x = 0; x < material.width; ++x) {

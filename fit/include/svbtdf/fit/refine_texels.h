@@ -5,9 +5,9 @@
 // (paper Sec. 4.3). Its own samples are still at hand, and a few parameters are cheap to fit to
 // them: the blend weight alpha (golden-section search on [0, 1], each step with the best scale in
 // closed form), the transmission scale k_s (linear least squares, per channel) and, for the
-// dual-microfacet model, the weights over the same representatives (non-negative, by
-// Levenberg-Marquardt with alpha, kept only where they lower the texel's residual). The
-// representatives' NDF tables and the shadowing roughness stay the blend's, so the material format
+// dual-microfacet model, the weights over the same representatives (by Levenberg-Marquardt with
+// alpha, extrapolating where the texel lies outside their hull; kept only where they lower the
+// texel's residual). The representatives' NDF tables and the shadowing roughness stay the blend's, so the material format
 // does not change. This costs about 3 ms per texel instead of the full fit's 0.1 s, and removes most
 // of the error that interpolating between few representatives adds.
 
