@@ -62,8 +62,11 @@ void FitAndWriteMaterial(const fs::path& processed, const fs::path& out, fit::Fi
               statistics["resumed_fits"].dump().c_str(), statistics["seconds"].get<double>(),
               statistics["seconds_per_fit"].get<double>(),
               statistics["median_relative_rmse"].is_number() ? statistics["median_relative_rmse"].get<double>() : -1.0);
+  if (statistics["refined_representatives"].get<int64_t>() > 0) {
+    std::printf("refined alpha and k_s of %s representatives\n", statistics["refined_representatives"].dump().c_str());
+  }
   if (statistics["refined_texels"].get<int64_t>() > 0) {
-    std::printf("refined alpha and k_s of %s interpolated texels: median residual %.3f -> %.3f\n",
+    std::printf("refined alpha, k_s and weights of %s interpolated texels: median residual %.3f -> %.3f\n",
                 statistics["refined_texels"].dump().c_str(), statistics["median_relative_rmse_blended"].get<double>(),
                 statistics["median_relative_rmse_refined"].get<double>());
   }
@@ -81,9 +84,9 @@ void AddFitOptions(CLI::App* command, fit::FitMaterialOptions* options, std::str
       ->capture_default_str();
   command->add_option("--holdout", options->holdout, "fraction of the dots withheld from the fit, for 'svbtdf compare'")
       ->capture_default_str();
-  command->add_flag("!--no-refine", options->refine_interpolated,
-                    "keep the interpolated texels' alpha and k_s as blended (the paper's interpolation) instead of "
-                    "fitting them to each texel's own samples");
+  command->add_flag("!--no-refine", options->refine_texels,
+                    "keep the paper's plain interpolation and alpha criterion instead of fitting every texel's "
+                    "alpha, k_s and weights to its own samples");
   command->add_option("--ndf-resolution", options->ndf_resolution, "NDF hemicube resolution (top face)")
       ->capture_default_str();
   command->add_option("--seed", options->seed, "seed of the clustering and the held-out dots")->capture_default_str();

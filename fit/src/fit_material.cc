@@ -392,11 +392,11 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
 
   Material material = fits.Assemble(store, eta, options.ndf_resolution, clustering);
   RefineStatistics refined;
-  if (options.refine_interpolated && reps.size() < valid.size()) {
+  if (options.refine_texels) {
     RefineOptions refine_options;
     refine_options.threads = options.threads;
     refine_options.progress = options.progress;
-    refined = RefineInterpolatedTexels(store, use_dot, valid, refine_options, &material);
+    refined = RefineTexels(store, use_dot, valid, refine_options, &material);
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   material.provenance = {
@@ -407,7 +407,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
         {"eta", eta},
         {"representative_fraction", options.representative_fraction},
         {"ndf_resolution", options.ndf_resolution},
-        {"refine_interpolated", options.refine_interpolated},
+        {"refine_texels", options.refine_texels},
         {"seed", options.seed}}},
       {"statistics",
        {{"texels", store.geometry().num_texels()},
@@ -418,6 +418,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
         {"resumed_fits", resumed},
         {"median_relative_rmse", Median(residuals)},
         // The interpolated texels' residuals on their own samples, before and after refinement.
+        {"refined_representatives", refined.representatives},
         {"refined_texels", refined.texels},
         {"median_relative_rmse_blended", refined.texels > 0 ? refined.median_rmse_blended : -1.0},
         {"median_relative_rmse_refined", refined.texels > 0 ? refined.median_rmse_refined : -1.0},

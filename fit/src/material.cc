@@ -276,6 +276,14 @@ MaterialEvaluator::MaterialEvaluator(const Material& material) : material_(mater
     for (int c = 0; c < 3; ++c) scale += material.k_s.at(x, y, c) / 3.0;
     representative_scale_.push_back(scale);
   }
+  // Every texel's NDF is a blend of these: exponentiate each table once, not once per texel.
+  if (material.model == MaterialModel::kDualMicrofacet) {
+    representative_d_.reserve(material.representative_ln_d.size());
+    for (const auto& ln_d : material.representative_ln_d) {
+      std::vector<float>& d = representative_d_.emplace_back(ln_d.size());
+      for (size_t c = 0; c < ln_d.size(); ++c) d[c] = static_cast<float>(std::exp(ln_d[c]));
+    }
+  }
 }
 
 Rgb TexelBtdf::Evaluate(const Vec3& i, const Vec3& o) const {
@@ -301,23 +309,25 @@ TabulatedNdf MaterialEvaluator::TexelNdf(int x, int y) const {
   // predicts. Blending D and k_s separately multiplied one representative's k_s with another's
   // D (held-out errors of 500% on a Monte Carlo truth, docs/validation.md).
   const int cells = grid_.num_cells();
-  std::vector<double> d(cells, 0.0), unscaled(cells, 0.0);
-  double total_scale = 0;
-  for (int k = 0; k < material_.weight_index.channels; ++k) {
-    const double w = material_.weight_value.at(x, y, k);
-    if (w == 0.0) continue;
-    const size_t rep = static_cast<size_t>(material_.weight_index.at(x, y, k));
-    const auto& table = material_.representative_ln_d[rep];
-    const double scale = rep < representative_scale_.size() ? representative_scale_[rep] : 0.0;
-    total_scale += w * scale;
-    for (int c = 0; c < cells; ++c) {
-      const double value = std::exp(table[c]);
-      d[c] += w * scale * value;
-      unscaled[c] += w * value;
+  const auto blend = [&](bool by_scale, double* total_scale) {
+    std::vector<double> d(cells, 0.0);
+    *total_scale = 0;
+    for (int k = 0; k < material_.weight_index.channels; ++k) {
+      const double w = material_.weight_value.at(x, y, k);
+      if (w == 0.0) continue;
+      const size_t rep = static_cast<size_t>(material_.weight_index.at(x, y, k));
+      const double scale = rep < representative_scale_.size() ? representative_scale_[rep] : 0.0;
+      *total_scale += w * scale;
+      const double weight = by_scale ? w * scale : w;
+      const std::vector<float>& table = representative_d_.at(rep);
+      for (int c = 0; c < cells; ++c) d[c] += weight * table[c];
     }
-  }
+    return d;
+  };
+  double total_scale = 0;
+  std::vector<double> d = blend(/*by_scale=*/true, &total_scale);
   // Representatives that transmit nothing (k_s = 0) leave the plain blend.
-  if (!(total_scale > 0)) d = std::move(unscaled);
+  if (!(total_scale > 0)) d = blend(/*by_scale=*/false, &total_scale);
   // Affine weights may be negative: keep D positive where the combination undershoots.
   std::vector<double> ln_d(cells);
   for (int c = 0; c < cells; ++c) ln_d[c] = std::log(std::max(d[c], 1e-12 * std::max(total_scale, 1.0)));

@@ -64,20 +64,31 @@ class ScalarRefiner {
     const DualMicrofacetModel model(texel.params().eta, texel.params().shadowing);
     rho_t_.resize(n);
     rho_b_.resize(n);
+    ln_t_.resize(n);
+    ln_b_.resize(n);
     for (size_t k = 0; k < n; ++k) {
       rho_t_[k] = model.RhoT(texel.ndf(), slice_.light[k], slice_.view);
       rho_b_[k] = model.RhoB(texel.ndf(), slice_.light[k], slice_.view);
+      ln_t_[k] = rho_t_[k] > 0 ? std::log(rho_t_[k]) : 0.0;
+      ln_b_[k] = rho_b_[k] > 0 ? std::log(rho_b_[k]) : 0.0;
     }
   }
 
-  // The shape of the model (its BTDF with k_s = 1) at blend weight `alpha` at every sample.
+  // The shape of the model (its BTDF with k_s = 1) at blend weight `alpha` at every sample:
+  // LogBlend with the logarithms taken once.
   const std::vector<double>& Shape(double alpha) {
     if (rho_t_.empty()) {
       shape_ = fixed_shape_;
       return shape_;
     }
     shape_.resize(rho_t_.size());
-    for (size_t k = 0; k < rho_t_.size(); ++k) shape_[k] = LogBlend(rho_t_[k], rho_b_[k], alpha);
+    for (size_t k = 0; k < rho_t_.size(); ++k) {
+      if (alpha >= 1.0 || alpha <= 0.0) {
+        shape_[k] = alpha >= 1.0 ? rho_t_[k] : rho_b_[k];
+      } else {
+        shape_[k] = rho_t_[k] > 0 && rho_b_[k] > 0 ? std::exp(alpha * ln_t_[k] + (1.0 - alpha) * ln_b_[k]) : 0.0;
+      }
+    }
     return shape_;
   }
 
@@ -109,7 +120,8 @@ class ScalarRefiner {
  private:
   const TexelSlice& slice_;
   double sum_rho_squared_ = 0.0;
-  std::vector<double> rho_t_, rho_b_;  // dual-microfacet: the two configurations (k_s = 1)
+  std::vector<double> rho_t_, rho_b_;  // dual-microfacet: the two configurations (k_s = 1) ...
+  std::vector<double> ln_t_, ln_b_;    // ... and their logarithms (0 where they vanish)
   std::vector<double> fixed_shape_;    // walter-ggx: the shape, which has no alpha
   std::vector<double> shape_;
 };
@@ -193,18 +205,25 @@ class BlendCost final : public ceres::CostFunction {
         st += a[j] * terms_.t[j][k];
         sb += a[j] * terms_.b[j][k];
       }
-      const double shape = LogBlend(std::max(st, 0.0), std::max(sb, 0.0), alpha);
+      // LogBlend, with the logarithms kept for the derivative in alpha.
+      const bool smooth = st > 0 && sb > 0;
+      const double ln_st = smooth ? std::log(st) : 0.0, ln_sb = smooth ? std::log(sb) : 0.0;
+      double shape = 0.0;
+      if (alpha >= 1.0 || alpha <= 0.0) {
+        shape = std::max(alpha >= 1.0 ? st : sb, 0.0);
+      } else if (smooth) {
+        shape = std::exp(alpha * ln_st + (1.0 - alpha) * ln_sb);
+      }
       residuals[k] = (shape - rho_[k]) * inverse_norm_;
-      if (!jacobians) continue;
       // Where a configuration is empty the blend is flat zero: no gradient to follow.
-      const bool smooth = st > 0 && sb > 0 && shape > 0;
+      if (!jacobians) continue;
       if (jacobians[0]) {
         for (size_t j = 0; j < m; ++j) {
           jacobians[0][k * m + j] =
               smooth ? shape * (alpha * terms_.t[j][k] / st + (1 - alpha) * terms_.b[j][k] / sb) * inverse_norm_ : 0.0;
         }
       }
-      if (jacobians[1]) jacobians[1][k] = smooth ? shape * (std::log(st) - std::log(sb)) * inverse_norm_ : 0.0;
+      if (jacobians[1]) jacobians[1][k] = smooth ? shape * (ln_st - ln_sb) * inverse_norm_ : 0.0;
     }
     return true;
   }
@@ -302,72 +321,113 @@ double Median(std::vector<double> v) {
 
 }  // namespace
 
-RefineStatistics RefineInterpolatedTexels(const SliceStore& store, const std::vector<bool>& use_dot,
-                                          const std::vector<int64_t>& texels, const RefineOptions& options,
-                                          Material* material) {
+namespace {
+
+struct RefineContext {
+  const SliceStore& store;
+  const std::vector<bool>& use_dot;
+  const RefineOptions& options;
+  bool refine_alpha = false;
+  bool refit_weights = false;
+};
+
+// Refines one texel in place; returns its relative RMSE on its own samples before and after, or
+// nothing when it has no usable samples (it then keeps the blend).
+std::optional<std::pair<double, double>> RefineTexel(const RefineContext& context, const MaterialEvaluator& evaluator,
+                                                     const Hemicube& grid, bool refit_weights, int64_t t,
+                                                     Material* material) {
+  const int x = static_cast<int>(t % material->width), y = static_cast<int>(t / material->width);
+  const TexelSlice slice = context.store.MakeTexelSlice(t, context.use_dot);
+  if (!(SumOfSquares(slice.rho) > 0)) return std::nullopt;
+  const TexelWeights blended_weights = ReadWeights(*material, x, y);
+  const TexelBtdf blended = evaluator.Texel(x, y);
+  const double before =
+      ScalarRefiner(blended, slice).RelativeRmse(blended.params().alpha, Luminance(blended.params().k_s));
+  const double tolerance = context.options.alpha_tolerance;
+  RefinedScalars best = RefineScalars(blended, slice, context.refine_alpha, tolerance);
+  if (refit_weights) {
+    if (const auto refitted = RefitWeights(*material, evaluator, grid, blended, blended_weights, slice)) {
+      WriteWeights(*refitted, x, y, material);
+      const RefinedScalars with_refitted = RefineScalars(evaluator.Texel(x, y), slice, context.refine_alpha, tolerance);
+      if (with_refitted.relative_rmse < best.relative_rmse) {
+        best = with_refitted;
+      } else {
+        WriteWeights(blended_weights, x, y, material);
+      }
+    }
+  }
+  material->alpha.at(x, y) = static_cast<float>(best.alpha);
+  for (int c = 0; c < 3; ++c) material->k_s.at(x, y, c) = static_cast<float>(best.k_s[c]);
+  material->residual.at(x, y) = static_cast<float>(best.relative_rmse);
+  return std::make_pair(before, best.relative_rmse);
+}
+
+// Refines `texels` in parallel (each writes only its own pixels of the maps) and returns the
+// before/after pairs of those refined.
+std::vector<std::pair<double, double>> RefineAll(const RefineContext& context, const std::vector<int64_t>& texels,
+                                                 bool refit_weights, const char* label, Material* material) {
+  // Constructed here, after any earlier pass changed the representatives' k_s: the blend scales
+  // it reads are then the ones a reader of the saved material computes.
+  const MaterialEvaluator evaluator(*material);
+  const Hemicube grid(material->ndf_resolution);
+  std::vector<std::optional<std::pair<double, double>>> results(texels.size());
+  std::unique_ptr<ProgressBar> progress;
+  if (context.options.progress) {
+    progress = std::make_unique<ProgressBar>(label, static_cast<int64_t>(texels.size()), "texels");
+  }
+  ParallelFor(static_cast<int64_t>(texels.size()), context.options.threads, 64, [&](int64_t a, int64_t b) {
+    for (int64_t k = a; k < b; ++k) {
+      ThrowIfInterrupted("refining");
+      results[k] = RefineTexel(context, evaluator, grid, refit_weights, texels[k], material);
+      if (progress) progress->Advance();
+    }
+  });
+  if (progress) progress->Finish();
+  std::vector<std::pair<double, double>> refined;
+  for (const auto& r : results) {
+    if (r) refined.push_back(*r);
+  }
+  return refined;
+}
+
+}  // namespace
+
+RefineStatistics RefineTexels(const SliceStore& store, const std::vector<bool>& use_dot,
+                              const std::vector<int64_t>& texels, const RefineOptions& options, Material* material) {
   const int width = material->width;
   if (store.info().texels_x != width || store.info().texels_y != material->height) {
     ThrowInvalidInput(store.folder().string(), "does not match the material's texel grid");
   }
   std::vector<uint8_t> is_representative(static_cast<size_t>(width) * material->height, 0);
   for (int64_t t : material->representative_texels) is_representative[t] = 1;
-  std::vector<int64_t> todo;
+  const bool dual = material->model == MaterialModel::kDualMicrofacet;
+  std::vector<int64_t> representatives, interpolated;
   for (int64_t t : texels) {
     if (t < 0 || t >= static_cast<int64_t>(is_representative.size())) {
       ThrowInvalidInput("refinement", "texel " + std::to_string(t) + " is outside the material");
     }
-    if (!is_representative[t]) todo.push_back(t);
-  }
-  const bool dual = material->model == MaterialModel::kDualMicrofacet;
-  const bool refine_alpha = options.refine_alpha && dual;
-  const bool refit_weights = options.refit_weights && dual;
-  const MaterialEvaluator evaluator(*material);
-  const Hemicube grid(material->ndf_resolution);
-  std::vector<double> before(todo.size(), -1.0), after(todo.size(), -1.0);
-  std::unique_ptr<ProgressBar> progress;
-  if (options.progress) progress = std::make_unique<ProgressBar>("refine", static_cast<int64_t>(todo.size()), "texels");
-  // Each texel writes only its own pixels of the maps; the evaluator reads the representatives'.
-  ParallelFor(static_cast<int64_t>(todo.size()), options.threads, 64, [&](int64_t a, int64_t b) {
-    for (int64_t k = a; k < b; ++k) {
-      ThrowIfInterrupted("refining");
-      const int64_t t = todo[k];
-      const int x = static_cast<int>(t % width), y = static_cast<int>(t / width);
-      const TexelSlice slice = store.MakeTexelSlice(t, use_dot);
-      if (!(SumOfSquares(slice.rho) > 0)) continue;
-      const TexelWeights blended_weights = ReadWeights(*material, x, y);
-      const TexelBtdf blended = evaluator.Texel(x, y);
-      before[k] = ScalarRefiner(blended, slice).RelativeRmse(blended.params().alpha, Luminance(blended.params().k_s));
-      RefinedScalars best = RefineScalars(blended, slice, refine_alpha, options.alpha_tolerance);
-      if (refit_weights) {
-        if (const auto refitted = RefitWeights(*material, evaluator, grid, blended, blended_weights, slice)) {
-          WriteWeights(*refitted, x, y, material);
-          const RefinedScalars with_refitted =
-              RefineScalars(evaluator.Texel(x, y), slice, refine_alpha, options.alpha_tolerance);
-          if (with_refitted.relative_rmse < best.relative_rmse) {
-            best = with_refitted;
-          } else {
-            WriteWeights(blended_weights, x, y, material);
-          }
-        }
-      }
-      after[k] = best.relative_rmse;
-      material->alpha.at(x, y) = static_cast<float>(best.alpha);
-      for (int c = 0; c < 3; ++c) material->k_s.at(x, y, c) = static_cast<float>(best.k_s[c]);
-      material->residual.at(x, y) = static_cast<float>(best.relative_rmse);
-      if (progress) progress->Advance();
+    if (!is_representative[t]) {
+      interpolated.push_back(t);
+    } else if (dual && options.refine_alpha) {
+      representatives.push_back(t);  // the baseline's representatives have nothing to refine
     }
-  });
-  if (progress) progress->Finish();
-  RefineStatistics statistics;
-  std::vector<double> refined_before, refined_after;
-  for (size_t k = 0; k < todo.size(); ++k) {
-    if (after[k] < 0) continue;
-    refined_before.push_back(before[k]);
-    refined_after.push_back(after[k]);
   }
-  statistics.texels = static_cast<int64_t>(refined_after.size());
-  statistics.median_rmse_blended = Median(refined_before);
-  statistics.median_rmse_refined = Median(refined_after);
+  RefineContext context{store, use_dot, options, options.refine_alpha && dual, options.refit_weights && dual};
+  RefineStatistics statistics;
+  // The representatives first (alpha and k_s only): the interpolated texels blend their D by the
+  // representatives' k_s, so those must be final before the weights are refitted against them.
+  statistics.representatives =
+      static_cast<int64_t>(RefineAll(context, representatives, false, "refine representatives", material).size());
+  const std::vector<std::pair<double, double>> refined =
+      RefineAll(context, interpolated, context.refit_weights, "refine", material);
+  std::vector<double> before, after;
+  for (const auto& [b, a] : refined) {
+    before.push_back(b);
+    after.push_back(a);
+  }
+  statistics.texels = static_cast<int64_t>(refined.size());
+  statistics.median_rmse_blended = Median(before);
+  statistics.median_rmse_refined = Median(after);
   return statistics;
 }
 

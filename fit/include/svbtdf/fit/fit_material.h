@@ -27,9 +27,10 @@ struct FitMaterialOptions {
   int threads = 0;
   bool progress = true;
   std::filesystem::path checkpoint;       // journal of finished fits; empty: none
-  // Fit alpha and k_s of every interpolated texel to its own samples, the blended NDF held fixed
-  // (refine_texels.h); false keeps the paper's plain interpolation.
-  bool refine_interpolated = true;
+  // Fit alpha, k_s and (interpolated texels) the weights of every texel to its own samples, the
+  // representatives' NDF tables held fixed (refine_texels.h); false keeps the paper's plain
+  // interpolation and the representatives' alpha by its eq. 18.
+  bool refine_texels = true;
 };
 
 // A representative whose fit fails (kNumerical) takes the fit of the nearest one that succeeded

@@ -116,6 +116,7 @@ class MaterialEvaluator {
   const Material& material_;
   Hemicube grid_;
   std::vector<double> representative_scale_;  // mean k_s of each representative's own fit
+  std::vector<std::vector<float>> representative_d_;  // exp of representative_ln_d (dual-microfacet)
 };
 
 }  // namespace svbtdf::fit
