@@ -15,6 +15,7 @@
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/progress.h"
+#include "svbtdf/common/statistics.h"
 #include "svbtdf/fit/material.h"
 #include "svbtdf/fit/ndf_error.h"
 #include "svbtdf/simulate/montecarlo_truth.h"
@@ -30,12 +31,6 @@ struct CompareOptions {
   int max_texels = 1000;
   uint64_t seed = 1;
 };
-
-double Median(std::vector<double> values) {
-  if (values.empty()) return std::nan("");
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
-}
 
 // The ground truth either kind of simulation wrote, evaluated through the renderer's SpatialBtdf:
 // the analytic dual-microfacet material (with a true alpha and NDF per texel) or the Monte Carlo

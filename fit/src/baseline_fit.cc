@@ -10,6 +10,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/ggx.h"
+#include "small_problem.h"
 
 namespace svbtdf::fit {
 namespace {
@@ -132,11 +133,7 @@ BaselineFitResult BaselineFitter::Fit(const TexelSlice& slice) const {
     problem.SetParameterLowerBound(p, axis, std::log(1e-3));
     problem.SetParameterUpperBound(p, axis, std::log(3.0));
   }
-  ceres::Solver::Options options;
-  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  options.linear_solver_type = ceres::DENSE_QR;
-  options.max_num_iterations = 100;
-  options.logging_type = ceres::SILENT;
+  const ceres::Solver::Options options = SmallProblemOptions(100);
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
 

@@ -17,6 +17,7 @@
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/common/parallel.h"
 #include "svbtdf/common/progress.h"
+#include "svbtdf/common/statistics.h"
 #include "svbtdf/fit/refine_texels.h"
 
 namespace svbtdf::fit {
@@ -245,12 +246,6 @@ std::vector<int64_t> FailedTexels(const std::vector<int64_t>& reps, const std::v
     if (failed[r]) texels.push_back(reps[r]);
   }
   return texels;
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
 }
 
 // The fits of all representatives with one model, as the journal records them.

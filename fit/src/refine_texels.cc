@@ -13,6 +13,8 @@
 #include "svbtdf/common/minimize.h"
 #include "svbtdf/common/parallel.h"
 #include "svbtdf/common/progress.h"
+#include "svbtdf/common/statistics.h"
+#include "small_problem.h"
 
 namespace svbtdf::fit {
 namespace {
@@ -292,12 +294,7 @@ std::optional<TexelWeights> RefitWeights(const Material& material, const Materia
   for (size_t j = 0; j < m; ++j) problem.SetParameterLowerBound(amount.data(), static_cast<int>(j), floor);
   problem.SetParameterLowerBound(&alpha, 0, 0.0);
   problem.SetParameterUpperBound(&alpha, 0, 1.0);
-  ceres::Solver::Options options;
-  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  options.linear_solver_type = ceres::DENSE_QR;
-  options.max_num_iterations = 25;
-  options.logging_type = ceres::SILENT;
-  options.num_threads = 1;
+  const ceres::Solver::Options options = SmallProblemOptions(25);
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
   if (!summary.IsSolutionUsable()) return std::nullopt;
@@ -311,12 +308,6 @@ std::optional<TexelWeights> RefitWeights(const Material& material, const Materia
   if (!(total_scaled > 0)) return std::nullopt;
   for (size_t j = 0; j < m; ++j) refitted.weights[j] = amount[j] / scale[j] / total;
   return refitted;
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
 }
 
 }  // namespace

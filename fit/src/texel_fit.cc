@@ -12,6 +12,7 @@
 #include "svbtdf/common/minimize.h"
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/tabulated_ndf.h"
+#include "small_problem.h"
 
 namespace svbtdf::fit {
 
@@ -404,12 +405,7 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
     problem.AddResidualBlock(cost, nullptr, parameters);
     problem.SetParameterLowerBound(parameters, 0, 0.01);
     problem.SetParameterUpperBound(parameters, 0, 2.0);
-    ceres::Solver::Options solver_options;
-    solver_options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-    solver_options.linear_solver_type = ceres::DENSE_QR;
-    solver_options.max_num_iterations = 50;
-    solver_options.logging_type = ceres::SILENT;
-    solver_options.num_threads = 1;
+    const ceres::Solver::Options solver_options = SmallProblemOptions(50);
     ceres::Solver::Summary summary;
     ceres::Solve(solver_options, &problem, &summary);
     if (summary.IsSolutionUsable()) {

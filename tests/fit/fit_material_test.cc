@@ -15,6 +15,7 @@
 #include "analytic_store.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/interrupt.h"
+#include "svbtdf/common/statistics.h"
 #include "svbtdf/fit/fit_material.h"
 #include "svbtdf/fit/material.h"
 #include "svbtdf/fit/ndf_error.h"
@@ -25,11 +26,6 @@ namespace fs = std::filesystem;
 using testing::AnalyticMaterial;
 
 constexpr int kDots = 24;  // per side of the dot grid
-
-double Median(std::vector<double> v) {
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 // How a material compares with the analytic truth it was fitted to.
 struct Scores {

@@ -18,6 +18,7 @@
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/common/progress.h"
 #include "svbtdf/common/session.h"
+#include "svbtdf/common/statistics.h"
 #include "svbtdf/fit/process_session.h"
 #include "svbtdf/fit/slice_store.h"
 #include "svbtdf/simulate/session_writer.h"
@@ -57,11 +58,6 @@ struct Accuracy {
   double rho_d_median_relative_error = 0;
   int64_t samples = 0, texels = 0;
 };
-
-double Median(std::vector<double> v) {
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 // Compares every valid sample of every valid texel with the truth R (refractive + diffuse), over
 // the samples whose truth is at least 5% of the texel's brightest (the directions the fit uses;
