@@ -326,9 +326,8 @@ struct RefineContext {
 // nothing when it has no usable samples (it then keeps the blend).
 std::optional<std::pair<double, double>> RefineTexel(const RefineContext& context, const MaterialEvaluator& evaluator,
                                                      const Hemicube& grid, bool refit_weights, int64_t t,
-                                                     Material* material) {
+                                                     const TexelSlice& slice, Material* material) {
   const int x = static_cast<int>(t % material->width), y = static_cast<int>(t / material->width);
-  const TexelSlice slice = context.store.MakeTexelSlice(t, context.use_dot);
   if (!(SumOfSquares(slice.rho) > 0)) return std::nullopt;
   const TexelWeights blended_weights = ReadWeights(*material, x, y);
   const TexelBtdf blended = evaluator.Texel(x, y);
@@ -366,13 +365,28 @@ std::vector<std::pair<double, double>> RefineAll(const RefineContext& context, c
   if (context.options.progress) {
     progress = std::make_unique<ProgressBar>(label, static_cast<int64_t>(texels.size()), "texels");
   }
-  ParallelFor(static_cast<int64_t>(texels.size()), context.options.threads, 64, [&](int64_t a, int64_t b) {
-    for (int64_t k = a; k < b; ++k) {
-      ThrowIfInterrupted("refining");
-      results[k] = RefineTexel(context, evaluator, grid, refit_weights, texels[k], material);
-      if (progress) progress->Advance();
-    }
-  });
+  // Tile by tile: one read per tile rather than one per dot and texel (slice_store.h).
+  const int64_t tile_texels = context.store.info().tile_texels;
+  std::vector<size_t> order(texels.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return texels[a] < texels[b]; });
+  std::vector<float> tile_samples;
+  for (size_t begin = 0; begin < order.size();) {
+    const int64_t tile = texels[order[begin]] / tile_texels;
+    size_t end = begin;
+    while (end < order.size() && texels[order[end]] / tile_texels == tile) ++end;
+    context.store.ReadTile(tile, &tile_samples);
+    ParallelFor(static_cast<int64_t>(end - begin), context.options.threads, 16, [&](int64_t a, int64_t b) {
+      for (int64_t k = a; k < b; ++k) {
+        ThrowIfInterrupted("refining");
+        const size_t index = order[begin + k];
+        const TexelSlice slice = context.store.MakeTexelSlice(texels[index], tile_samples, context.use_dot);
+        results[index] = RefineTexel(context, evaluator, grid, refit_weights, texels[index], slice, material);
+        if (progress) progress->Advance();
+      }
+    });
+    begin = end;
+  }
   if (progress) progress->Finish();
   std::vector<std::pair<double, double>> refined;
   for (const auto& r : results) {

@@ -277,6 +277,25 @@ void SliceStore::ReadSlice(int64_t texel, float* out) const {
 TexelSlice SliceStore::MakeTexelSlice(int64_t texel, const std::vector<bool>& use_dot) const {
   std::vector<float> samples;
   ReadSamples(texel, &samples);
+  return SliceFromSamples(texel, samples.data(), 3, use_dot);
+}
+
+TexelSlice SliceStore::MakeTexelSlice(int64_t texel, const std::vector<float>& tile_samples,
+                                      const std::vector<bool>& use_dot) const {
+  if (texel < 0 || texel >= geometry_.num_texels()) {
+    ThrowInvalidInput("texel", std::to_string(texel) + " is outside the store");
+  }
+  const size_t tile_values = static_cast<size_t>(info_.num_dots) * info_.tile_texels * 3;
+  if (tile_samples.size() != tile_values) {
+    ThrowInvalidInput("tile samples", std::to_string(tile_samples.size()) + " values where a tile has " +
+                                          std::to_string(tile_values));
+  }
+  const size_t k = static_cast<size_t>(texel % info_.tile_texels);
+  return SliceFromSamples(texel, &tile_samples[3 * k], static_cast<size_t>(info_.tile_texels) * 3, use_dot);
+}
+
+TexelSlice SliceStore::SliceFromSamples(int64_t texel, const float* rgb, size_t dot_stride,
+                                        const std::vector<bool>& use_dot) const {
   const Vec3 x = geometry_.TexelCentre(texel);
   const int col = static_cast<int>(texel % info_.texels_x), row = static_cast<int>(texel / info_.texels_x);
   const Rgb rho_d = {rho_d_.at(col, row, 0), rho_d_.at(col, row, 1), rho_d_.at(col, row, 2)};
@@ -284,7 +303,7 @@ TexelSlice SliceStore::MakeTexelSlice(int64_t texel, const std::vector<bool>& us
   slice.view = geometry_.View(texel);
   for (int q = 0; q < info_.num_dots; ++q) {
     if (!use_dot.empty() && !use_dot[q]) continue;
-    const float* r = &samples[3 * q];
+    const float* r = rgb + q * dot_stride;
     if (!std::isfinite(r[0]) || !std::isfinite(r[1]) || !std::isfinite(r[2])) continue;
     const Vec3 to_dot = geometry_.dots[q] - x;
     const Vec3 i = to_dot.normalized();

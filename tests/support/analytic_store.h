@@ -70,13 +70,14 @@ inline calib::SessionCalibration AnalyticCalibration(int dots_per_side) {
 // Writes PROCESSED/ at `folder` with R of `truth` at every texel and dot, times (1 + noise N(0,1)).
 // `store_eta` is what the store records as the sample's nominal eta (0: unknown).
 inline void WriteAnalyticStore(const std::filesystem::path& folder, const AnalyticMaterial& truth, int dots_per_side,
-                               double noise, double store_eta = 1.5, uint64_t seed = 7) {
+                               double noise, double store_eta = 1.5, uint64_t seed = 7, int tile_texels = 1024) {
   const calib::SessionCalibration calibration = AnalyticCalibration(dots_per_side);
   fit::SliceStoreInfo info;
   info.texels_x = truth.width;
   info.texels_y = truth.height;
   info.num_dots = static_cast<int>(calibration.monitor.dots.size());
   info.eta = store_eta;
+  info.tile_texels = tile_texels;
   const fit::TexelGeometry geometry = fit::MakeTexelGeometry(calibration, truth.width, truth.height);
   fit::SliceStoreWriter writer(folder, info, calibration);
   std::mt19937_64 rng(seed);

@@ -84,6 +84,11 @@ class SliceStore {
   // The fit's input for one texel: the refractive part R - rho_d at every valid dot whose
   // `use_dot[q]` is true (all when empty), with the texel's own view and light directions.
   TexelSlice MakeTexelSlice(int64_t texel, const std::vector<bool>& use_dot = {}) const;
+  // The same from the samples of the texel's tile, as ReadTile gives them: reading a texel on its
+  // own takes one small read per dot (the store is dot-major within a tile), so code that visits
+  // every texel reads each tile once instead.
+  TexelSlice MakeTexelSlice(int64_t texel, const std::vector<float>& tile_samples,
+                            const std::vector<bool>& use_dot = {}) const;
 
  private:
   std::filesystem::path folder_;
@@ -92,6 +97,8 @@ class SliceStore {
   TexelGeometry geometry_;
   Hemicube light_grid_{16};
   FloatImage rho_d_, mask_;
+  // MakeTexelSlice from RGB samples, dot q's at rgb[q * dot_stride].
+  TexelSlice SliceFromSamples(int64_t texel, const float* rgb, size_t dot_stride, const std::vector<bool>& use_dot) const;
   struct Files;
   std::shared_ptr<Files> files_;  // open file handles, shared by copies
 };
