@@ -87,6 +87,9 @@ void AddFitOptions(CLI::App* command, fit::FitMaterialOptions* options, std::str
   command->add_flag("!--no-refine", options->refine_texels,
                     "keep the paper's plain interpolation and alpha criterion instead of fitting every texel's "
                     "alpha, k_s and weights to its own samples");
+  command->add_flag("!--fixed-horizon", options->free_horizon,
+                    "hold the NDF at its horizon to the paper's 1e-6 instead of leaving it to the smoothness "
+                    "prior (which fits rough lobes, GGX roughness above about 0.3, far better)");
   command->add_option("--ndf-resolution", options->ndf_resolution, "NDF hemicube resolution (top face)")
       ->capture_default_str();
   command->add_option("--seed", options->seed, "seed of the clustering and the held-out dots")->capture_default_str();

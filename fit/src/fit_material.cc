@@ -287,6 +287,7 @@ class RepresentativeFits {
   static TexelFitOptions DualOptions(const FitMaterialOptions& options) {
     TexelFitOptions fit_options;
     fit_options.ndf_resolution = options.ndf_resolution;
+    fit_options.free_horizon = options.free_horizon;
     return fit_options;
   }
 
@@ -363,12 +364,14 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
   const Clustering clustering = ClusterTexels(store, valid, options);
   const std::vector<int64_t>& reps = clustering.representatives;
 
-  const nlohmann::json identity = {{"store", fs::absolute(store.folder()).string()},
-                                   {"model", MaterialModelName(options.model)},
-                                   {"eta", eta},
-                                   {"ndf_resolution", options.ndf_resolution},
-                                   {"holdout", held_out},
-                                   {"representatives", reps}};
+  nlohmann::json identity = {{"store", fs::absolute(store.folder()).string()},
+                             {"model", MaterialModelName(options.model)},
+                             {"eta", eta},
+                             {"ndf_resolution", options.ndf_resolution},
+                             {"holdout", held_out},
+                             {"representatives", reps}};
+  // Only when set, so that journals written before the option existed still resume.
+  if (options.free_horizon) identity["free_horizon"] = true;
   Checkpoint checkpoint(options.checkpoint, identity);
   RepresentativeFits fits(eta, options, reps.size());
   const size_t resumed = checkpoint.done().size();
@@ -403,6 +406,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
         {"representative_fraction", options.representative_fraction},
         {"ndf_resolution", options.ndf_resolution},
         {"refine_texels", options.refine_texels},
+        {"free_horizon", options.free_horizon},
         {"seed", options.seed}}},
       {"statistics",
        {{"texels", store.geometry().num_texels()},

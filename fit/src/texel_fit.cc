@@ -142,7 +142,7 @@ TexelFitter::TexelFitter(double eta, const TexelFitOptions& options)
   const int cells = grid_.num_cells();
   system->column.assign(cells, -1);
   for (int c = 0; c < cells; ++c) {
-    if (!grid_.IsHorizon(c)) system->column[c] = system->num_unknowns++;
+    if (options.free_horizon || !grid_.IsHorizon(c)) system->column[c] = system->num_unknowns++;
   }
   const int n = system->num_unknowns;
 

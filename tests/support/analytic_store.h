@@ -24,7 +24,15 @@ struct AnalyticMaterial {
   // Texel (x, y): u, v in [0, 1] across the sample.
   double U(int x) const { return width > 1 ? x / (width - 1.0) : 0.5; }
   double V(int y) const { return height > 1 ? y / (height - 1.0) : 0.5; }
-  GgxNdf Ndf(int x, int y) const { return GgxNdf(0.18 + 0.10 * U(x), 0.16 + 0.06 * V(y)); }
+  bool rough = false;  // rice-paper-like lobes: GGX 0.25-0.45 across, 1.1-1.6x that along
+
+  GgxNdf Ndf(int x, int y) const {
+    if (rough) {
+      const double across = 0.25 + 0.20 * U(x);
+      return GgxNdf(across, across * (1.1 + 0.5 * V(y)));
+    }
+    return GgxNdf(0.18 + 0.10 * U(x), 0.16 + 0.06 * V(y));
+  }
   DualMicrofacetParams Params(int x, int y) const {
     DualMicrofacetParams p;
     p.eta = eta;
