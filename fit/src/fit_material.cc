@@ -416,8 +416,8 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
         {"failed_representatives", FailedTexels(reps, failed)},
         {"resumed_fits", resumed},
         {"median_relative_rmse", Median(residuals)},
-        // The interpolated texels' residuals on their own samples, before and after refinement.
         {"refined_representatives", refined.representatives},
+        // The interpolated texels' residuals on their own samples, before and after refinement.
         {"refined_texels", refined.texels},
         {"median_relative_rmse_blended", refined.texels > 0 ? refined.median_rmse_blended : -1.0},
         {"median_relative_rmse_refined", refined.texels > 0 ? refined.median_rmse_refined : -1.0},

@@ -134,20 +134,19 @@ struct RefinedScalars {
   double relative_rmse = 1.0;
 };
 
-// Alpha by golden-section search (never ending worse than `texel`'s own), then k_s per channel.
-RefinedScalars RefineScalars(const TexelBtdf& texel, const TexelSlice& slice, bool refine_alpha, double tolerance) {
-  ScalarRefiner refiner(texel, slice);
+// Alpha by golden-section search (never ending worse than `start_alpha`), then k_s per channel.
+RefinedScalars RefineScalars(ScalarRefiner* refiner, double start_alpha, bool refine_alpha, double tolerance) {
   RefinedScalars result;
-  result.alpha = texel.params().alpha;
+  result.alpha = start_alpha;
   if (refine_alpha) {
-    const double searched = GoldenSectionSearch([&](double a) { return refiner.FitAt(a).relative_squared_error; },
+    const double searched = GoldenSectionSearch([&](double a) { return refiner->FitAt(a).relative_squared_error; },
                                                 0.0, 1.0, tolerance);
-    if (refiner.FitAt(searched).relative_squared_error < refiner.FitAt(result.alpha).relative_squared_error) {
+    if (refiner->FitAt(searched).relative_squared_error < refiner->FitAt(result.alpha).relative_squared_error) {
       result.alpha = searched;
     }
   }
-  const ScaledFit best = refiner.FitAt(result.alpha);  // leaves the shape at alpha for the channels
-  result.k_s = refiner.ChannelScales(best.scale);
+  const ScaledFit best = refiner->FitAt(result.alpha);  // leaves the shape at alpha for the channels
+  result.k_s = refiner->ChannelScales(best.scale);
   result.relative_rmse = std::sqrt(best.relative_squared_error);
   return result;
 }
@@ -265,8 +264,8 @@ void WriteWeights(const TexelWeights& w, int x, int y, Material* material) {
 constexpr double kExtrapolation = 3.0;
 
 // Fits blend amounts a_j (each >= -kExtrapolation times their starting total) of the texel's
-// representatives, and alpha, to its samples, starting from the clustering's weights; returns the weights w_j (sum 1) that make TexelNdf
-// blend a_j D_j, or nothing when the fit does not run.
+// representatives, and alpha, to its samples, starting from the clustering's weights; returns the
+// weights w_j (sum 1) that make TexelNdf blend a_j D_j, or nothing when the fit does not run.
 std::optional<TexelWeights> RefitWeights(const Material& material, const MaterialEvaluator& evaluator,
                                          const Hemicube& grid, const TexelBtdf& blended, const TexelWeights& start,
                                          const TexelSlice& slice) {
@@ -310,16 +309,11 @@ std::optional<TexelWeights> RefitWeights(const Material& material, const Materia
   return refitted;
 }
 
-}  // namespace
-
-namespace {
-
 struct RefineContext {
   const SliceStore& store;
   const std::vector<bool>& use_dot;
   const RefineOptions& options;
   bool refine_alpha = false;
-  bool refit_weights = false;
 };
 
 // Refines one texel in place; returns its relative RMSE on its own samples before and after, or
@@ -331,14 +325,17 @@ std::optional<std::pair<double, double>> RefineTexel(const RefineContext& contex
   if (!(SumOfSquares(slice.rho) > 0)) return std::nullopt;
   const TexelWeights blended_weights = ReadWeights(*material, x, y);
   const TexelBtdf blended = evaluator.Texel(x, y);
-  const double before =
-      ScalarRefiner(blended, slice).RelativeRmse(blended.params().alpha, Luminance(blended.params().k_s));
+  const double start_alpha = blended.params().alpha;
+  ScalarRefiner refiner(blended, slice);
+  const double before = refiner.RelativeRmse(start_alpha, Luminance(blended.params().k_s));
   const double tolerance = context.options.alpha_tolerance;
-  RefinedScalars best = RefineScalars(blended, slice, context.refine_alpha, tolerance);
+  RefinedScalars best = RefineScalars(&refiner, start_alpha, context.refine_alpha, tolerance);
   if (refit_weights) {
     if (const auto refitted = RefitWeights(*material, evaluator, grid, blended, blended_weights, slice)) {
       WriteWeights(*refitted, x, y, material);
-      const RefinedScalars with_refitted = RefineScalars(evaluator.Texel(x, y), slice, context.refine_alpha, tolerance);
+      ScalarRefiner refitted_refiner(evaluator.Texel(x, y), slice);
+      const RefinedScalars with_refitted =
+          RefineScalars(&refitted_refiner, start_alpha, context.refine_alpha, tolerance);
       if (with_refitted.relative_rmse < best.relative_rmse) {
         best = with_refitted;
       } else {
@@ -417,14 +414,14 @@ RefineStatistics RefineTexels(const SliceStore& store, const std::vector<bool>& 
       representatives.push_back(t);  // the baseline's representatives have nothing to refine
     }
   }
-  RefineContext context{store, use_dot, options, options.refine_alpha && dual, options.refit_weights && dual};
+  const RefineContext context{store, use_dot, options, options.refine_alpha && dual};
   RefineStatistics statistics;
   // The representatives first (alpha and k_s only): the interpolated texels blend their D by the
   // representatives' k_s, so those must be final before the weights are refitted against them.
   statistics.representatives =
       static_cast<int64_t>(RefineAll(context, representatives, false, "refine representatives", material).size());
   const std::vector<std::pair<double, double>> refined =
-      RefineAll(context, interpolated, context.refit_weights, "refine", material);
+      RefineAll(context, interpolated, options.refit_weights && dual, "refine", material);
   std::vector<double> before, after;
   for (const auto& [b, a] : refined) {
     before.push_back(b);
