@@ -144,7 +144,7 @@ void ParseCalibration(const json& object, const std::string& source, CapturePlan
 }
 
 void ParseRigNotes(const json& object, const std::string& source, RigNotes* rig) {
-  const Fields f(object, source, "rig.", {"monitor_distance_mm", "emission", "board", "sample_width_mm",
+  const Fields f(object, source, "rig.", {"monitor_distance_mm", "emission", "board", "sample_plane_board", "sample_width_mm",
                                           "sample_height_mm", "texels_x", "texels_y", "eta", "camera_response"});
   rig->monitor_distance_mm = f.Number("monitor_distance_mm", 0.0, 10000.0, 0.0);
   rig->emission = f.Text("emission", "");
@@ -152,6 +152,7 @@ void ParseRigNotes(const json& object, const std::string& source, RigNotes* rig)
     f.Fail("rig.emission", "must be isotropic, lambertian or lcd");
   }
   rig->board = f.Text("board", "");
+  rig->sample_plane_board = f.Text("sample_plane_board", "");
   rig->sample_width_mm = f.Number("sample_width_mm", 0.0, 10000.0, 0.0);
   rig->sample_height_mm = f.Number("sample_height_mm", 0.0, 10000.0, 0.0);
   rig->texels_x = f.Integer("texels_x", 0, 100000, 0);
@@ -250,7 +251,8 @@ json CapturePlanToJson(const CapturePlan& plan) {
                        {"flat_white_exposure_s", plan.flat_white_exposure_s}}},
       {"bytes_per_image", plan.bytes_per_image},
       {"rig", {{"monitor_distance_mm", plan.rig.monitor_distance_mm}, {"emission", plan.rig.emission},
-               {"board", plan.rig.board}, {"sample_width_mm", plan.rig.sample_width_mm},
+               {"board", plan.rig.board}, {"sample_plane_board", plan.rig.sample_plane_board},
+               {"sample_width_mm", plan.rig.sample_width_mm},
                {"sample_height_mm", plan.rig.sample_height_mm}, {"texels_x", plan.rig.texels_x},
                {"texels_y", plan.rig.texels_y}, {"eta", plan.rig.eta}, {"camera_response", plan.rig.camera_response}}},
   };
@@ -291,11 +293,10 @@ CapturePlan PlanFromSimulation(const SimulatedSetup& setup) {
   plan.pixel_pitch_mm = config.monitor.pixel_pitch * 1000.0;
   plan.bytes_per_image = static_cast<uint64_t>(config.intrinsics.width) * config.intrinsics.height * 3 * 2;
   // What `svbtdf simulate` writes as the session's nominal rig.
-  const BoardConfig& b = config.board;
   plan.rig.monitor_distance_mm = config.monitor.distance * 1000.0;
   plan.rig.emission = config.monitor.emission.kind;
-  plan.rig.board = "chessboard:" + std::to_string(b.inner_cols) + "x" + std::to_string(b.inner_rows) + ":" +
-                   std::to_string(b.square * 1000.0);
+  plan.rig.board = config.board.Spec();
+  plan.rig.sample_plane_board = config.holder_board.Spec();
   plan.rig.sample_width_mm = config.sample.width * 1000.0;
   plan.rig.sample_height_mm = config.sample.height() * 1000.0;
   plan.rig.texels_x = config.sample.texels_x;

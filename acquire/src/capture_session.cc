@@ -103,7 +103,7 @@ class CaptureRun {
   CaptureRun(const CapturePlan& plan, Camera& camera, Display& display, Operator& op, Session& session,
              const AcquireOptions& options, AcquireResult& result)
       : plan_(plan), camera_(camera), display_(display), op_(op), session_(session), options_(options),
-        result_(result), camera_id_(camera.Info().id) {}
+        result_(result), camera_id_(camera.Info().id), windowed_(camera.Info().sensor_width > 0) {}
 
   void Run(const std::vector<PlannedCapture>& captures) {
     std::unique_ptr<ProgressBar> progress;
@@ -136,22 +136,27 @@ class CaptureRun {
   }
 
   // One session holds one sensor mode (calibration assumes it), also across resumes with
-  // another camera; and a camera that snaps the exposure is worth knowing about.
+  // another camera; and a camera that snaps the exposure is worth knowing about. A camera that
+  // crops to a window takes its board views on the whole sensor: those share a size of their own.
   void CheckFrame(const PlannedCapture& capture, const Frame& frame) {
+    const bool whole_sensor = windowed_ && capture.scene == Scene::kBoardView;
+    std::optional<std::array<int, 3>>& expected = size_[whole_sensor ? 1 : 0];
     const std::array<int, 3> size = {frame.width, frame.height, frame.channels};
-    if (!size_ && !session_.entries().empty()) {
-      const CameraImage first = session_.ReadImage(session_.entries().front().key);
-      size_ = {first.width, first.height, first.channels};
+    for (size_t n = 0; !expected && n < session_.entries().size(); ++n) {
+      const std::string& key = session_.entries()[n].key;
+      if (windowed_ && (key.rfind("board/", 0) == 0) != whole_sensor) continue;
+      const CameraImage first = session_.ReadImage(key);
+      expected = {first.width, first.height, first.channels};
     }
-    if (size_ && *size_ != size) {
+    if (expected && *expected != size) {
       const auto text = [](const std::array<int, 3>& s) {
         return std::to_string(s[0]) + "x" + std::to_string(s[1]) + "x" + std::to_string(s[2]);
       };
       throw Error(ErrorKind::kInvalidInput, camera_id_,
-                  "delivers " + text(size) + " frames but the session holds " + text(*size_) + " images",
+                  "delivers " + text(size) + " frames but the session holds " + text(*expected) + " images",
                   "resume with the camera and format the session was started with");
     }
-    size_ = size;
+    expected = size;
     if (std::abs(frame.exposure_s - capture.exposure_s) > 0.05 * capture.exposure_s &&
         warned_exposures_.insert(capture.exposure_s).second) {
       spdlog::warn("{}: asked for {} s, the camera used {} s (journalled as used)", camera_id_, capture.exposure_s,
@@ -229,7 +234,8 @@ class CaptureRun {
   std::optional<Pattern> shown_;
   std::optional<double> exposure_;
   std::optional<std::pair<Scene, int>> scene_;
-  std::optional<std::array<int, 3>> size_;
+  bool windowed_ = false;  // the camera crops to a window; board views are whole-sensor
+  std::array<std::optional<std::array<int, 3>>, 2> size_;  // window frames, whole-sensor frames
   std::set<double> warned_exposures_;
   bool scene_ready_ = false;
 };
@@ -302,7 +308,12 @@ nlohmann::json AcquisitionRig(const CapturePlan& plan, const CameraInfo& camera,
   if (pitch_mm > 0) m["pixel_pitch_m"] = pitch_mm / 1000.0;
   if (notes.monitor_distance_mm > 0) m["distance_m"] = notes.monitor_distance_mm / 1000.0;
   if (!notes.emission.empty()) m["emission"] = notes.emission;
+  if (camera.sensor_width > 0) {
+    c["sensor"] = {{"width", camera.sensor_width}, {"height", camera.sensor_height},
+                   {"window_offset", {camera.window_x, camera.window_y}}};
+  }
   if (!notes.board.empty()) rig["board"] = {{"spec", notes.board}, {"views", plan.board_views}};
+  if (!notes.sample_plane_board.empty()) rig["sample_plane_board"] = {{"spec", notes.sample_plane_board}};
   nlohmann::json sample = nlohmann::json::object();
   if (notes.sample_width_mm > 0) sample["width_m"] = notes.sample_width_mm / 1000.0;
   if (notes.sample_height_mm > 0) sample["height_m"] = notes.sample_height_mm / 1000.0;

@@ -72,6 +72,13 @@ CameraInfo SimCamera::Info() const {
   info.frame_height = k.height;
   info.frame_channels = 3;
   info.frame_bits = setup_->rig->config().sensor.bit_depth;
+  const SensorWindow& window = setup_->rig->config().window;
+  if (!window.whole_sensor()) {
+    info.sensor_width = window.sensor_width;
+    info.sensor_height = window.sensor_height;
+    info.window_x = window.offset_x;
+    info.window_y = window.offset_y;
+  }
   return info;
 }
 
@@ -160,7 +167,8 @@ Frame SimCamera::Capture() {
     RenderCaptureRadiance(*setup_->renderer, setup_->plan, id, &radiance_);
     rendered_ = id.kind == "dark" ? std::string() : scene_key;
   }
-  const CameraImage image = setup_->renderer->Expose(radiance_, settings_.exposure_s, setup_->seed, stream);
+  const CameraImage image = setup_->renderer->Expose(radiance_, settings_.exposure_s, setup_->seed, stream,
+                                                     CaptureWindowOrigin(*setup_->rig, id));
   Frame frame;
   frame.width = image.width;
   frame.height = image.height;

@@ -316,6 +316,43 @@ Radiometry RadiometryOf(const Session& session, int bits, const cv::Size& size) 
   return r;
 }
 
+// Where the session's images lie on the sensor (docs/session-format.md, rig.camera.sensor): the
+// Zhang board views are whole-sensor images when the other captures are a window of it.
+struct SensorWindow {
+  cv::Size sensor;
+  cv::Point offset;  // the window's top-left pixel on the sensor
+};
+
+SensorWindow ReadSensorWindow(const nlohmann::json& camera, const cv::Size& window, const std::string& manifest) {
+  if (!camera.contains("sensor")) return {window, {0, 0}};
+  SensorWindow w;
+  try {
+    const nlohmann::json& s = camera.at("sensor");
+    w.sensor = cv::Size(s.at("width").get<int>(), s.at("height").get<int>());
+    w.offset = cv::Point(s.at("window_offset").at(0).get<int>(), s.at("window_offset").at(1).get<int>());
+  } catch (const nlohmann::json::exception& e) {
+    ThrowFormatError(manifest, std::string("has a malformed rig.camera.sensor: ") + e.what(),
+                     "it needs width, height and window_offset [x, y]");
+  }
+  if (w.offset.x < 0 || w.offset.y < 0 || w.offset.x + window.width > w.sensor.width ||
+      w.offset.y + window.height > w.sensor.height) {
+    ThrowFormatError(manifest, "has a " + std::to_string(window.width) + "x" + std::to_string(window.height) +
+                                   " window at (" + std::to_string(w.offset.x) + ", " + std::to_string(w.offset.y) +
+                                   ") that does not lie on its " + std::to_string(w.sensor.width) + "x" +
+                                   std::to_string(w.sensor.height) + " sensor (rig.camera.sensor)");
+  }
+  return w;
+}
+
+// The whole sensor's intrinsics as the window's: the same lens, the principal point measured
+// from the window's corner.
+void MoveToWindow(const SensorWindow& w, const cv::Size& window, CameraModel* camera) {
+  camera->cx -= w.offset.x;
+  camera->cy -= w.offset.y;
+  camera->width = window.width;
+  camera->height = window.height;
+}
+
 }  // namespace
 
 SessionCalibration CalibrateSession(const Session& session, const CalibrateSessionOptions& options) {
@@ -336,15 +373,24 @@ SessionCalibration CalibrateSession(const Session& session, const CalibrateSessi
                      "calibration needs rig.camera (width, height, bit_depth), rig.board.spec and rig.sample");
   }
   const BoardSpec board = BoardSpec::Parse(board_text, manifest + " rig.board.spec");
+  const std::string holder_text = session.rig().value("sample_plane_board", nlohmann::json::object()).value("spec", board_text);
+  const BoardSpec holder_board = BoardSpec::Parse(holder_text, manifest + " rig.sample_plane_board.spec");
   const cv::Size size(width, height);
+  const SensorWindow window = ReadSensorWindow(session.rig().at("camera"), size, manifest);
   SessionCalibration c;
-  c.camera = CalibrateCameraFromBoards(session, board, size, bits, options);
-  c.sample_plane = SamplePlaneFromBoard(session, board, c.camera.camera, bits);
+  c.camera = CalibrateCameraFromBoards(session, board, window.sensor, bits, options);
+  MoveToWindow(window, size, &c.camera.camera);
+  c.sample_plane = SamplePlaneFromBoard(session, holder_board, c.camera.camera, bits);
   c.sample_plane.width_m = sample_width;
   c.sample_plane.height_m = sample_height;
   c.monitor = CalibrateMonitor(session, c.camera.camera, c.sample_plane);
   c.radiometry = RadiometryOf(session, bits, size);
-  c.provenance = {{"session", std::filesystem::absolute(session.folder()).string()}, {"board", board.ToString()}};
+  c.provenance = {{"session", std::filesystem::absolute(session.folder()).string()}, {"board", board.ToString()},
+                  {"sample_plane_board", holder_board.ToString()}};
+  if (window.sensor != size) {
+    c.provenance["sensor"] = {{"width", window.sensor.width}, {"height", window.sensor.height},
+                              {"window_offset", {window.offset.x, window.offset.y}}};
+  }
   return c;
 }
 

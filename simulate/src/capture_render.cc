@@ -51,9 +51,9 @@ void RenderCaptureRadiance(const RigRenderer& renderer, const CaptureTruth& plan
   if (id.kind == "dark") {
     *radiance = FloatImage(k.width, k.height, 3);
   } else if (id.kind == "board") {
-    renderer.RenderBoard(plan.zhang_boards.at(id.index), radiance);
+    renderer.RenderZhangBoard(plan.zhang_boards.at(id.index), radiance);
   } else if (id.kind == "holder_board") {
-    renderer.RenderBoard(plan.holder_board, radiance);
+    renderer.RenderHolderBoard(plan.holder_board, radiance);
   } else if (id.kind == "all_dots") {
     renderer.RenderAllDots(radiance);
   } else if (id.kind == "flat") {
@@ -63,6 +63,12 @@ void RenderCaptureRadiance(const RigRenderer& renderer, const CaptureTruth& plan
   } else {
     ThrowInvalidInput("capture", "unknown simulated capture kind '" + id.kind + "'");
   }
+}
+
+Vec2 CaptureWindowOrigin(const Rig& rig, const CaptureId& id) {
+  const SensorWindow& window = rig.config().window;
+  if (id.kind != "board") return Vec2::Zero();
+  return -Vec2(window.offset_x, window.offset_y);
 }
 
 std::unique_ptr<SimulatedSetup> MakeSimulatedSetup(SimulationPreset preset, uint64_t seed, int threads) {

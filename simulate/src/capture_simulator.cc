@@ -84,7 +84,7 @@ void RunCapture(const RigRenderer& renderer, const CaptureTruth& plan, CaptureSi
       // Dark frames differ only by their noise, so they are not cached by index.
       rendered = id.kind == "dark" ? std::string() : key;
     }
-    sink.Write(id, renderer.Expose(radiance, id.exposure_s, options.seed, id.Stream()));
+    sink.Write(id, renderer.Expose(radiance, id.exposure_s, options.seed, id.Stream(), CaptureWindowOrigin(rig, id)));
     if (progress) progress->Advance(1);
   }
 }

@@ -6,11 +6,16 @@ namespace svbtdf {
 namespace {
 
 // The paper's geometry (camera 1 m from the sample centre at 45 degrees, monitor 4 cm behind an
-// 8 cm sample) with a camera of `width` x `height` pixels and focal length `f` pixels.
-RigConfig PaperGeometry(int width, int height, double f) {
+// 8 cm sample) with stored images of `width` x `height` pixels cropped from the centre of a
+// `sensor_width` x `sensor_height` sensor, focal length `f` pixels. The Zhang views are taken on
+// the whole sensor with an 11 x 8 board of 25 mm squares (A3 paper) filling 60-70% of it at about
+// a metre; the sample plane's board is a small one that fits the holder.
+RigConfig PaperGeometry(int width, int height, double f, int sensor_width, int sensor_height) {
   RigConfig rig;
   rig.intrinsics.width = width;
   rig.intrinsics.height = height;
+  rig.window = SensorWindow::Centred(width, height, sensor_width, sensor_height);
+  rig.board = {11, 8, 0.025, 12, 0.85, 0.04, 1.0};
   rig.intrinsics.fx = f;
   rig.intrinsics.fy = f * 1.0005;  // a hair of pixel aspect, as real calibrations find
   rig.intrinsics.cx = (width - 1) / 2.0 + 0.013 * width;
@@ -28,11 +33,11 @@ SimulationPreset Tiny() {
   SimulationPreset p;
   p.name = "tiny";
   p.description = "unit tests: 240x200 image, 32x32 texels, 6x6 dots (seconds)";
-  p.rig = PaperGeometry(240, 200, 2200.0);
+  p.rig = PaperGeometry(240, 200, 2200.0, 1280, 1024);  // a 32-degree lens
   p.rig.sample.texels_x = p.rig.sample.texels_y = 32;
   p.rig.dots.cols = p.rig.dots.rows = 6;
   p.rig.dots.radius_px = 4.0;
-  p.rig.board = {6, 4, 0.007, 12, 0.85, 0.04, 1.0};
+  p.rig.holder_board = {10, 10, 0.007, 0, 0.85, 0.04, 1.0};
   p.rig.sensor.bit_depth = 12;
   p.rig.dark_frames = 2;
   p.pattern = "smooth";
@@ -49,11 +54,11 @@ SimulationPreset Small() {
   SimulationPreset p;
   p.name = "small";
   p.description = "fit acceptance tests: 320x256 image, 32x32 texels, 20x20 dots (about half a minute)";
-  p.rig = PaperGeometry(320, 256, 2900.0);
+  p.rig = PaperGeometry(320, 256, 2900.0, 1600, 1280);
   p.rig.sample.texels_x = p.rig.sample.texels_y = 32;
   p.rig.dots.cols = p.rig.dots.rows = 20;
   p.rig.dots.radius_px = 3.0;
-  p.rig.board = {6, 4, 0.007, 12, 0.85, 0.04, 1.0};
+  p.rig.holder_board = {10, 10, 0.007, 0, 0.85, 0.04, 1.0};
   p.rig.sensor.bit_depth = 12;
   p.rig.dark_frames = 2;
   p.pattern = "smooth";
@@ -65,11 +70,11 @@ SimulationPreset Demo() {
   SimulationPreset p;
   p.name = "demo";
   p.description = "README demo: 480x384 image, 64x64 texels, 24x24 dots (a few minutes)";
-  p.rig = PaperGeometry(480, 384, 4500.0);
+  p.rig = PaperGeometry(480, 384, 4500.0, 2400, 1920);
   p.rig.sample.texels_x = p.rig.sample.texels_y = 64;
   p.rig.dots.cols = p.rig.dots.rows = 24;
   p.rig.dots.radius_px = 3.0;
-  p.rig.board = {8, 6, 0.006, 10, 0.85, 0.04, 1.0};
+  p.rig.holder_board = {10, 10, 0.007, 0, 0.85, 0.04, 1.0};
   p.rig.sensor.bit_depth = 12;
   p.rig.sensor.vignetting = 0.05;
   p.pattern = "smooth";
@@ -83,8 +88,8 @@ SimulationPreset Demo() {
 SimulationPreset PaperScale(const std::string& name) {
   SimulationPreset p;
   p.name = name;
-  p.rig = PaperGeometry(1280, 1024, 12000.0);
-  p.rig.board = {9, 7, 0.006, 12, 0.85, 0.04, 1.0};
+  p.rig = PaperGeometry(1280, 1024, 12000.0, 6000, 4000);  // a 24 MP camera with a 48 mm lens
+  p.rig.holder_board = {10, 10, 0.007, 0, 0.85, 0.04, 1.0};
   p.rig.sensor.bit_depth = 14;
   p.rig.sensor.vignetting = 0.08;
   p.rig.dots.radius_px = 2.0;
@@ -97,8 +102,8 @@ SimulationPreset PaperScale(const std::string& name) {
     p.eta = 1.4;
   } else if (name == "leaf-glass") {
     p.description = "paper Table 1: leaf glass, 400x420 texels, 40x40 dots, eta 1.5";
-    p.rig = PaperGeometry(1280, 1024, 11500.0);
-    p.rig.board = {9, 7, 0.006, 12, 0.85, 0.04, 1.0};
+    p.rig = PaperGeometry(1280, 1024, 11500.0, 6000, 4000);
+    p.rig.holder_board = {10, 10, 0.007, 0, 0.85, 0.04, 1.0};
     p.rig.sensor.bit_depth = 14;
     p.rig.sensor.vignetting = 0.08;
     p.rig.dots.radius_px = 2.0;

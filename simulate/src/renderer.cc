@@ -3,12 +3,14 @@
 #include "svbtdf/common/parallel.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <exception>
 #include <limits>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "svbtdf/common/error.h"
@@ -297,62 +299,110 @@ void RigRenderer::RenderFlatField(double level, FloatImage* radiance) const {
   });
 }
 
-void RigRenderer::RenderBoard(const BoardPose& board, FloatImage* radiance) const {
-  const BoardConfig& b = rig_.config().board;
-  const CameraIntrinsics& k = rig_.config().intrinsics;
-  const int n = rig_.config().board_samples;
-  const Vec3 camera = rig_.camera().Centre();
-  const Vec3 normal = board.rotation.col(2);
-  constexpr double kBackground = 0.12;  // reflectance of the table around the board
-  auto reflectance = [&](const Vec2& p) {
-    // Squares from -1 to inner_cols along x (inner corners where four squares meet), plus a
-    // white margin of one square; outside it the table.
-    const double u = p.x() / b.square, v = p.y() / b.square;
-    if (u < -2.0 || v < -2.0 || u > b.inner_cols + 1.0 || v > b.inner_rows + 1.0) return kBackground;
-    if (u < -1.0 || v < -1.0 || u > b.inner_cols || v > b.inner_rows) return b.reflectance_white;
+namespace {
+
+// A uniformly lit chessboard: squares from -1 to inner_cols along x (inner corners where four
+// squares meet), a white margin of one square, the table beyond. Every edge of this pattern lies
+// on an integer coordinate in square units, so a pixel whose footprint stays within one unit cell
+// sees a single reflectance.
+class BoardPattern {
+ public:
+  BoardPattern(const BoardPose& pose, const BoardConfig& board, const Vec3& eye)
+      : pose_(pose), board_(board), eye_(eye), normal_(pose.rotation.col(2)) {}
+
+  static constexpr double kTable = 0.12;  // reflectance of the table around the board
+
+  // Board coordinates in square units where the ray from the eye meets the board's plane;
+  // nullopt when it does not (the table is seen).
+  std::optional<Vec2> Hit(const std::optional<Vec3>& ray) const {
+    const double denominator = ray ? normal_.dot(*ray) : 0.0;
+    if (std::abs(denominator) < 1e-12) return std::nullopt;
+    const double t = normal_.dot(pose_.translation - eye_) / denominator;
+    if (t <= 0.0) return std::nullopt;
+    const Vec3 local = pose_.rotation.transpose() * (eye_ + t * (*ray) - pose_.translation);
+    return Vec2(local.x(), local.y()) / board_.square;
+  }
+
+  double Reflectance(const std::optional<Vec2>& uv) const {
+    if (!uv) return kTable;
+    const double u = uv->x(), v = uv->y();
+    if (u < -2.0 || v < -2.0 || u > board_.inner_cols + 1.0 || v > board_.inner_rows + 1.0) return kTable;
+    if (u < -1.0 || v < -1.0 || u > board_.inner_cols || v > board_.inner_rows) return board_.reflectance_white;
     const int a = static_cast<int>(std::floor(u)) + static_cast<int>(std::floor(v));
-    return (a % 2 == 0) ? b.reflectance_black : b.reflectance_white;
-  };
+    return (a % 2 == 0) ? board_.reflectance_black : board_.reflectance_white;
+  }
+
+  // True when the four corners of a pixel's footprint lie in one unit cell: the cell is convex,
+  // so the whole (nearly straight-edged) footprint does.
+  static bool OneCell(const std::array<std::optional<Vec2>, 4>& corners) {
+    for (const auto& c : corners) {
+      if (!c) return false;
+    }
+    const double u = std::floor(corners[0]->x()), v = std::floor(corners[0]->y());
+    for (const auto& c : corners) {
+      if (std::floor(c->x()) != u || std::floor(c->y()) != v) return false;
+    }
+    return true;
+  }
+
+ private:
+  const BoardPose& pose_;
+  const BoardConfig& board_;
+  Vec3 eye_;
+  Vec3 normal_;
+};
+
+}  // namespace
+
+void RigRenderer::RenderZhangBoard(const BoardPose& board, FloatImage* radiance) const {
+  RenderBoard(board, rig_.config().board, rig_.sensor_camera(), radiance);
+}
+
+void RigRenderer::RenderHolderBoard(const BoardPose& board, FloatImage* radiance) const {
+  RenderBoard(board, rig_.config().holder_board, rig_.camera(), radiance);
+}
+
+void RigRenderer::RenderBoard(const BoardPose& board, const BoardConfig& config, const PinholeCamera& camera,
+                              FloatImage* radiance) const {
+  const CameraIntrinsics& k = camera.intrinsics();
+  const int n = rig_.config().board_samples;
+  const BoardPattern pattern(board, config, camera.Centre());
+  const auto hit = [&](double x, double y) { return pattern.Hit(camera.PixelRay(Vec2(x, y))); };
   *radiance = FloatImage(k.width, k.height, 3);
   ParallelFor(k.height, threads_, 4, [&](int begin, int end) {
+    // Board coordinates of the pixel corners above and below the current row.
+    std::vector<std::optional<Vec2>> top(k.width + 1), bottom(k.width + 1);
+    for (int x = 0; x <= k.width; ++x) top[x] = hit(x - 0.5, begin - 0.5);
     for (int y = begin; y < end; ++y) {
+      for (int x = 0; x <= k.width; ++x) bottom[x] = hit(x - 0.5, y + 0.5);
       for (int x = 0; x < k.width; ++x) {
-        double sum = 0.0;
-        for (int sy = 0; sy < n; ++sy) {
-          for (int sx = 0; sx < n; ++sx) {
-            const auto ray = rig_.camera().PixelRay(Vec2(x + SubSample(sx, n), y + SubSample(sy, n)));
-            const double denominator = ray ? normal.dot(*ray) : 0.0;
-            if (std::abs(denominator) < 1e-12) {
-              sum += kBackground;
-              continue;
-            }
-            const double t = normal.dot(board.translation - camera) / denominator;
-            if (t <= 0.0) {
-              sum += kBackground;
-              continue;
-            }
-            const Vec3 local = board.rotation.transpose() * (camera + t * (*ray) - board.translation);
-            sum += reflectance(local.head<2>());
+        double reflectance = 0.0;
+        if (BoardPattern::OneCell({top[x], top[x + 1], bottom[x], bottom[x + 1]})) {
+          reflectance = pattern.Reflectance(hit(x, y));
+        } else {
+          for (int sy = 0; sy < n; ++sy) {
+            for (int sx = 0; sx < n; ++sx) reflectance += pattern.Reflectance(hit(x + SubSample(sx, n), y + SubSample(sy, n)));
           }
+          reflectance /= n * n;
         }
-        const float value = static_cast<float>(b.illumination * sum / (n * n));
+        const float value = static_cast<float>(config.illumination * reflectance);
         for (int c = 0; c < 3; ++c) radiance->at(x, y, c) = value;
       }
+      std::swap(top, bottom);
     }
   });
 }
 
-std::vector<Vec3> RigRenderer::BoardCorners(const BoardPose& board) const {
-  const BoardConfig& b = rig_.config().board;
+std::vector<Vec3> BoardCorners(const BoardPose& pose, const BoardConfig& board) {
   std::vector<Vec3> corners;
-  for (int j = 0; j < b.inner_rows; ++j) {
-    for (int i = 0; i < b.inner_cols; ++i) corners.push_back(board.ToWorld(Vec2(i, j) * b.square));
+  for (int j = 0; j < board.inner_rows; ++j) {
+    for (int i = 0; i < board.inner_cols; ++i) corners.push_back(pose.ToWorld(Vec2(i, j) * board.square));
   }
   return corners;
 }
 
 BoardPose RigRenderer::HolderBoardPose() const {
-  const BoardConfig& b = rig_.config().board;
+  const BoardConfig& b = rig_.config().holder_board;
   BoardPose pose;
   // Board x along world x, board y along world -y, so that the board faces the camera (+z) with
   // a right-handed frame whose z points down into the plane: rotation = diag(1, -1, -1).
@@ -363,8 +413,9 @@ BoardPose RigRenderer::HolderBoardPose() const {
 
 std::vector<BoardPose> RigRenderer::ZhangBoardPoses(int views, uint64_t seed) const {
   const BoardConfig& b = rig_.config().board;
-  const CameraIntrinsics& k = rig_.config().intrinsics;
-  const CameraPose& camera_pose = rig_.camera().pose();
+  const PinholeCamera& camera = rig_.sensor_camera();
+  const CameraIntrinsics& k = camera.intrinsics();
+  const CameraPose& camera_pose = camera.pose();
   const double distance = rig_.camera().Centre().norm();
   // The board's outline including its white margin: this much must be in view.
   const std::array<Vec2, 4> outline = {Vec2(-2, -2) * b.square,
@@ -397,7 +448,7 @@ std::vector<BoardPose> RigRenderer::ZhangBoardPoses(int views, uint64_t seed) co
       pose.translation = centre_world - pose.rotation * Vec3(board_centre.x(), board_centre.y(), 0.0);
       placed = true;
       for (const Vec2& corner : outline) {
-        const std::optional<Vec2> px = rig_.camera().Project(pose.ToWorld(corner));
+        const std::optional<Vec2> px = camera.Project(pose.ToWorld(corner));
         if (!px || px->x() < 2 || px->y() < 2 || px->x() > k.width - 3 || px->y() > k.height - 3) {
           placed = false;
           break;
@@ -409,7 +460,7 @@ std::vector<BoardPose> RigRenderer::ZhangBoardPoses(int views, uint64_t seed) co
       ThrowInvalidInput("board", "a " + std::to_string(b.inner_cols) + " x " +
                         std::to_string(b.inner_rows) + " board of " +
                         std::to_string(b.square * 1000) + " mm squares does not fit in the camera's view",
-                        "use smaller squares (board.square) or a wider field of view");
+                        "use smaller squares (board.square) or a wider sensor (window)");
     }
   }
   return poses;
@@ -419,7 +470,7 @@ double RigRenderer::Vignetting(const Vec2& pixel) const {
   const CameraIntrinsics& k = rig_.config().intrinsics;
   const double half_diagonal = 0.5 * std::hypot(k.width, k.height);
   const double r2 = (Square(pixel.x() - k.cx) + Square(pixel.y() - k.cy)) / Square(half_diagonal);
-  return 1.0 - rig_.config().sensor.vignetting * r2;
+  return 1.0 / (1.0 + rig_.config().sensor.vignetting * r2);
 }
 
 double RigRenderer::MeanElectrons(double radiance, const Vec2& pixel, double exposure_s) const {
@@ -427,8 +478,8 @@ double RigRenderer::MeanElectrons(double radiance, const Vec2& pixel, double exp
   return radiance * exposure_s * s.sensitivity * Vignetting(pixel) + s.dark_current * exposure_s;
 }
 
-CameraImage RigRenderer::Expose(const FloatImage& radiance, double exposure_s, uint64_t seed,
-                                uint64_t stream) const {
+CameraImage RigRenderer::Expose(const FloatImage& radiance, double exposure_s, uint64_t seed, uint64_t stream,
+                                const Vec2& window_origin) const {
   const SensorConfig& s = rig_.config().sensor;
   CameraImage out;
   out.width = radiance.width;
@@ -444,7 +495,7 @@ CameraImage RigRenderer::Expose(const FloatImage& radiance, double exposure_s, u
         const uint64_t pixel = uint64_t(y) * radiance.width + x;
         PixelRandom random(seed, stream, pixel);
         for (int c = 0; c < radiance.channels; ++c) {
-          const double mean = MeanElectrons(radiance.at(x, y, c), Vec2(x, y), exposure_s);
+          const double mean = MeanElectrons(radiance.at(x, y, c), window_origin + Vec2(x, y), exposure_s);
           double electrons = s.shot_noise ? random.Poisson(mean) : mean;
           electrons += s.read_noise * random.Gaussian();
           const double linear = std::clamp(electrons / s.full_well, 0.0, 1.0);

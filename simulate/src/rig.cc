@@ -106,8 +106,32 @@ CameraPose RigConfig::PaperPose(double distance, double theta) {
   return CameraPose::LookAt(eye, Vec3::Zero(), Vec3::UnitZ());
 }
 
+std::string BoardConfig::Spec() const {
+  return "chessboard:" + std::to_string(inner_cols) + "x" + std::to_string(inner_rows) + ":" + Fmt(square * 1000.0);
+}
+
+SensorWindow SensorWindow::Centred(int width, int height, int sensor_width, int sensor_height) {
+  return {sensor_width, sensor_height, (sensor_width - width) / 2, (sensor_height - height) / 2};
+}
+
+namespace {
+
+CameraIntrinsics WholeSensor(const CameraIntrinsics& window_intrinsics, const SensorWindow& window) {
+  if (window.whole_sensor()) return window_intrinsics;
+  CameraIntrinsics sensor = window_intrinsics;
+  sensor.width = window.sensor_width;
+  sensor.height = window.sensor_height;
+  sensor.cx += window.offset_x;
+  sensor.cy += window.offset_y;
+  return sensor;
+}
+
+}  // namespace
+
 Rig::Rig(RigConfig config)
-    : config_(std::move(config)), camera_(config_.intrinsics, config_.pose) {
+    : config_(std::move(config)),
+      camera_(config_.intrinsics, config_.pose),
+      sensor_camera_(WholeSensor(config_.intrinsics, config_.window), config_.pose) {
   Validate();
   LayOutDots();
 }
@@ -205,10 +229,19 @@ void Rig::Validate() const {
   if (config_.pixel_samples < 1 || config_.board_samples < 1) {
     ThrowInvalidInput("pixel_samples", "supersampling must be >= 1");
   }
-  const BoardConfig& b = config_.board;
-  if (b.inner_cols < 3 || b.inner_rows < 3) ThrowInvalidInput("board", "needs >= 3 x 3 inner corners");
-  RequirePositive(b.square, "board.square");
-  if (b.views < 3) ThrowInvalidInput("board.views", "Zhang calibration needs at least 3 views");
+  for (const auto& [b, name] : {std::pair{&config_.board, "board"}, std::pair{&config_.holder_board, "holder_board"}}) {
+    if (b->inner_cols < 3 || b->inner_rows < 3) ThrowInvalidInput(name, "needs >= 3 x 3 inner corners");
+    RequirePositive(b->square, std::string(name) + ".square");
+  }
+  if (config_.board.views < 3) ThrowInvalidInput("board.views", "Zhang calibration needs at least 3 views");
+  const SensorWindow& w = config_.window;
+  if (!w.whole_sensor() && (w.offset_x < 0 || w.offset_y < 0 || w.offset_x + k.width > w.sensor_width ||
+                            w.offset_y + k.height > w.sensor_height)) {
+    ThrowInvalidInput("window", "the " + std::to_string(k.width) + " x " + std::to_string(k.height) + " image at (" +
+                                    std::to_string(w.offset_x) + ", " + std::to_string(w.offset_y) +
+                                    ") does not lie on the " + std::to_string(w.sensor_width) + " x " +
+                                    std::to_string(w.sensor_height) + " sensor");
+  }
 }
 
 void Rig::LayOutDots() {

@@ -42,13 +42,16 @@ nlohmann::json NominalRig(const Rig& rig, const SimulationPreset& preset, const 
   const RigConfig& c = rig.config();
   nlohmann::json dots = nlohmann::json::array();
   for (const Dot& dot : rig.dots()) dots.push_back({dot.monitor_x, dot.monitor_y});
-  return {
+  nlohmann::json nominal = {
       {"camera", {{"model", "svbtdf simulated camera"},
                   {"width", c.intrinsics.width},
                   {"height", c.intrinsics.height},
                   {"channels", 3},
                   {"bit_depth", c.sensor.bit_depth},
                   {"response", c.sensor.response}}},
+      // Zhang views are whole-sensor images, the rest the window around the sample.
+      {"board", {{"spec", c.board.Spec()}, {"views", c.board.views}}},
+      {"sample_plane_board", {{"spec", c.holder_board.Spec()}}},
       {"monitor", {{"width_px", static_cast<int>(std::lround(c.monitor.width / c.monitor.pixel_pitch))},
                    {"height_px", static_cast<int>(std::lround(c.monitor.height / c.monitor.pixel_pitch))},
                    {"pixel_pitch_m", c.monitor.pixel_pitch},
@@ -61,12 +64,15 @@ nlohmann::json NominalRig(const Rig& rig, const SimulationPreset& preset, const 
       // The texel grid and eta a lab would choose for processing and fitting (defaults there).
       {"sample", {{"width_m", c.sample.width}, {"height_m", c.sample.height()},
                   {"texels_x", c.sample.texels_x}, {"texels_y", c.sample.texels_y}, {"eta", preset.eta}}},
-      {"board", {{"spec", "chessboard:" + std::to_string(c.board.inner_cols) + "x" + std::to_string(c.board.inner_rows) +
-                              ":" + std::to_string(c.board.square * 1000.0)},
-                 {"views", c.board.views}}},
       {"exposures_s", capture.dot_exposures_s},
       {"simulated", {{"preset", preset.name}, {"seed", capture.seed}, {"truth", capture.truth_kind}}},
   };
+  const SensorWindow& window = c.window;
+  if (!window.whole_sensor()) {
+    nominal["camera"]["sensor"] = {{"width", window.sensor_width}, {"height", window.sensor_height},
+                                   {"window_offset", {window.offset_x, window.offset_y}}};
+  }
+  return nominal;
 }
 
 // The ground-truth material as EXR maps plus a manifest (docs/truth-format.md).

@@ -63,6 +63,10 @@ void WriteRigTruth(const std::filesystem::path& path, const Rig& rig, const Capt
       {"pose_convention", "x_cam = rotation * x_world + translation (OpenCV)"},
       {"centre", ToJson(rig.camera().Centre())},
       {"theta_deg", rig.CameraTheta() * 180.0 / kPi}};
+  const CameraIntrinsics& sensor_k = rig.sensor_camera().intrinsics();
+  out["camera"]["sensor"] = {{"width", sensor_k.width}, {"height", sensor_k.height},
+                             {"window_offset", {config.window.offset_x, config.window.offset_y}},
+                             {"cx", sensor_k.cx}, {"cy", sensor_k.cy}};
   const MonitorConfig& m = config.monitor;
   out["monitor"] = {{"distance", m.distance}, {"width", m.width}, {"height", m.height},
                     {"centre", ToJson(m.centre)}, {"pixel_pitch", m.pixel_pitch},
@@ -91,13 +95,14 @@ void WriteRigTruth(const std::filesystem::path& path, const Rig& rig, const Capt
                    {"dark_current", sensor.dark_current}, {"bit_depth", sensor.bit_depth},
                    {"response", sensor.response}, {"vignetting", sensor.vignetting},
                    {"black_offset", sensor.black_offset}};
-  RigRenderer corners_of(rig, nullptr, 1);
   json zhang = json::array();
-  for (const BoardPose& pose : capture.zhang_boards) zhang.push_back(ToJson(pose, corners_of.BoardCorners(pose)));
+  for (const BoardPose& pose : capture.zhang_boards) zhang.push_back(ToJson(pose, BoardCorners(pose, config.board)));
   const BoardConfig& b = config.board;
+  const BoardConfig& h = config.holder_board;
   out["board"] = {{"kind", "chessboard"}, {"inner_cols", b.inner_cols}, {"inner_rows", b.inner_rows},
-                  {"square", b.square}, {"zhang_views", zhang},
-                  {"holder", ToJson(capture.holder_board, corners_of.BoardCorners(capture.holder_board))}};
+                  {"square", b.square}, {"zhang_views", zhang}, {"zhang_views_image", "whole sensor"}};
+  out["holder_board"] = {{"kind", "chessboard"}, {"inner_cols", h.inner_cols}, {"inner_rows", h.inner_rows},
+                         {"square", h.square}, {"pose", ToJson(capture.holder_board, BoardCorners(capture.holder_board, h))}};
   out["exposures"] = {{"dots_s", capture.dot_exposures_s}, {"all_dots_s", capture.all_dots_exposure_s},
                       {"flat_s", capture.flat_exposure_s}, {"board_s", capture.board_exposure_s}};
   WriteTextAtomically(path, out.dump(2) + "\n", /*overwrite=*/false);
@@ -155,7 +160,7 @@ RigTruth ReadRigTruth(const std::filesystem::path& path) {
     }
     const json& b = in.at("board");
     for (const json& view : b.at("zhang_views")) truth.capture.zhang_boards.push_back(BoardFrom(view));
-    truth.capture.holder_board = BoardFrom(b.at("holder"));
+    truth.capture.holder_board = BoardFrom(in.at("holder_board").at("pose"));
     const json& e = in.at("exposures");
     truth.capture.dot_exposures_s = e.at("dots_s").get<std::vector<double>>();
     truth.capture.all_dots_exposure_s = e.at("all_dots_s");

@@ -75,44 +75,31 @@ class CalibrateSessionTest : public ::testing::Test {
   static inline RigTruth truth_;
 };
 
-// The tiny rig's camera is the paper's: 1 m from the sample, a 6 degree lens. Its board views
-// cannot pin down the principal point (the full model's is uncertain by about 60 px) nor the
-// focal length to better than a few percent, so the calibration falls back to the narrow-lens
-// model. The issue's targets (focal length within 0.5%, principal point within 2 px, dots within
-// 0.2 mm) are not reached on this lens; the tolerances below are what is reached, with margin,
-// and docs/validation.md states both. What the BTDF needs, the directions, comes out right: see
-// ProcessingWithTheCalibrationMeasuresTheTrueBtdf.
+// Issue 4's targets on the tiny rig: the paper's geometry (camera 1 m from the sample at 45
+// degrees, f = 2200 px), the dot images a 240 x 200 window of a 1280 x 1024 sensor (a 32 degree
+// lens), the Zhang views whole-sensor images of an 11 x 8 board of 25 mm squares. Focal lengths
+// within 0.5%, principal point within 2 px, dots within 0.2 mm.
 TEST_F(CalibrateSessionTest, RecoversTheRigWithinTheStatedTolerances) {
   const SessionCalibration c = CalibrateSession(Session::Open(root_ / "sim" / "session"), Quiet());
   const CameraModel& camera = c.camera.camera;
   const double centre_error_mm = 1000 * (c.sample_plane.CameraCentre() - truth_.pose.Centre()).norm();
   const double dot_error_mm = WorstDotErrorMm(c);
-  std::printf("fx %.2f +- %.2f (true %.2f), fy %.2f (true %.2f), cx %.2f (true %.2f), cy %.2f (true %.2f)\n",
+  std::printf("fx %.2f +- %.2f (true %.2f), fy %.2f (true %.2f), cx %.2f +- %.2f (true %.2f), cy %.2f +- %.2f (true %.2f)\n",
               camera.fx, c.camera.intrinsics_std[0], truth_.camera.fx, camera.fy, truth_.camera.fy, camera.cx,
-              truth_.camera.cx, camera.cy, truth_.camera.cy);
+              c.camera.intrinsics_std[2], truth_.camera.cx, camera.cy, c.camera.intrinsics_std[3], truth_.camera.cy);
   std::printf("camera centre %.2f mm off, monitor %.3f mm (true %.3f), worst dot %.3f mm off, dot residual RMS %.3f mm\n",
               centre_error_mm, 1000 * c.monitor.distance_m, 1000 * truth_.monitor.distance, dot_error_mm,
               c.monitor.residual_rms_mm);
-  EXPECT_NE(c.camera.narrow_lens_because.find("principal point"), std::string::npos) << c.camera.narrow_lens_because;
-  EXPECT_NEAR(camera.fx / truth_.camera.fx, 1.0, 0.01);
-  EXPECT_DOUBLE_EQ(camera.fx, camera.fy);  // square pixels in the narrow-lens model
-  EXPECT_LT(std::abs(camera.cx - truth_.camera.cx), 0.02 * camera.width);
-  EXPECT_LT(std::abs(camera.cy - truth_.camera.cy), 0.02 * camera.height);
+  EXPECT_TRUE(c.camera.narrow_lens_because.empty()) << c.camera.narrow_lens_because;
+  EXPECT_EQ(camera.width, truth_.camera.width);  // the window's intrinsics
+  EXPECT_NEAR(camera.fx / truth_.camera.fx, 1.0, 0.005);
+  EXPECT_NEAR(camera.fy / truth_.camera.fy, 1.0, 0.005);
+  EXPECT_LT(std::abs(camera.cx - truth_.camera.cx), 2.0);
+  EXPECT_LT(std::abs(camera.cy - truth_.camera.cy), 2.0);
   EXPECT_LT(centre_error_mm, 10.0);
   EXPECT_NEAR(c.monitor.distance_m, truth_.monitor.distance, 0.5e-3);
-  EXPECT_LT(dot_error_mm, 1.0);
+  EXPECT_LT(dot_error_mm, 0.2);
   EXPECT_EQ(c.monitor.dots.size(), truth_.dots.size());
-
-  // The full model on the same views: its principal point wanders by tens of pixels, and the
-  // dots with it.
-  CalibrateSessionOptions full = Quiet();
-  full.camera.max_principal_point_std_fraction = 0;
-  const SessionCalibration f = CalibrateSession(Session::Open(root_ / "sim" / "session"), full);
-  std::printf("full model: cx %.2f +- %.2f, cy %.2f +- %.2f, worst dot %.3f mm off\n", f.camera.camera.cx,
-              f.camera.intrinsics_std[2], f.camera.camera.cy, f.camera.intrinsics_std[3], WorstDotErrorMm(f));
-  EXPECT_TRUE(f.camera.narrow_lens_because.empty());
-  EXPECT_GT(f.camera.intrinsics_std[2], 0.02 * camera.width);
-  EXPECT_LT(dot_error_mm, WorstDotErrorMm(f));
 }
 
 TEST_F(CalibrateSessionTest, ProcessingWithTheCalibrationMeasuresTheTrueBtdf) {

@@ -345,11 +345,14 @@ TEST(RigRenderer, ZhangPosesAreVariedAndInView) {
     const double tilt = std::acos(std::abs(pose.rotation.col(2).dot(rig.camera().pose().rotation.row(2))));
     min_tilt = std::min(min_tilt, tilt);
     max_tilt = std::max(max_tilt, tilt);
-    for (const Vec3& corner : renderer.BoardCorners(pose)) {
-      const auto px = rig.camera().Project(corner);
+    // Zhang views are taken on the whole sensor.
+    for (const Vec3& corner : BoardCorners(pose, rig.config().board)) {
+      const auto px = rig.sensor_camera().Project(corner);
       ASSERT_TRUE(px.has_value());
       EXPECT_GT(px->x(), 0);
-      EXPECT_LT(px->x(), rig.config().intrinsics.width);
+      EXPECT_LT(px->x(), rig.sensor_camera().intrinsics().width);
+      EXPECT_GT(px->y(), 0);
+      EXPECT_LT(px->y(), rig.sensor_camera().intrinsics().height);
     }
   }
   EXPECT_GT(min_tilt, 10 * kPi / 180);

@@ -38,6 +38,10 @@ struct CameraInfo {
   // The frames Capture() delivers, when the backend knows before the first one (0 = unknown);
   // recorded in a new session's manifest (rig.camera).
   int frame_width = 0, frame_height = 0, frame_channels = 0, frame_bits = 0;
+  // When the frames are a window (region of interest) of a larger sensor: the sensor's size and
+  // the window's top-left pixel on it. Board views for Zhang calibration (Scene::kBoardView) are
+  // then whole-sensor frames. sensor_width = 0: the frames are the whole sensor.
+  int sensor_width = 0, sensor_height = 0, window_x = 0, window_y = 0;
 };
 
 class Camera {

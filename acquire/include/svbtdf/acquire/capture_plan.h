@@ -35,7 +35,8 @@ enum class Scene {
 struct RigNotes {
   double monitor_distance_mm = 0.0;  // d: the monitor plane behind the sample plane
   std::string emission;              // isotropic | lambertian | lcd
-  std::string board;                 // calibration board, e.g. "chessboard:9x6:25"
+  std::string board;                 // Zhang calibration board, e.g. "chessboard:9x6:25"
+  std::string sample_plane_board;    // the board laid in the sample holder, when not `board`
   double sample_width_mm = 0.0, sample_height_mm = 0.0;
   int texels_x = 0, texels_y = 0;    // the texel grid for processing
   double eta = 0.0;                  // the sample's relative index of refraction, if known

@@ -21,6 +21,10 @@ namespace svbtdf {
 void RenderCaptureRadiance(const RigRenderer& renderer, const CaptureTruth& plan, const CaptureId& id,
                            FloatImage* radiance);
 
+// Where pixel (0, 0) of capture `id`'s image lies in the window's pixel coordinates: the Zhang
+// board views are whole-sensor images, every other capture is the window (RigRenderer::Expose).
+Vec2 CaptureWindowOrigin(const Rig& rig, const CaptureId& id);
+
 // Everything the simulator derives from a preset: the rig, the material, the renderer and the
 // capture plan (exposures, board poses). Held behind one pointer because the renderer keeps
 // references to the rig and the material.

@@ -30,6 +30,10 @@ struct BoardPose {
   Vec3 ToWorld(const Vec2& b) const { return rotation * Vec3(b.x(), b.y(), 0.0) + translation; }
 };
 
+// Inner corners of a board in world coordinates, row-major (i fastest), as OpenCV's finder orders
+// them for a board that is not rotated by more than 90 degrees in the image.
+std::vector<Vec3> BoardCorners(const BoardPose& pose, const BoardConfig& board);
+
 class RigRenderer {
  public:
   // `material` (the truth: analytic or Monte Carlo) may be null when only captures without the
@@ -47,22 +51,24 @@ class RigRenderer {
   void RenderAllDots(FloatImage* radiance) const;
   void RenderFlatField(double level, FloatImage* radiance) const;
 
-  // A chessboard lit uniformly (BoardConfig), seen through the lens with its distortion.
-  void RenderBoard(const BoardPose& board, FloatImage* radiance) const;
-  // Inner corners in world coordinates, row-major (i fastest), as OpenCV's finder orders them
-  // for a board that is not rotated by more than 90 degrees in the image.
-  std::vector<Vec3> BoardCorners(const BoardPose& board) const;
-  // `views` deterministic poses for Zhang calibration, tilted 20-40 degrees about varied axes,
-  // at about the sample's distance, fully in view. Throws when the board cannot fit.
+  // A chessboard lit uniformly: a Zhang view (the rig's `board`) as a whole-sensor image, or the
+  // board in the sample holder (`holder_board`) through the window; both through the lens with its
+  // distortion. Pixels that straddle a square's edge get board_samples^2 sub-samples.
+  void RenderZhangBoard(const BoardPose& board, FloatImage* radiance) const;
+  void RenderHolderBoard(const BoardPose& board, FloatImage* radiance) const;
+  // `views` deterministic poses of the Zhang board, tilted 20-40 degrees about varied axes, at
+  // about the sample's distance, fully in the sensor's view. Throws when the board cannot fit.
   std::vector<BoardPose> ZhangBoardPoses(int views, uint64_t seed) const;
-  // The board lying in the sample plane, centred on the sample.
+  // The holder board lying in the sample plane, centred on the sample.
   BoardPose HolderBoardPose() const;
 
   // The sensor chain: radiance x exposure x sensitivity x vignetting (+ dark current) electrons,
   // Poisson shot noise, Gaussian read noise, full-well clipping, response curve, black offset,
-  // quantisation. Noise is a deterministic function of (seed, stream, pixel).
-  CameraImage Expose(const FloatImage& radiance, double exposure_s, uint64_t seed,
-                     uint64_t stream) const;
+  // quantisation. Noise is a deterministic function of (seed, stream, pixel). `window_origin`:
+  // where the image's pixel (0, 0) lies in the window's pixel coordinates (minus the window's
+  // offset for a whole-sensor image), for the vignetting.
+  CameraImage Expose(const FloatImage& radiance, double exposure_s, uint64_t seed, uint64_t stream,
+                     const Vec2& window_origin = Vec2::Zero()) const;
   // The noise-free, unquantised, unclipped value on the stored scale (for tests and for the
   // inversion of the chain): (electrons / full_well), before the response curve.
   double MeanElectrons(double radiance, const Vec2& pixel, double exposure_s) const;
@@ -80,6 +86,8 @@ class RigRenderer {
     float weight;     // fraction of the pixel's sub-samples in this texel
     double x, y;      // centroid of those sub-samples on the sample plane
   };
+  void RenderBoard(const BoardPose& board, const BoardConfig& config, const PinholeCamera& camera,
+                   FloatImage* radiance) const;
   void PrecomputeGroups();
   void PrecomputeBackground();
   Vec3 DotRadianceAt(const Dot& dot, const Group& group) const;

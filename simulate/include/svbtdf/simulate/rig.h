@@ -131,30 +131,53 @@ struct SensorConfig {
   double dark_current = 0.0;     // electrons per second (mean level of the dark frames)
   int bit_depth = 16;            // quantisation of the stored value
   std::string response = "linear";  // linear | srgb: the curve between exposure and value
-  double vignetting = 0.0;       // cos^4-style fall-off strength: v(r) = 1 - vignetting r^2,
-                                 // r = distance from (cx, cy) over the half diagonal
+  double vignetting = 0.0;       // fall-off strength: v(r) = 1 / (1 + vignetting r^2), r = distance
+                                 // from (cx, cy) over the window's half diagonal
   double black_offset = 0.0;     // pedestal added to the digital value, as a fraction of full scale
 };
 
-// The chessboard used for Zhang calibration and for the sample plane's pose.
+// Where the stored images lie on the camera's sensor. A lab crops its dot images to the region of
+// interest around the sample, and calibrates the lens on the whole sensor with a board that fills
+// it: only a wide view separates the principal point from the camera's rotation, and the focal
+// length from the board's distance (docs/simulator.md, "Sensor window"). The rig's `intrinsics`
+// are the window's (principal point relative to the window's corner); the Zhang board views are
+// whole-sensor images. sensor_width = 0: the window is the whole sensor.
+struct SensorWindow {
+  int sensor_width = 0;
+  int sensor_height = 0;
+  int offset_x = 0;  // the window's top-left pixel on the sensor
+  int offset_y = 0;
+
+  bool whole_sensor() const { return sensor_width == 0; }
+  // A window of `width` x `height` centred on a sensor of `sensor_width` x `sensor_height`.
+  static SensorWindow Centred(int width, int height, int sensor_width, int sensor_height);
+};
+
+// A chessboard: the one held up for Zhang calibration, or the one laid in the sample holder for
+// the sample plane's pose.
 struct BoardConfig {
   int inner_cols = 9;    // inner corners
   int inner_rows = 6;
   double square = 0.008; // m
-  int views = 10;        // views at varied poses for the intrinsics
+  int views = 10;        // views at varied poses for the intrinsics (Zhang board only)
   double reflectance_white = 0.85;
   double reflectance_black = 0.04;
   double illumination = 1.0;  // radiance of a perfect white board, in the simulator's unit
+
+  // "chessboard:COLSxROWS:SQUARE_MM", as sessions name boards (calib::BoardSpec).
+  std::string Spec() const;
 };
 
 struct RigConfig {
-  CameraIntrinsics intrinsics;
+  CameraIntrinsics intrinsics;  // of the stored images (the window)
+  SensorWindow window;
   CameraPose pose;
   MonitorConfig monitor;
   DotGridConfig dots;
   SampleConfig sample;
   SensorConfig sensor;
-  BoardConfig board;
+  BoardConfig board;         // Zhang views, whole sensor
+  BoardConfig holder_board;  // in the sample holder, seen through the window
   int pixel_samples = 2;   // supersampling per pixel axis for dot images (n x n stratified)
   int board_samples = 4;   // ... for board images (anti-aliasing of the squares)
   int dark_frames = 4;
@@ -184,7 +207,10 @@ class Rig {
   explicit Rig(RigConfig config);
 
   const RigConfig& config() const { return config_; }
+  // The camera of the stored images (the window), and of the whole sensor (the same lens and
+  // pose, the principal point moved by the window's offset).
   const PinholeCamera& camera() const { return camera_; }
+  const PinholeCamera& sensor_camera() const { return sensor_camera_; }
   const std::vector<Dot>& dots() const { return dots_; }
 
   // The dot drawn centred on monitor coordinate (x_px, y_px) with a radius of `radius_px` monitor
@@ -214,6 +240,7 @@ class Rig {
 
   RigConfig config_;
   PinholeCamera camera_;
+  PinholeCamera sensor_camera_;
   std::vector<Dot> dots_;
 };
 

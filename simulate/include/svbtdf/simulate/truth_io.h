@@ -14,7 +14,8 @@
 
 namespace svbtdf {
 
-inline constexpr int kTruthFormatVersion = 1;
+// 2: the Zhang views are whole-sensor images (camera.sensor); the holder board is its own.
+inline constexpr int kTruthFormatVersion = 2;
 
 // What the capture did besides the rig itself: the exposures used and where the boards were.
 struct CaptureTruth {
