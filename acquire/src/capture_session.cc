@@ -103,7 +103,7 @@ class CaptureRun {
   CaptureRun(const CapturePlan& plan, Camera& camera, Display& display, Operator& op, Session& session,
              const AcquireOptions& options, AcquireResult& result)
       : plan_(plan), camera_(camera), display_(display), op_(op), session_(session), options_(options),
-        result_(result), camera_id_(camera.Info().id), windowed_(camera.Info().sensor_width > 0) {}
+        result_(result), info_(camera.Info()), camera_id_(info_.id), windowed_(info_.sensor_width > 0) {}
 
   void Run(const std::vector<PlannedCapture>& captures) {
     std::unique_ptr<ProgressBar> progress;
@@ -142,6 +142,11 @@ class CaptureRun {
     const bool whole_sensor = windowed_ && capture.scene == Scene::kBoardView;
     std::optional<std::array<int, 3>>& expected = size_[whole_sensor ? 1 : 0];
     const std::array<int, 3> size = {frame.width, frame.height, frame.channels};
+    std::string source = "the session holds";
+    if (!expected && whole_sensor) {  // the camera told us its sensor
+      expected = {info_.sensor_width, info_.sensor_height, frame.channels};
+      source = "the camera's sensor is";
+    }
     for (size_t n = 0; !expected && n < session_.entries().size(); ++n) {
       const std::string& key = session_.entries()[n].key;
       if (windowed_ && (key.rfind("board/", 0) == 0) != whole_sensor) continue;
@@ -153,7 +158,7 @@ class CaptureRun {
         return std::to_string(s[0]) + "x" + std::to_string(s[1]) + "x" + std::to_string(s[2]);
       };
       throw Error(ErrorKind::kInvalidInput, camera_id_,
-                  "delivers " + text(size) + " frames but the session holds " + text(*expected) + " images",
+                  "delivers " + text(size) + " frames but " + source + " " + text(*expected),
                   "resume with the camera and format the session was started with");
     }
     expected = size;
@@ -230,6 +235,7 @@ class CaptureRun {
   Session& session_;
   const AcquireOptions& options_;
   AcquireResult& result_;
+  CameraInfo info_;
   std::string camera_id_;
   std::optional<Pattern> shown_;
   std::optional<double> exposure_;

