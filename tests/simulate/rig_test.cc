@@ -359,5 +359,30 @@ TEST(RigRenderer, ZhangPosesAreVariedAndInView) {
   EXPECT_LT(max_tilt, 45 * kPi / 180);
 }
 
+// Every preset can be captured: its Zhang board fits the whole sensor at every planned pose, and
+// the holder board, with its white margin, lies in the window (else the finder fails on it).
+TEST(RigRenderer, EveryPresetsBoardsFitTheirView) {
+  for (const std::string& name : PresetNames()) {
+    const SimulationPreset preset = MakePreset(name);
+    const Rig rig(preset.rig);
+    const RigRenderer renderer(rig, nullptr, 1);
+    EXPECT_FALSE(rig.config().window.whole_sensor()) << name;
+    EXPECT_EQ(renderer.ZhangBoardPoses(preset.rig.board.views, 1).size(), static_cast<size_t>(preset.rig.board.views))
+        << name;
+    const BoardConfig& h = rig.config().holder_board;
+    const BoardPose holder = renderer.HolderBoardPose();
+    const CameraIntrinsics& k = rig.config().intrinsics;
+    for (const Vec2& outline : {Vec2(-2, -2), Vec2(h.inner_cols + 1, -2), Vec2(-2, h.inner_rows + 1),
+                                Vec2(h.inner_cols + 1, h.inner_rows + 1)}) {
+      const std::optional<Vec2> px = rig.camera().Project(holder.ToWorld(outline * h.square));
+      ASSERT_TRUE(px.has_value()) << name;
+      EXPECT_GT(px->x(), 1.0) << name;
+      EXPECT_GT(px->y(), 1.0) << name;
+      EXPECT_LT(px->x(), k.width - 2.0) << name;
+      EXPECT_LT(px->y(), k.height - 2.0) << name;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace svbtdf
