@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
+#include <opencv2/calib3d.hpp>
+#include <cmath>
 #include <cstdio>
 #include <random>
 
@@ -81,6 +83,47 @@ TEST(CameraCalibration, RecoversKnownIntrinsicsFromRenderedViews) {
   const nlohmann::json json = ToJson(report);
   EXPECT_DOUBLE_EQ(json["fx"].get<double>(), report.camera.fx);
   EXPECT_EQ(json["distortion"].size(), 5u);
+}
+
+// A 6-degree lens (240 x 200 pixels, f = 2200 px) seeing a 6 x 4 board of 7 mm squares at 1 m,
+// the simulator's old set-up: the full model's principal point is ill-determined, so the views are
+// refitted with the narrow-lens model (square pixels, centred principal point, k1 only). Corners are exact projections plus 0.08 px noise.
+TEST(CameraCalibration, ANarrowLensFallsBackToTheNarrowLensModel) {
+  const BoardSpec board = BoardSpec::Parse("chessboard:6x4:7");
+  const cv::Matx33d k(2200, 0, 122.6, 0, 2201, 97.7, 0, 0, 1);
+  const std::vector<double> distortion = {-0.12, 0.4, 0.0004, -0.0003, 0.0};
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.08);
+  std::vector<BoardDetection> detections;
+  for (int view = 0; view < 12; ++view) {
+    const double tilt = (20.0 + 20.0 * uniform(rng)) * CV_PI / 180.0, axis = 2 * CV_PI * view / 12.0;
+    const cv::Vec3d rvec(tilt * std::cos(axis), tilt * std::sin(axis), 0.0);
+    const cv::Vec3d tvec(-17.5 + 10 * (uniform(rng) - 0.5), -10.5 + 8 * (uniform(rng) - 0.5), 1000.0 + 100 * (uniform(rng) - 0.5));
+    BoardDetection detection;
+    detection.source = "view" + std::to_string(view);
+    detection.found = true;
+    detection.object_points = board.CornerPositions();
+    std::vector<cv::Point2f> projected;
+    cv::projectPoints(detection.object_points, rvec, tvec, k, distortion, projected);
+    for (cv::Point2f& p : projected) p += cv::Point2f(noise(rng), noise(rng));
+    detection.image_points = projected;
+    detections.push_back(detection);
+  }
+  const CalibrationReport narrow = CalibrateCamera(detections, cv::Size(240, 200));
+  std::printf("narrow-lens model: fx %.1f +- %.1f (truth 2200), because %s\n", narrow.camera.fx, narrow.intrinsics_std[0],
+              narrow.narrow_lens_because.c_str());
+  EXPECT_NE(narrow.narrow_lens_because.find("principal point"), std::string::npos);
+  EXPECT_DOUBLE_EQ(narrow.camera.fx, narrow.camera.fy);
+  EXPECT_DOUBLE_EQ(narrow.camera.cx, 119.5);  // the image centre
+  // At 6 degrees even the narrow model knows f only to a few percent; the truth lies within
+  // three of its reported standard deviations.
+  EXPECT_LT(std::abs(narrow.camera.fx - 2200.0), 3 * narrow.intrinsics_std[0]);
+  CalibrationOptions full;
+  full.max_principal_point_std_fraction = 0;
+  const CalibrationReport free = CalibrateCamera(detections, cv::Size(240, 200), full);
+  EXPECT_TRUE(free.narrow_lens_because.empty());
+  EXPECT_GT(free.intrinsics_std[2], 0.02 * 240);
 }
 
 TEST(CameraCalibration, DropsAndReportsViewsWithoutABoardAndOutliers) {
