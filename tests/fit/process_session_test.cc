@@ -2,7 +2,8 @@
 // against the simulator's ground truth (issue 4's acceptance), resuming, and input errors.
 //
 // The calibration is built from the simulator's true rig here, so that these tests measure the
-// processing alone; tests/calib checks the calibration against the same truth.
+// processing alone; tests/calib checks the calibration against the same truth, and the accuracy
+// tests also process with the session's own calibration (the user's path).
 
 #include <gtest/gtest.h>
 
@@ -13,6 +14,7 @@
 #include <numbers>
 #include <vector>
 
+#include "svbtdf/calib/calibrate_session.h"
 #include "svbtdf/calib/session_calibration.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/interrupt.h"
@@ -102,6 +104,18 @@ ProcessOptions QuietOptions() {
   return options;
 }
 
+// Issue 4's acceptance through the user's path: the session calibrated from its own captures
+// (board views on the whole sensor, tests/calib), then processed.
+Accuracy AccuracyWithItsOwnCalibration(const Simulation& sim) {
+  const Session session = Session::Open(sim.folder / "session");
+  calib::CalibrateSessionOptions quiet;
+  quiet.progress = false;
+  const calib::SessionCalibration own = calib::CalibrateSession(session, quiet);
+  const fs::path out = sim.folder / "processed_own_calibration";
+  ProcessSession(session, own, out, QuietOptions());
+  return MeasureAccuracy(SliceStore::Open(out), sim.folder / "truth");
+}
+
 TEST(ProcessSession, NoiseFreeSessionGivesTheTrueBtdfWithinOnePercent) {
   const Simulation sim = Simulate("noise_free", /*noise=*/false);
   const fs::path out = sim.folder / "processed";
@@ -116,6 +130,12 @@ TEST(ProcessSession, NoiseFreeSessionGivesTheTrueBtdfWithinOnePercent) {
   EXPECT_GT(a.texels, 0.9 * report.texels);
   EXPECT_LT(a.median_relative_error, 0.01);
   EXPECT_LT(a.rho_d_median_relative_error, 0.02);
+
+  const Accuracy own = AccuracyWithItsOwnCalibration(sim);
+  std::printf("noise-free, own calibration: median |R/R_true - 1| = %.4f, rho_d %.4f\n", own.median_relative_error,
+              own.rho_d_median_relative_error);
+  EXPECT_LT(own.median_relative_error, 0.01);
+  EXPECT_LT(own.rho_d_median_relative_error, 0.02);
 }
 
 std::string FileBytes(const fs::path& path) {
@@ -135,6 +155,11 @@ TEST(ProcessSession, DefaultNoiseWithinThreePercentAndResumesWhereItStopped) {
               a.median_relative_error, a.rho_d_median_relative_error);
   EXPECT_LT(a.median_relative_error, 0.03);
   EXPECT_LT(a.rho_d_median_relative_error, 0.02);
+  const Accuracy own = AccuracyWithItsOwnCalibration(sim);
+  std::printf("noisy, own calibration: median |R/R_true - 1| = %.4f, rho_d %.4f\n", own.median_relative_error,
+              own.rho_d_median_relative_error);
+  EXPECT_LT(own.median_relative_error, 0.03);
+  EXPECT_LT(own.rho_d_median_relative_error, 0.02);
 
   // An interruption before it started is a clean, resumable stop.
   const fs::path resumed = sim.folder / "resumed";
