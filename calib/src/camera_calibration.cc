@@ -115,6 +115,30 @@ std::vector<cv::Point3f> BoardSpec::CornerPositions() const {
   return corners;
 }
 
+namespace {
+
+// findChessboardCorners's time grows with the pixel count (about 4 s for a 24 MP frame), so the
+// corners are looked for on a copy halved until its longer side is at most 2000 px, where
+// squares of any usable board are still tens of pixels wide, and on the full image only if that
+// fails. pyrDown keeps pixel i of the copy centred on pixel 2i of its source.
+bool FindChessboardCorners(const cv::Mat& gray, const cv::Size& pattern, std::vector<cv::Point2f>* corners) {
+  constexpr int kSearchSide = 2000;
+  constexpr int kFlags = cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK;
+  cv::Mat reduced = gray;
+  float scale = 1.0f;
+  while (std::max(reduced.cols, reduced.rows) > kSearchSide) {
+    cv::pyrDown(reduced, reduced);
+    scale *= 2.0f;
+  }
+  if (scale > 1.0f && cv::findChessboardCorners(reduced, pattern, *corners, kFlags)) {
+    for (cv::Point2f& corner : *corners) corner *= scale;
+    return true;
+  }
+  return cv::findChessboardCorners(gray, pattern, *corners, kFlags);
+}
+
+}  // namespace
+
 BoardDetection DetectBoard(const cv::Mat& gray, const BoardSpec& board, const std::string& source) {
   BoardDetection detection;
   detection.source = source;
@@ -125,10 +149,7 @@ BoardDetection DetectBoard(const cv::Mat& gray, const BoardSpec& board, const st
   const std::vector<cv::Point3f> positions = board.CornerPositions();
   if (board.kind == BoardSpec::Kind::kChessboard) {
     std::vector<cv::Point2f> corners;
-    const bool found = cv::findChessboardCorners(
-        gray, cv::Size(board.cols, board.rows), corners,
-        cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK);
-    if (!found) {
+    if (!FindChessboardCorners(gray, cv::Size(board.cols, board.rows), &corners)) {
       detection.failure = "chessboard with " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
                           " inner corners not found";
       return detection;

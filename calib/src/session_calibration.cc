@@ -28,6 +28,10 @@ CalibrationReport CameraFromJson(const nlohmann::json& j) {
   c.cy = j.at("cy").get<double>();
   c.distortion = j.at("distortion").get<std::array<double, 5>>();
   report.rms_px = j.at("rms_px").get<double>();
+  if (j.value("lens_model", "full") == "narrow") {
+    report.narrow_lens_because = j.value("lens_model_because", "");
+    if (report.narrow_lens_because.empty()) report.narrow_lens_because = "calibration.json says lens_model narrow";
+  }
   if (j.contains("std")) {
     const nlohmann::json& s = j["std"];
     report.intrinsics_std = {s.at("fx").get<double>(), s.at("fy").get<double>(), s.at("cx").get<double>(),

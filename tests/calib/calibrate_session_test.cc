@@ -7,10 +7,12 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 
 #include <nlohmann/json.hpp>
 
 #include "svbtdf/calib/calibrate_session.h"
+#include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/common/progress.h"
@@ -108,6 +110,51 @@ TEST_F(CalibrateSessionTest, RecoversTheRigWithinTheStatedTolerances) {
   EXPECT_NEAR(c.monitor.distance_m, truth_.monitor.distance, 0.5e-3);
   EXPECT_LT(dot_error_mm, 0.2);
   EXPECT_EQ(c.monitor.dots.size(), truth_.dots.size());
+}
+
+// calibration.json is what `svbtdf process` and `svbtdf run` read back, and users may edit or
+// bring one: it must read back as written, and damaged copies must be an Error naming the file,
+// never a crash or another exception.
+TEST_F(CalibrateSessionTest, CalibrationFileRoundTripsAndDamageIsAClearError) {
+  SessionCalibration c = CalibrateSession(Session::Open(root_ / "sim" / "session"), Quiet());
+  c.camera.narrow_lens_because = "a test reason";  // the lens model must survive the trip too
+  const fs::path path = root_ / "calibration.json";
+  WriteSessionCalibration(path, c);
+  const SessionCalibration back = ReadSessionCalibration(path);
+  EXPECT_EQ(back.camera.camera.width, c.camera.camera.width);
+  EXPECT_DOUBLE_EQ(back.camera.camera.fx, c.camera.camera.fx);
+  EXPECT_DOUBLE_EQ(back.camera.camera.cy, c.camera.camera.cy);
+  EXPECT_EQ(back.camera.camera.distortion, c.camera.camera.distortion);
+  EXPECT_EQ(back.camera.narrow_lens_because, "a test reason");
+  EXPECT_TRUE(back.sample_plane.rotation.isApprox(c.sample_plane.rotation, 1e-12));
+  EXPECT_TRUE(back.sample_plane.translation.isApprox(c.sample_plane.translation, 1e-12));
+  ASSERT_EQ(back.monitor.dots.size(), c.monitor.dots.size());
+  for (size_t q = 0; q < c.monitor.dots.size(); ++q) {
+    EXPECT_LT((back.monitor.dots[q].position - c.monitor.dots[q].position).norm(), 1e-12);
+  }
+  EXPECT_EQ(back.provenance, c.provenance);
+
+  const std::string original = ReadTextFile(path);
+  std::mt19937_64 rng(3);
+  int refused = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    std::string damaged = original;
+    const int mode = trial % 3;
+    if (mode == 0) damaged.resize(rng() % damaged.size());
+    if (mode == 1) damaged[rng() % damaged.size()] = static_cast<char>(rng() % 256);
+    if (mode == 2) damaged.insert(rng() % damaged.size(), std::string(1 + rng() % 5, "{}[]\",:0e9-x\n"[rng() % 13]));
+    const fs::path damaged_path = root_ / "damaged.json";
+    std::ofstream(damaged_path, std::ios::trunc) << damaged;
+    try {
+      ReadSessionCalibration(damaged_path);
+    } catch (const Error& e) {
+      ++refused;
+      EXPECT_NE(std::string(e.what()).find("damaged.json"), std::string::npos) << e.what();
+    } catch (const std::exception& e) {
+      FAIL() << "trial " << trial << ": " << e.what();
+    }
+  }
+  EXPECT_GT(refused, 100);  // every truncation at least
 }
 
 TEST_F(CalibrateSessionTest, ProcessingWithTheCalibrationMeasuresTheTrueBtdf) {
