@@ -274,10 +274,18 @@ SimulationOutput SimulateSession(const fs::path& out, const SimulationOptions& o
   if (error) ThrowIoError(output.truth.string(), "cannot create: " + error.message(), "is the folder writable?");
 
   const Rig rig(preset.rig);
-  const bool resuming = fs::exists(output.session / "session.json");
-  if (resuming && Session::Open(output.session).Verify(/*check_crc=*/false).complete()) {
-    ThrowInvalidInput(output.session.string(), "holds a complete simulated session already; it is never overwritten",
-                      "choose a new output folder");
+  if (fs::exists(output.session / "session.json")) {
+    // Resuming: the journal is append-only, so a damaged image could not be rendered again under
+    // its key, and the run would end with it still damaged.
+    const SessionVerification check = Session::Open(output.session).Verify(/*check_crc=*/true);
+    if (check.complete()) {
+      ThrowInvalidInput(output.session.string(), "holds a complete simulated session already; it is never overwritten",
+                        "choose a new output folder");
+    }
+    if (!check.corrupt.empty() || !check.duplicated.empty()) {
+      ThrowFormatError(output.session.string(), "cannot be resumed: " + check.Summary(),
+                       "simulate into a new output folder");
+    }
   }
   const std::unique_ptr<SpatialBtdf> material = MakeTruth(preset, rig, options, output.truth);
   const RigRenderer renderer(rig, material.get(), options.threads);

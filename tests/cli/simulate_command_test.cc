@@ -59,6 +59,11 @@ TEST_F(SimulateCommand, TinyPresetWritesACompleteSessionAndRefusesToOverwriteIt)
   const auto verify = RunSvbtdf("session verify " + (out / "session").string());
   EXPECT_EQ(verify.exit_code, 3) << verify.output;
   EXPECT_NE(verify.output.find("dot/q0003/e0/r0"), std::string::npos) << verify.output;
+  // Simulating into it again cannot mend it (the journal is append-only): a clear refusal.
+  const auto resume = RunSvbtdf("-q simulate --preset tiny --out " + out.string());
+  EXPECT_EQ(resume.exit_code, 2) << resume.output;
+  EXPECT_NE(resume.output.find("cannot be resumed"), std::string::npos) << resume.output;
+  EXPECT_NE(resume.output.find("dot/q0003/e0/r0"), std::string::npos) << resume.output;
 }
 
 // Runs the tiny preset whole and interrupted-then-resumed with `arguments` (a vector of extra
