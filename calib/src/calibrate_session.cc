@@ -118,8 +118,11 @@ SamplePlane SamplePlaneFromBoard(const Session& session, const BoardSpec& board,
                    "lay the board in the holder with its rows along the sample's x axis");
 }
 
-// Blobs brighter than a fifth of the way from the background to the peak, with centroids
-// weighted by their brightness above the background.
+// Blobs brighter than a fifth of the way from the background to the peak. Each centroid weighs
+// the brightness above the background over the blob's box grown by half its size (pixels of
+// other blobs excepted), not over the thresholded pixels alone: those depend on the threshold,
+// which one bright speck elsewhere raises, and a dot seen obliquely is not symmetric about its
+// peak, so the centroid of its brightest core moves.
 std::vector<Eigen::Vector2d> FindBlobs(const cv::Mat& gray) {
   std::vector<float> values(gray.begin<float>(), gray.end<float>());
   std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
@@ -129,18 +132,24 @@ std::vector<Eigen::Vector2d> FindBlobs(const cv::Mat& gray) {
   const double threshold = background + 0.2 * (peak - background);
   cv::Mat mask = gray > threshold, labels, stats, centroids;
   const int count = cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8, CV_32S);
-  std::vector<Eigen::Vector3d> sums(count, Eigen::Vector3d::Zero());  // (w x, w y, w)
-  for (int y = 0; y < gray.rows; ++y) {
-    for (int x = 0; x < gray.cols; ++x) {
-      const int label = labels.at<int>(y, x);
-      if (label == 0) continue;
-      const double w = gray.at<float>(y, x) - background;
-      sums[label] += Eigen::Vector3d(w * x, w * y, w);
-    }
-  }
   std::vector<Eigen::Vector2d> blobs;
   for (int label = 1; label < count; ++label) {
-    if (sums[label].z() > 0) blobs.emplace_back(sums[label].x() / sums[label].z(), sums[label].y() / sums[label].z());
+    const int w = stats.at<int>(label, cv::CC_STAT_WIDTH), h = stats.at<int>(label, cv::CC_STAT_HEIGHT);
+    const int grow = std::max(2, std::max(w, h) / 2);
+    const int x0 = std::max(0, stats.at<int>(label, cv::CC_STAT_LEFT) - grow);
+    const int y0 = std::max(0, stats.at<int>(label, cv::CC_STAT_TOP) - grow);
+    const int x1 = std::min(gray.cols, stats.at<int>(label, cv::CC_STAT_LEFT) + w + grow);
+    const int y1 = std::min(gray.rows, stats.at<int>(label, cv::CC_STAT_TOP) + h + grow);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();  // (w x, w y, w)
+    for (int y = y0; y < y1; ++y) {
+      for (int x = x0; x < x1; ++x) {
+        const int other = labels.at<int>(y, x);
+        if (other != 0 && other != label) continue;
+        const double weight = std::max(0.0, gray.at<float>(y, x) - background);
+        sum += Eigen::Vector3d(weight * x, weight * y, weight);
+      }
+    }
+    if (sum.z() > 0) blobs.emplace_back(sum.x() / sum.z(), sum.y() / sum.z());
   }
   return blobs;
 }

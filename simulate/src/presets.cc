@@ -37,7 +37,7 @@ SimulationPreset Tiny() {
   p.rig.sample.texels_x = p.rig.sample.texels_y = 32;
   p.rig.dots.cols = p.rig.dots.rows = 6;
   p.rig.dots.radius_px = 4.0;
-  p.rig.holder_board = {10, 10, 0.007, 0, 0.85, 0.04, 1.0};
+  p.rig.holder_board = {12, 12, 0.006, 0, 0.85, 0.04, 1.0};
   p.rig.sensor.bit_depth = 12;
   p.rig.dark_frames = 2;
   p.pattern = "smooth";
@@ -58,7 +58,7 @@ SimulationPreset Small() {
   p.rig.sample.texels_x = p.rig.sample.texels_y = 32;
   p.rig.dots.cols = p.rig.dots.rows = 20;
   p.rig.dots.radius_px = 3.0;
-  p.rig.holder_board = {10, 10, 0.007, 0, 0.85, 0.04, 1.0};
+  p.rig.holder_board = {12, 12, 0.006, 0, 0.85, 0.04, 1.0};
   p.rig.sensor.bit_depth = 12;
   p.rig.dark_frames = 2;
   p.pattern = "smooth";
@@ -74,7 +74,7 @@ SimulationPreset Demo() {
   p.rig.sample.texels_x = p.rig.sample.texels_y = 64;
   p.rig.dots.cols = p.rig.dots.rows = 24;
   p.rig.dots.radius_px = 3.0;
-  p.rig.holder_board = {10, 10, 0.007, 0, 0.85, 0.04, 1.0};
+  p.rig.holder_board = {12, 12, 0.006, 0, 0.85, 0.04, 1.0};
   p.rig.sensor.bit_depth = 12;
   p.rig.sensor.vignetting = 0.05;
   p.pattern = "smooth";
@@ -89,7 +89,7 @@ SimulationPreset PaperScale(const std::string& name) {
   SimulationPreset p;
   p.name = name;
   p.rig = PaperGeometry(1280, 1024, 12000.0, 6000, 4000);  // a 24 MP camera with a 48 mm lens
-  p.rig.holder_board = {10, 10, 0.007, 0, 0.85, 0.04, 1.0};
+  p.rig.holder_board = {12, 12, 0.006, 0, 0.85, 0.04, 1.0};
   p.rig.sensor.bit_depth = 14;
   p.rig.sensor.vignetting = 0.08;
   p.rig.dots.radius_px = 2.0;
@@ -103,7 +103,7 @@ SimulationPreset PaperScale(const std::string& name) {
   } else if (name == "leaf-glass") {
     p.description = "paper Table 1: leaf glass, 400x420 texels, 40x40 dots, eta 1.5";
     p.rig = PaperGeometry(1280, 1024, 11500.0, 6000, 4000);
-    p.rig.holder_board = {10, 10, 0.007, 0, 0.85, 0.04, 1.0};
+    p.rig.holder_board = {12, 12, 0.006, 0, 0.85, 0.04, 1.0};
     p.rig.sensor.bit_depth = 14;
     p.rig.sensor.vignetting = 0.08;
     p.rig.dots.radius_px = 2.0;
