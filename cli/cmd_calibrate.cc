@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "quality_output.h"
 #include "svbtdf/calib/calibrate_session.h"
 #include "svbtdf/calib/camera_calibration.h"
 #include "svbtdf/common/session.h"
@@ -32,6 +33,7 @@ struct CalibrateOptions {
   std::string json_path;
   bool fix_k3 = false;
   bool full_lens_model = false;
+  bool strict = false;
 };
 
 std::vector<std::string> ExpandGlob(const std::string& pattern) {
@@ -131,6 +133,9 @@ void RunCalibrateSession(const CalibrateOptions& options) {
   const std::filesystem::path out = std::filesystem::path(options.session) / "calibration.json";
   calib::WriteSessionCalibration(out, c);
   std::printf("wrote %s\n", out.c_str());
+  const std::vector<fit::QualityWarning> warnings = fit::CheckCalibration(c, out.string());
+  PrintQualityWarnings(warnings);
+  ExitIfStrict(warnings, options.strict);
 }
 
 }  // namespace
@@ -151,6 +156,7 @@ void AddCalibrateCommand(CLI::App& app) {
   calibrate->add_flag("--full-lens-model", options->full_lens_model,
                       "estimate the principal point and all distortion terms even when the views cannot "
                       "determine them (by default a long lens falls back to the narrow-lens model)");
+  AddStrictFlag(calibrate, &options->strict);
   calibrate->callback([options] {
     if (!options->session.empty()) return RunCalibrateSession(*options);
     if (options->images_glob.empty()) {

@@ -4,9 +4,11 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "commands.h"
 #include "fit_command.h"
+#include "quality_output.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/fit/fit_material.h"
 #include "svbtdf/fit/material.h"
@@ -20,6 +22,7 @@ struct FitCommandOptions {
   std::string processed, out;
   std::string representatives = "0.01";
   fit::FitMaterialOptions fit;
+  bool strict = false;
 };
 
 }  // namespace
@@ -45,7 +48,9 @@ double ParseRepresentatives(const std::string& text) {
   ThrowInvalidInput("--representatives", "must be a fraction in (0, 1] or 'all', got '" + text + "'");
 }
 
-void FitAndWriteMaterial(const fs::path& processed, const fs::path& out, fit::FitMaterialOptions options) {
+std::vector<fit::QualityWarning> FitAndWriteMaterial(const fs::path& processed, const fs::path& out,
+                                                     fit::FitMaterialOptions options,
+                                                     const std::vector<fit::QualityWarning>* earlier) {
   if (fs::exists(out) && (!fs::is_directory(out) || !fs::is_empty(out))) {
     ThrowInvalidInput(out.string(), "exists and is not empty; a material is never overwritten", "choose a new --out folder");
   }
@@ -71,6 +76,21 @@ void FitAndWriteMaterial(const fs::path& processed, const fs::path& out, fit::Fi
                 statistics["median_relative_rmse_refined"].get<double>());
   }
   std::printf("material: %s\n", out.c_str());
+
+  std::vector<fit::QualityWarning> warnings;
+  if (earlier) {
+    warnings = *earlier;
+  } else {
+    warnings = fit::CheckCalibration(store.calibration(), (processed / "calibration.json").string());
+    const std::vector<fit::QualityWarning> stored = fit::CheckSliceStore(processed);
+    warnings.insert(warnings.end(), stored.begin(), stored.end());
+    PrintQualityWarnings(warnings);
+  }
+  const std::vector<fit::QualityWarning> fitted = fit::CheckMaterial(material, out);
+  PrintQualityWarnings(fitted);
+  warnings.insert(warnings.end(), fitted.begin(), fitted.end());
+  fit::WriteQuality(out, warnings);
+  return warnings;
 }
 
 void AddFitOptions(CLI::App* command, fit::FitMaterialOptions* options, std::string* representatives) {
@@ -102,10 +122,11 @@ void AddFitCommand(CLI::App& app) {
   fit->add_option("processed", options->processed, "output folder of 'svbtdf process'")->required();
   fit->add_option("--out", options->out, "new material folder")->required();
   AddFitOptions(fit, &options->fit, &options->representatives);
+  AddStrictFlag(fit, &options->strict);
   fit->callback([options] {
     fit::FitMaterialOptions fit_options = options->fit;
     fit_options.representative_fraction = ParseRepresentatives(options->representatives);
-    FitAndWriteMaterial(options->processed, options->out, fit_options);
+    ExitIfStrict(FitAndWriteMaterial(options->processed, options->out, fit_options), options->strict);
   });
 }
 

@@ -3,8 +3,10 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "commands.h"
+#include "quality_output.h"
 #include "svbtdf/calib/session_calibration.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/session.h"
@@ -17,6 +19,7 @@ struct ProcessCommandOptions {
   std::string session, out;
   std::string texels;  // "WxH"
   fit::ProcessOptions process;
+  bool strict = false;
 };
 
 void ParseTexels(const std::string& text, fit::ProcessOptions* options) {
@@ -43,6 +46,9 @@ void RunProcess(ProcessCommandOptions options) {
               report.dots_resumed, static_cast<long long>(report.images_read), report.seconds,
               static_cast<long long>(report.valid_texels), static_cast<long long>(report.texels));
   std::printf("slice store: %s\n", options.out.c_str());
+  const std::vector<fit::QualityWarning> warnings = fit::CheckSliceStore(options.out);
+  PrintQualityWarnings(warnings);
+  ExitIfStrict(warnings, options.strict);
 }
 
 }  // namespace
@@ -57,6 +63,7 @@ void AddProcessCommand(CLI::App& app) {
                       "light hemicube resolution of the resampled slices (power of two)")
       ->capture_default_str();
   process->add_option("--threads", options->process.threads, "worker threads (0: all cores)")->capture_default_str();
+  AddStrictFlag(process, &options->strict);
   process->callback([options] { RunProcess(*options); });
 }
 

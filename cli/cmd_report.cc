@@ -19,6 +19,7 @@
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/fit/material.h"
+#include "svbtdf/fit/quality.h"
 #include "svbtdf/simulate/session_writer.h"
 
 namespace svbtdf::cli {
@@ -180,6 +181,45 @@ void AddNdfs(Page& page, const fit::Material& material, const std::optional<Mate
   }
 }
 
+std::string EscapeHtml(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '&': out += "&amp;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+// The quality warnings (docs/quality.md), first on the page: MATERIAL/quality.json, or for a
+// material written before it existed, the material's own checks computed now. Returns them.
+std::vector<fit::QualityWarning> AddQuality(Page& page, const fit::Material& material, const fs::path& folder) {
+  std::vector<fit::QualityWarning> warnings;
+  const bool recorded = fit::ReadQuality(folder, &warnings);
+  if (!recorded) warnings = fit::CheckMaterial(material, folder);
+  const std::string source = recorded ? "<code>quality.json</code>"
+                                      : "the material's own checks (it has no <code>quality.json</code>, so the "
+                                        "calibration and processing were not checked)";
+  if (warnings.empty()) {
+    page.Raw("<p class=\"quality-ok\">Quality checks: no warnings (" + source + ").</p>\n");
+    return warnings;
+  }
+  std::string html = "<div class=\"quality-warnings\" style=\"border:2px solid #c00;background:#fee;padding:4px 12px\">"
+                     "<h2>Quality warnings (" + std::to_string(warnings.size()) + ")</h2><p>This material may be badly "
+                     "wrong. From " + source + "; what each check means: docs/quality.md.</p><ul>\n";
+  for (const fit::QualityWarning& w : warnings) {
+    html += "<li><b>" + EscapeHtml(w.stage) + "</b>: " + EscapeHtml(w.what) + " (" + EscapeHtml(w.figures) +
+            ")<br>likely cause: " + EscapeHtml(w.likely_cause) + "<br><small><code>" + EscapeHtml(w.file) +
+            "</code></small></li>\n";
+  }
+  page.Raw(html + "</ul></div>\n");
+  return warnings;
+}
+
 void AddCompare(Page& page, const std::string& compare_file) {
   const nlohmann::json metrics = nlohmann::json::parse(ReadTextFile(compare_file));
   page.Heading("Against the ground truth");
@@ -204,6 +244,7 @@ void RunReport(const ReportOptions& options) {
   fs::create_directories(options.out, error);
   if (error) ThrowIoError(options.out, "cannot create: " + error.message());
   Page page(options.out);
+  const std::vector<fit::QualityWarning> warnings = AddQuality(page, material, options.material);
   page.Paragraph("Material <code>" + options.material + "</code>: " + std::to_string(material.width) + " x " +
                  std::to_string(material.height) + " texels, eta " + std::to_string(material.eta).substr(0, 5) + ", " +
                  std::to_string(material.representative_texels.size()) + " representatives, NDF hemicube " +
@@ -214,6 +255,11 @@ void RunReport(const ReportOptions& options) {
   page.Raw("<h2>Provenance</h2><pre>" + material.provenance.dump(2) + "</pre>\n");
   page.Write("svbtdf material report");
   std::printf("report: %s\n", (fs::path(options.out) / "index.html").c_str());
+  if (!warnings.empty()) {
+    std::fflush(stdout);
+    std::fprintf(stderr, "svbtdf: the report shows %zu quality warning%s at its top\n", warnings.size(),
+                 warnings.size() == 1 ? "" : "s");
+  }
 }
 
 }  // namespace

@@ -6,9 +6,11 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "commands.h"
 #include "fit_command.h"
+#include "quality_output.h"
 #include "svbtdf/calib/calibrate_session.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/session.h"
@@ -24,6 +26,7 @@ struct RunOptions {
   std::string representatives = "0.01";
   fit::ProcessOptions process;
   fit::FitMaterialOptions fit;
+  bool strict = false;
 };
 
 calib::SessionCalibration CalibrationOf(const Session& session) {
@@ -68,13 +71,28 @@ void Run(const RunOptions& options) {
     ThrowInvalidInput(options.session, "is not a complete session: " + verification.Summary(),
                       "finish the capture (re-run 'svbtdf acquire' with the same --out) or check it with 'svbtdf session verify'");
   }
+  // Every stage's output is checked after it (docs/quality.md), also when an earlier run made it.
   const calib::SessionCalibration calibration = CalibrationOf(session);
+  std::vector<fit::QualityWarning> warnings =
+      fit::CheckCalibration(calibration, (session.folder() / "calibration.json").string());
+  PrintQualityWarnings(warnings);
   ProcessUnlessDone(session, calibration, work / "processed", options.process);
+  const std::vector<fit::QualityWarning> processed = fit::CheckSliceStore(work / "processed");
+  PrintQualityWarnings(processed);
+  warnings.insert(warnings.end(), processed.begin(), processed.end());
   std::printf("== 3/3 fitting\n");
   fit::FitMaterialOptions fit_options = options.fit;
   fit_options.representative_fraction = ParseRepresentatives(options.representatives);
-  FitAndWriteMaterial(work / "processed", out, fit_options);
+  warnings = FitAndWriteMaterial(work / "processed", out, fit_options, &warnings);
   std::printf("intermediate files (calibrated slices, reusable): %s\n", work.c_str());
+  if (warnings.empty()) {
+    std::printf("quality: no warnings (%s)\n", (out / "quality.json").c_str());
+  } else {
+    std::fflush(stdout);
+    std::fprintf(stderr, "svbtdf: %zu quality warning%s, recorded in %s: the material may be badly wrong\n",
+                 warnings.size(), warnings.size() == 1 ? "" : "s", (out / "quality.json").c_str());
+  }
+  ExitIfStrict(warnings, options.strict);
 }
 
 }  // namespace
@@ -88,6 +106,7 @@ void AddRunCommand(CLI::App& app) {
   run->add_option("--light-resolution", options->process.light_resolution, "light hemicube of the resampled slices")
       ->capture_default_str();
   AddFitOptions(run, &options->fit, &options->representatives);
+  AddStrictFlag(run, &options->strict);
   run->callback([options] {
     options->process.threads = options->fit.threads;
     Run(*options);

@@ -1,6 +1,8 @@
 // svbtdf: capture, calibrate and fit spatially varying BTDFs of thin transparent slabs.
 // This file only wires the subcommands together and maps every error to one line on stderr
 // and an exit code (2: bad input or usage, 1: I/O, hardware or numerical failure,
+// 3: an incomplete session (acquire, session verify), 4: --strict and the output drew quality
+// warnings (docs/quality.md; the output is still written),
 // 130: interrupted; the work done so far is kept and the command can be re-run to resume).
 
 #include <spdlog/spdlog.h>

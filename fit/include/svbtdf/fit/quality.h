@@ -1,0 +1,102 @@
+#pragma once
+// Quality checks of the pipeline's outputs (docs/quality.md): each stage's output is inspected
+// for figures that say the result is badly wrong (dots far off the fitted grid, texels with no
+// dot beneath them, fits that do not match their samples, implausible k_s), and every finding is
+// a QualityWarning naming the stage, the file, the figures and the likely cause.
+//
+// `svbtdf calibrate`, `process`, `fit` and `run` print them on stderr (one line each, starting
+// "warning:"); `fit` and `run` record every stage's warnings in MATERIAL/quality.json, which
+// `svbtdf report` shows at the top of its page; `--strict` turns them into exit code 4.
+//
+// The checks only read the outputs: a stage's warnings are the same whenever they are computed.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "svbtdf/calib/session_calibration.h"
+#include "svbtdf/fit/material.h"
+
+namespace svbtdf::fit {
+
+inline constexpr int kQualityFormatVersion = 1;
+// The exit code of a command run with --strict whose output drew quality warnings (3 is taken:
+// `svbtdf acquire` and `session verify` use it for an incomplete session).
+inline constexpr int kQualityWarningExitCode = 4;
+
+struct QualityWarning {
+  std::string stage;         // "calibrate" | "process" | "fit"
+  std::string file;          // the output inspected (calibration.json, mask.exr, residual.exr, ...)
+  std::string check;         // short stable identifier, e.g. "dot-residual" (docs/quality.md)
+  std::string what;          // what is wrong, in words
+  std::string figures;       // the numbers behind it, with the threshold
+  std::string likely_cause;  // what probably went wrong and what to do
+
+  // "warning: calibrate: FILE: WHAT (FIGURES); likely cause: LIKELY_CAUSE"
+  std::string Line() const;
+};
+
+// --- Thresholds (docs/quality.md says why each is where it is) -----------------------------------
+
+// Calibration. A dot's centroid is located to about 0.02 mm on the monitor plane (blob noise; the
+// simulated presets' grid residual RMS is 0.014 mm, their worst dot 0.11-0.15 mm): residuals many
+// times that mean the dots are not where the grid says (mislabelled, a wrong monitor pose).
+inline constexpr double kMaxDotResidualMm = 0.3;
+inline constexpr double kMaxDotResidualRmsMm = 0.1;
+// Dots with no blob matched: their position is extrapolated from the fitted grid. A few may be
+// hidden (a speck, the holder's edge); more than this fraction says the dot image is wrong.
+inline constexpr double kMaxMissingDotFraction = 0.05;
+// Zhang reprojection RMS: a sharp, well-lit board calibrates to a few tenths of a pixel
+// (simulated presets: below 0.1 px); above 1 px the corners or the lens model are off.
+inline constexpr double kMaxCameraRmsPx = 1.0;
+// Reprojection RMS of the holder board in sample_plane/v00 (same reasoning as the camera's).
+inline constexpr double kMaxSamplePlaneRmsPx = 1.0;
+// Board views dropped as outliers or not found: a few are normal; more than this fraction of
+// the views means the board photos (focus, motion, exposure) are poor.
+inline constexpr double kMaxDroppedViewFraction = 0.25;
+
+// Processing. Every texel of the grid lies on the sample; texels masked out (fewer than 8 valid
+// dots or no refractive signal) have no fit of their own.
+inline constexpr double kMinValidTexelFraction = 0.9;
+// Texels with no dot beneath them (reach.exr == 0) see only grazing light: their lobe peak is
+// never sampled and the fit extrapolates it.
+inline constexpr double kMaxTexelsWithoutDotFraction = 0.05;
+
+// Fit. The relative RMSE of a good fit is the capture's noise plus the model's error, a few
+// percent (tiny preset: median ~0.03); 20% means the model does not describe the samples.
+inline constexpr double kMaxTexelRelativeRmse = 0.2;
+// ... and more than this fraction of the texels with a known residual above it is a bad material.
+inline constexpr double kMaxBadResidualFraction = 0.1;
+// k_s scales the refractive lobe; a physical slab transmits at most about 1 (simulated presets:
+// 0.3-1.5). Values above this compensate for an NDF whose mass sits where no dot looks.
+inline constexpr double kMaxPlausibleKs = 1e3;
+// Texels whose alpha sits at 0 or 1 (within this) — "everywhere" means this fraction of them.
+inline constexpr double kAlphaBoundTolerance = 1e-3;
+inline constexpr double kMaxAlphaAtBoundFraction = 0.99;
+// Representatives whose fit failed borrow the nearest successful one's. One of the `tiny` preset's
+// 10 does (its texels are refined on their own samples afterwards); a quarter is a bad capture.
+inline constexpr double kMaxFailedFitFraction = 0.25;
+
+// --- Checks ------------------------------------------------------------------------------------
+
+// `file` is how the warnings name the calibration (e.g. SESSION/calibration.json).
+std::vector<QualityWarning> CheckCalibration(const calib::SessionCalibration& calibration, const std::string& file);
+// Reads PROCESSED/mask.exr, and PROCESSED/reach.exr or processed.json's
+// statistics.texels_without_dot_beneath when present (the check is skipped when neither is).
+std::vector<QualityWarning> CheckSliceStore(const std::filesystem::path& processed);
+// `folder` is how the warnings name the material's files.
+std::vector<QualityWarning> CheckMaterial(const Material& material, const std::filesystem::path& folder);
+
+// --- MATERIAL/quality.json ---------------------------------------------------------------------
+
+nlohmann::json QualityToJson(const std::vector<QualityWarning>& warnings);
+// Throws svbtdf::Error(kFormat) naming `source` for a wrong format, version or field.
+std::vector<QualityWarning> QualityFromJson(const nlohmann::json& json, const std::string& source);
+// Writes MATERIAL/quality.json atomically (replacing an earlier one).
+void WriteQuality(const std::filesystem::path& material_folder, const std::vector<QualityWarning>& warnings);
+// Reads MATERIAL/quality.json; false when the material has none (written before the checks existed).
+bool ReadQuality(const std::filesystem::path& material_folder, std::vector<QualityWarning>* warnings);
+
+}  // namespace svbtdf::fit
