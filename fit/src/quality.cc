@@ -185,9 +185,13 @@ std::vector<QualityWarning> CheckMaterial(const Material& m, const fs::path& fol
                                "%.3f, max %.3f",
                                static_cast<long long>(bad), static_cast<long long>(known), Percent(bad, known),
                                100 * kMaxBadResidualFraction, kMaxTexelRelativeRmse, median, worst),
-                        "wrong light directions (the dots may be mislabelled or misplaced: see the calibration's dot "
-                        "residuals), samples too noisy (the exposure is too low), or a material the model cannot "
-                        "describe"});
+                        m.model == MaterialModel::kWalterGgx
+                            ? "the single-interface baseline (--model ggx) cannot describe this slab's lobes (it "
+                              "refracts once; expected for a slab with two rough interfaces: fit --model dual), or "
+                              "wrong light directions (see the calibration's dot residuals)"
+                            : "wrong light directions (the dots may be mislabelled or misplaced: see the calibration's "
+                              "dot residuals), samples too noisy (the exposure is too low), or a material the model "
+                              "cannot describe"});
   }
 
   // k_s: a transmission scale, about 1 for a physical slab.
