@@ -25,6 +25,12 @@ void AddSimulateCommand(CLI::App& app) {
       ->check(CLI::IsMember({"model", "montecarlo"}))
       ->capture_default_str();
   simulate->add_flag("!--no-noise", options->noise, "no shot or read noise (quantisation stays): for accuracy checks");
+  simulate->add_option("--monitor-orientation", options->monitor_orientation_deg,
+                       "turn the screen about its normal (degrees, counter-clockwise seen from the sample; 0: its "
+                       "top edge toward +y) instead of the preset's");
+  simulate->add_option("--monitor-tilt", options->monitor_tilt_deg, "tilt the screen about the x axis (degrees) instead of the preset's");
+  simulate->add_flag("--mirror-monitor", options->mirror_monitor,
+                     "show a mirror image of the screen (a mirrored display mode), which calibration must refuse");
   simulate->add_option("--threads", options->threads, "worker threads (0: all cores)")->capture_default_str();
   simulate->callback([options, out] {
     const SimulationOutput result = SimulateSession(*out, *options);

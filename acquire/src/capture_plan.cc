@@ -7,6 +7,7 @@
 
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/fiducials.h"
 #include "svbtdf/simulate/capture_render.h"
 #include "svbtdf/simulate/presets.h"
 
@@ -131,12 +132,16 @@ void ParseDots(const json& object, const std::string& source, double pixel_pitch
 
 void ParseCalibration(const json& object, const std::string& source, CapturePlan* plan) {
   const Fields f(object, source, "calibration.", {"board_views", "board_exposure_s", "sample_plane_views", "all_dots",
-                                                  "all_dots_exposure_s", "flat_white", "flat_white_exposure_s"});
+                                                  "all_dots_exposure_s", "fiducials", "flat_white",
+                                                  "flat_white_exposure_s"});
   plan->board_views = f.Integer("board_views", 0, 100, 0);
   if (plan->board_views > 0 && plan->board_views < 3) f.Fail("calibration.board_views", "must be 0 or at least 3 (Zhang calibration)");
   plan->sample_plane_views = f.Integer("sample_plane_views", 0, 20, 1);
   plan->all_dots = f.Flag("all_dots", true);
   plan->flat_white = f.Flag("flat_white", true);
+  // The fiducial dots tell calibration which blob is which dot; they need the all-dots capture.
+  plan->fiducials = plan->all_dots && f.Flag("fiducials", true);
+  if (plan->fiducials) plan->fiducial_dots = FiducialDots(plan->dot_cols, plan->dot_rows);
   const bool boards = plan->board_views + plan->sample_plane_views > 0;
   plan->board_exposure_s = boards ? f.Number("board_exposure_s", 1e-7, kMaxExposure) : 0.0;
   plan->all_dots_exposure_s = plan->all_dots ? f.Number("all_dots_exposure_s", 1e-7, kMaxExposure) : 0.0;
@@ -145,7 +150,8 @@ void ParseCalibration(const json& object, const std::string& source, CapturePlan
 
 void ParseRigNotes(const json& object, const std::string& source, RigNotes* rig) {
   const Fields f(object, source, "rig.", {"monitor_distance_mm", "emission", "board", "sample_plane_board", "sample_width_mm",
-                                          "sample_height_mm", "texels_x", "texels_y", "eta", "camera_response"});
+                                          "sample_height_mm", "texels_x", "texels_y", "eta", "camera_response",
+                                          "monitor_orientation_deg"});
   rig->monitor_distance_mm = f.Number("monitor_distance_mm", 0.0, 10000.0, 0.0);
   rig->emission = f.Text("emission", "");
   if (!rig->emission.empty() && rig->emission != "isotropic" && rig->emission != "lambertian" && rig->emission != "lcd") {
@@ -162,6 +168,7 @@ void ParseRigNotes(const json& object, const std::string& source, RigNotes* rig)
   if (!rig->camera_response.empty() && rig->camera_response != "linear" && rig->camera_response != "srgb") {
     f.Fail("rig.camera_response", "must be linear or srgb");
   }
+  if (f.Has("monitor_orientation_deg")) rig->monitor_orientation_deg = f.Number("monitor_orientation_deg", -360.0, 360.0);
 }
 
 CapturePlan ParsePlanJson(const json& root, const std::string& source) {
@@ -233,7 +240,7 @@ CapturePlan ReadCapturePlan(const std::filesystem::path& path) {
 json CapturePlanToJson(const CapturePlan& plan) {
   json positions = json::array();
   for (const auto& [x, y] : plan.dots_px) positions.push_back({x, y});
-  return {
+  json out = {
       {"format", kFormatName},
       {"version", kCapturePlanVersion},
       {"name", plan.name},
@@ -247,7 +254,8 @@ json CapturePlanToJson(const CapturePlan& plan) {
       {"dark_frames", plan.dark_frames},
       {"calibration", {{"board_views", plan.board_views}, {"board_exposure_s", plan.board_exposure_s},
                        {"sample_plane_views", plan.sample_plane_views}, {"all_dots", plan.all_dots},
-                       {"all_dots_exposure_s", plan.all_dots_exposure_s}, {"flat_white", plan.flat_white},
+                       {"all_dots_exposure_s", plan.all_dots_exposure_s}, {"fiducials", plan.fiducials},
+                       {"flat_white", plan.flat_white},
                        {"flat_white_exposure_s", plan.flat_white_exposure_s}}},
       {"bytes_per_image", plan.bytes_per_image},
       {"rig", {{"monitor_distance_mm", plan.rig.monitor_distance_mm}, {"emission", plan.rig.emission},
@@ -256,6 +264,8 @@ json CapturePlanToJson(const CapturePlan& plan) {
                {"sample_height_mm", plan.rig.sample_height_mm}, {"texels_x", plan.rig.texels_x},
                {"texels_y", plan.rig.texels_y}, {"eta", plan.rig.eta}, {"camera_response", plan.rig.camera_response}}},
   };
+  if (!std::isnan(plan.rig.monitor_orientation_deg)) out["rig"]["monitor_orientation_deg"] = plan.rig.monitor_orientation_deg;
+  return out;
 }
 
 std::vector<std::string> PlanPresetNames() { return {"tiny", "demo"}; }
@@ -286,7 +296,8 @@ CapturePlan PlanFromSimulation(const SimulatedSetup& setup) {
   plan.dark_frames = config.dark_frames;
   plan.board_views = static_cast<int>(capture.zhang_boards.size());
   plan.sample_plane_views = 1;
-  plan.all_dots = plan.flat_white = true;
+  plan.all_dots = plan.flat_white = plan.fiducials = true;
+  plan.fiducial_dots = FiducialDots(plan.dot_cols, plan.dot_rows);
   plan.board_exposure_s = capture.board_exposure_s;
   plan.all_dots_exposure_s = capture.all_dots_exposure_s;
   plan.flat_white_exposure_s = capture.flat_exposure_s;
@@ -303,6 +314,7 @@ CapturePlan PlanFromSimulation(const SimulatedSetup& setup) {
   plan.rig.texels_y = config.sample.texels_y;
   plan.rig.eta = setup.preset.eta;
   plan.rig.camera_response = config.sensor.response;
+  plan.rig.monitor_orientation_deg = NominalOrientationDeg(config.monitor);
   return plan;
 }
 
@@ -328,6 +340,14 @@ std::vector<PlannedCapture> ExpandPlan(const CapturePlan& plan) {
     all.dot_radius_px = plan.dot_radius_px;
     all.intensity = plan.dot_intensity;
     list.push_back({"all_dots/e0", all, plan.all_dots_exposure_s, Scene::kNoSample});
+  }
+  if (plan.fiducials) {
+    Pattern some;
+    some.kind = Pattern::Kind::kAllDots;
+    for (int q : plan.fiducial_dots) some.all_dots_px.push_back(plan.dots_px.at(q));
+    some.dot_radius_px = plan.dot_radius_px;
+    some.intensity = plan.dot_intensity;
+    list.push_back({"fiducials/e0", some, plan.all_dots_exposure_s, Scene::kNoSample});
   }
   if (plan.flat_white) {
     Pattern white;

@@ -314,6 +314,8 @@ nlohmann::json AcquisitionRig(const CapturePlan& plan, const CameraInfo& camera,
   if (pitch_mm > 0) m["pixel_pitch_m"] = pitch_mm / 1000.0;
   if (notes.monitor_distance_mm > 0) m["distance_m"] = notes.monitor_distance_mm / 1000.0;
   if (!notes.emission.empty()) m["emission"] = notes.emission;
+  if (!std::isnan(notes.monitor_orientation_deg)) m["orientation_deg"] = notes.monitor_orientation_deg;
+  if (plan.fiducials) rig["dots"]["fiducials"] = plan.fiducial_dots;
   if (camera.sensor_width > 0) {
     c["sensor"] = {{"width", camera.sensor_width}, {"height", camera.sensor_height},
                    {"window_offset", {camera.window_x, camera.window_y}}};

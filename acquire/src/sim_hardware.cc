@@ -7,6 +7,7 @@
 
 #include "svbtdf/acquire/pattern_raster.h"
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/fiducials.h"
 #include "svbtdf/simulate/capture_render.h"
 
 namespace svbtdf::acquire {
@@ -119,8 +120,16 @@ SimCamera::Identified SimCamera::Identify() const {
     return known("dark", 0, e);
   }
   if (world_->scene == Scene::kNoSample && p.kind == Pattern::Kind::kAllDots) {
-    if (p.all_dots_px.size() != rig.dots().size()) NotSimulated(id_, "an all-dots pattern other than the rig's dots");
-    return known("all_dots", 0, 0);
+    if (p.all_dots_px.size() == rig.dots().size()) return known("all_dots", 0, 0);
+    // The fiducial dots, which the simulator renders as its `fiducials` capture.
+    const std::vector<int> fiducials = FiducialDots(rig.config().dots.cols, rig.config().dots.rows);
+    bool same = p.all_dots_px.size() == fiducials.size();
+    for (size_t k = 0; same && k < fiducials.size(); ++k) {
+      const Dot& dot = rig.dots()[fiducials[k]];
+      same = p.all_dots_px[k] == std::pair<double, double>(dot.monitor_x, dot.monitor_y);
+    }
+    if (!same) NotSimulated(id_, "a set of lit dots other than the rig's dots or its fiducial dots");
+    return known("fiducials", 0, 0);
   }
   if (world_->scene == Scene::kNoSample && p.kind == Pattern::Kind::kFlatWhite && p.intensity == 1.0) {
     return known("flat", 0, 0);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -11,6 +12,7 @@
 #include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "svbtdf/calib/dot_identification.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/progress.h"
 
@@ -154,135 +156,236 @@ std::vector<Eigen::Vector2d> FindBlobs(const cv::Mat& gray) {
   return blobs;
 }
 
-// Where the camera ray through `pixel` meets the plane z = z0 of the sample frame.
-Vec3 BackProject(const Eigen::Vector2d& pixel, const CameraModel& camera, const SamplePlane& plane, double z0) {
+// The direction (sample frame, not unit) of the camera ray through `pixel`.
+Vec3 PixelRay(const Eigen::Vector2d& pixel, const CameraModel& camera, const SamplePlane& plane) {
   std::vector<cv::Point2d> in = {{pixel.x(), pixel.y()}}, out;
   cv::undistortPoints(in, out, camera.CameraMatrix(), camera.DistortionCoefficients());
-  const Vec3 direction = plane.rotation.transpose() * Vec3(out[0].x, out[0].y, 1.0);
+  return plane.rotation.transpose() * Vec3(out[0].x, out[0].y, 1.0);
+}
+
+// Where the camera ray through `pixel` meets the plane z = z0 of the sample frame.
+Vec3 BackProject(const Eigen::Vector2d& pixel, const CameraModel& camera, const SamplePlane& plane, double z0) {
+  const Vec3 direction = PixelRay(pixel, camera, plane);
   const Vec3 origin = plane.CameraCentre();
   return origin + direction * ((z0 - origin.z()) / direction.z());
 }
 
+// How far (mm) the ray through a dot's centroid meets the monitor plane (through `position`, with
+// `normal`) from where the fitted grid puts the dot.
+double DotResidualMm(const Eigen::Vector2d& pixel, const Vec3& position, const Vec3& normal, const CameraModel& camera,
+                     const SamplePlane& plane) {
+  const Vec3 centre = plane.CameraCentre();
+  const Vec3 direction = PixelRay(pixel, camera, plane);
+  const double t = normal.dot(position - centre) / normal.dot(direction);
+  return 1000.0 * (centre + t * direction - position).norm();
+}
+
+// What the session says it displayed (docs/session-format.md, rig.monitor and rig.dots).
 struct NominalDots {
-  std::vector<Eigen::Vector2d> monitor_px;  // displayed centre of each dot, in monitor pixels
-  double pitch_m = 0, radius_px = 0, distance_m = 0.04, spacing_m = 0;
+  DisplayedGrid grid;  // the dots' centres in monitor pixels and the fiducial dots
+  double radius_px = 0, distance_m = 0.04;
+  std::optional<double> orientation_deg;  // rig.monitor.orientation_deg, as the lab noted it
 };
 
 NominalDots ReadNominalDots(const Session& session) {
   const std::string source = (session.folder() / "session.json").string();
   NominalDots n;
+  DisplayedGrid& grid = n.grid;
+  std::vector<int> fiducials;
   try {
     const nlohmann::json& rig = session.rig();
-    n.pitch_m = rig.at("monitor").at("pixel_pitch_m").get<double>();
-    n.distance_m = rig.at("monitor").at("distance_m").get<double>();
+    const nlohmann::json& monitor = rig.at("monitor");
+    grid.pixel_pitch_m = monitor.at("pixel_pitch_m").get<double>();
+    n.distance_m = monitor.at("distance_m").get<double>();
+    if (monitor.contains("orientation_deg")) n.orientation_deg = monitor.at("orientation_deg").get<double>();
     n.radius_px = rig.at("dots").at("radius_px").get<double>();
     for (const nlohmann::json& p : rig.at("dots").at("positions_px")) {
-      // A dot drawn centred on pixel (x, y) has its centre at (x + 0.5, y + 0.5).
-      n.monitor_px.emplace_back(p.at(0).get<double>() + 0.5, p.at(1).get<double>() + 0.5);
+      // Monitor pixel (i, j) covers [i, i + 1) x [j, j + 1): a dot drawn on it is centred on
+      // (i + 0.5, j + 0.5).
+      grid.monitor_px.emplace_back(p.at(0).get<double>() + 0.5, p.at(1).get<double>() + 0.5);
     }
+    if (rig.at("dots").contains("fiducials")) fiducials = rig.at("dots").at("fiducials").get<std::vector<int>>();
   } catch (const nlohmann::json::exception& e) {
     ThrowFormatError(source, std::string("does not describe the monitor and dots: ") + e.what());
   }
-  if (n.monitor_px.size() < 4 || !(n.pitch_m > 0) || !(n.distance_m > 0)) {
+  if (grid.monitor_px.size() < 4 || !(grid.pixel_pitch_m > 0) || !(n.distance_m > 0)) {
     ThrowFormatError(source, "needs at least 4 dots, a positive monitor pixel pitch and distance");
   }
-  n.spacing_m = std::numeric_limits<double>::infinity();
-  for (size_t a = 1; a < n.monitor_px.size(); ++a) {
-    n.spacing_m = std::min(n.spacing_m, (n.monitor_px[a] - n.monitor_px[a - 1]).norm() * n.pitch_m);
+  if (!fiducials.empty()) {
+    grid.fiducial.assign(grid.monitor_px.size(), false);
+    for (int q : fiducials) {
+      if (q < 0 || q >= static_cast<int>(grid.monitor_px.size())) {
+        ThrowFormatError(source, "lists fiducial dot " + std::to_string(q) + " of " +
+                                     std::to_string(grid.monitor_px.size()) + " (rig.dots.fiducials)");
+      }
+      grid.fiducial[q] = true;
+    }
   }
+  grid.spacing_m = std::numeric_limits<double>::infinity();
+  for (size_t a = 0; a < grid.monitor_px.size(); ++a) {
+    for (size_t b = a + 1; b < grid.monitor_px.size(); ++b) {
+      grid.spacing_m = std::min(grid.spacing_m, (grid.monitor_px[a] - grid.monitor_px[b]).norm() * grid.pixel_pitch_m);
+    }
+  }
+  if (!(grid.spacing_m > 0)) ThrowFormatError(source, "lists two dots at the same position (rig.dots.positions_px)");
   return n;
 }
 
-// Matches blobs to dots: the blobs' back-projections onto the nominal monitor plane are aligned
-// with the displayed grid by a translation (centroids, then the median of the matched offsets),
-// and each dot takes the nearest blob within a third of the grid spacing. Missing and extra
-// blobs only lose or add unmatched entries.
-std::vector<int> MatchDots(const std::vector<Vec3>& blob_positions, const NominalDots& nominal) {
-  std::vector<Eigen::Vector2d> grid;
-  for (const auto& px : nominal.monitor_px) grid.push_back(px * nominal.pitch_m);
-  Eigen::Vector2d blob_mean = Eigen::Vector2d::Zero(), grid_mean = Eigen::Vector2d::Zero();
-  for (const Vec3& b : blob_positions) blob_mean += b.head<2>();
-  for (const auto& g : grid) grid_mean += g;
-  Eigen::Vector2d offset = blob_mean / blob_positions.size() - grid_mean / grid.size();
-  std::vector<int> match(grid.size(), -1);
-  for (double tolerance : {0.5, 0.33, 0.33}) {
-    std::vector<double> dx, dy;
-    for (size_t q = 0; q < grid.size(); ++q) {
-      double best = tolerance * nominal.spacing_m;
-      match[q] = -1;
-      for (size_t b = 0; b < blob_positions.size(); ++b) {
-        const double d = (blob_positions[b].head<2>() - grid[q] - offset).norm();
-        if (d < best) best = d, match[q] = static_cast<int>(b);
-      }
-      if (match[q] >= 0) {
-        dx.push_back(blob_positions[match[q]].x() - grid[q].x());
-        dy.push_back(blob_positions[match[q]].y() - grid[q].y());
+// The brightness above the background within `radius` pixels of each blob centre, per second of
+// exposure.
+std::vector<double> BlobSignals(const cv::Mat& gray, const std::vector<Eigen::Vector2d>& blobs, double radius,
+                                double exposure_s) {
+  std::vector<float> values(gray.begin<float>(), gray.end<float>());
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  const double background = values[values.size() / 2];
+  std::vector<double> signals;
+  const int r = static_cast<int>(std::ceil(radius));
+  for (const Eigen::Vector2d& b : blobs) {
+    double sum = 0;
+    const int cx = static_cast<int>(std::lround(b.x())), cy = static_cast<int>(std::lround(b.y()));
+    for (int y = std::max(0, cy - r); y <= std::min(gray.rows - 1, cy + r); ++y) {
+      for (int x = std::max(0, cx - r); x <= std::min(gray.cols - 1, cx + r); ++x) {
+        if (std::hypot(x - b.x(), y - b.y()) <= radius) sum += std::max(0.0, gray.at<float>(y, x) - background);
       }
     }
-    if (dx.empty()) break;
-    std::nth_element(dx.begin(), dx.begin() + dx.size() / 2, dx.end());
-    std::nth_element(dy.begin(), dy.begin() + dy.size() / 2, dy.end());
-    offset = {dx[dx.size() / 2], dy[dy.size() / 2]};
+    signals.push_back(sum / exposure_s);
   }
-  return match;
+  return signals;
 }
+
+// Which all-dots blobs the fiducial capture shows lit: those keeping at least half of their
+// all-dots signal (the same dots at the same exposure give the same signal).
+std::vector<bool> FiducialBlobs(const Session& session, const std::string& all_dots_key, const cv::Mat& all_dots,
+                                const std::vector<Eigen::Vector2d>& blobs, const cv::Size& size) {
+  const std::vector<std::string> keys = KeysWithPrefix(session, "fiducials/");
+  if (keys.empty() || blobs.size() < 2) return {};
+  const cv::Mat fiducial = GrayImage(session, keys.front(), size);
+  // Half the distance to the nearest other blob: each window holds one dot.
+  std::vector<double> nearest;
+  for (size_t a = 0; a < blobs.size(); ++a) {
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t b = 0; b < blobs.size(); ++b) {
+      if (a != b) best = std::min(best, (blobs[a] - blobs[b]).norm());
+    }
+    nearest.push_back(best);
+  }
+  std::nth_element(nearest.begin(), nearest.begin() + nearest.size() / 2, nearest.end());
+  const double radius = std::max(1.5, 0.4 * nearest[nearest.size() / 2]);
+  const std::vector<double> all = BlobSignals(all_dots, blobs, radius, session.Entry(all_dots_key).exposure_s);
+  const std::vector<double> lit = BlobSignals(fiducial, blobs, radius, session.Entry(keys.front()).exposure_s);
+  std::vector<bool> on(blobs.size());
+  for (size_t b = 0; b < blobs.size(); ++b) on[b] = all[b] > 0 && lit[b] > 0.5 * all[b];
+  return on;
+}
+
+// A dot whose centroid lies this far from the fitted grid is not that dot (a speck, or two blobs
+// merged); beyond a tenth of the dots so placed, the grid is not the displayed one.
+constexpr double kOutlierResidualMm = 1.0;
+constexpr double kMaxOutlierFraction = 0.1;
+// Blob noise puts the dots' RMS residual at 0.01-0.05 mm on the simulated rigs; a fit ten times
+// worse is no measurement of the dots.
+constexpr double kMaxResidualRmsMm = 0.5;
 
 MonitorCalibration CalibrateMonitor(const Session& session, const CameraModel& camera, const SamplePlane& plane) {
   const std::vector<std::string> keys = KeysWithPrefix(session, "all_dots/");
   if (keys.empty()) ThrowInvalidInput(session.folder().string(), "plans no all_dots/ capture (every dot lit, sample removed)");
   const NominalDots nominal = ReadNominalDots(session);
-  const cv::Mat gray = GrayImage(session, keys.front(), cv::Size(camera.width, camera.height));
+  const DisplayedGrid& grid = nominal.grid;
+  const cv::Size size(camera.width, camera.height);
+  const cv::Mat gray = GrayImage(session, keys.front(), size);
   const std::vector<Eigen::Vector2d> blobs = FindBlobs(gray);
-  std::vector<Vec3> on_plane;
-  for (const auto& b : blobs) on_plane.push_back(BackProject(b, camera, plane, -nominal.distance_m));
-  const std::vector<int> match = on_plane.empty() ? std::vector<int>(nominal.monitor_px.size(), -1)
-                                                  : MatchDots(on_plane, nominal);
-  std::vector<cv::Point3d> object;
-  std::vector<cv::Point2d> image;
-  for (size_t q = 0; q < match.size(); ++q) {
-    if (match[q] < 0) continue;
-    object.emplace_back(nominal.monitor_px[q].x() * nominal.pitch_m, nominal.monitor_px[q].y() * nominal.pitch_m, 0.0);
-    image.emplace_back(blobs[match[q]].x(), blobs[match[q]].y());
+  std::vector<Eigen::Vector2d> on_plane;
+  for (const auto& b : blobs) on_plane.push_back(BackProject(b, camera, plane, -nominal.distance_m).head<2>());
+  const std::vector<bool> lit = FiducialBlobs(session, keys.front(), gray, blobs, size);
+  const std::vector<std::string> fiducial_keys = KeysWithPrefix(session, "fiducials/");
+  const std::string decider = fiducial_keys.empty() ? (session.folder() / "session.json").string()
+                                                    : ImageFile(session, fiducial_keys.front());
+  if (!fiducial_keys.empty() && grid.fiducial.empty()) {
+    ThrowFormatError((session.folder() / "session.json").string(),
+                     "plans a fiducials/ capture but does not say which dots it lit (rig.dots.fiducials)");
   }
-  if (object.size() < std::max<size_t>(4, match.size() / 2)) {
-    ThrowFormatError(ImageFile(session, keys.front()), "shows " + std::to_string(object.size()) + " of the " +
-                                                           std::to_string(match.size()) + " displayed dots",
-                     "check that the sample is removed, the room dark and the exposure right");
-  }
-  // The monitor's pose from its dots (monitor frame: pixel x, pixel y, normal toward the sample).
-  cv::Vec3d rvec, tvec;
-  cv::solvePnP(object, image, camera.CameraMatrix(), camera.DistortionCoefficients(), rvec, tvec, false, cv::SOLVEPNP_IPPE);
-  cv::Mat r;
-  cv::Rodrigues(rvec, r);
-  Eigen::Matrix3d monitor_rotation;
-  cv::cv2eigen(r, monitor_rotation);
-  const Eigen::Matrix3d to_sample = plane.rotation.transpose() * monitor_rotation;
-  const Vec3 origin = plane.rotation.transpose() * (Vec3(tvec[0], tvec[1], tvec[2]) - plane.translation);
-
+  const DotIdentification id = IdentifyDots(on_plane, lit, grid, nominal.orientation_deg, decider);
+  std::vector<int> match = id.chosen.blob_of_dot;
+  if (match.empty()) match.assign(grid.monitor_px.size(), -1);
+  const auto monitor_point = [&](size_t q) {
+    return cv::Point3d(grid.monitor_px[q].x() * grid.pixel_pitch_m, grid.monitor_px[q].y() * grid.pixel_pitch_m, 0.0);
+  };
   MonitorCalibration monitor;
-  monitor.normal = to_sample.col(2).normalized();
-  if (monitor.normal.z() < 0) monitor.normal = -monitor.normal;
+  Eigen::Matrix3d to_sample;
+  Vec3 origin;
+  int outliers = 0;
+  // The monitor's pose from its dots, in the screen's own frame: u right, v down (seen from the
+  // front), so its z axis u x v points into the screen, away from the sample. Dots far off the
+  // fitted grid are dropped and the pose fitted again.
+  for (int pass = 0; pass < 2; ++pass) {
+    std::vector<cv::Point3d> object;
+    std::vector<cv::Point2d> image;
+    for (size_t q = 0; q < match.size(); ++q) {
+      if (match[q] < 0) continue;
+      object.push_back(monitor_point(q));
+      image.emplace_back(blobs[match[q]].x(), blobs[match[q]].y());
+    }
+    if (object.size() < std::max<size_t>(4, match.size() / 2)) {
+      ThrowFormatError(ImageFile(session, keys.front()), "shows " + std::to_string(object.size()) + " of the " +
+                                                             std::to_string(match.size()) + " displayed dots",
+                       "check that the sample is removed, the room dark and the exposure right");
+    }
+    cv::Vec3d rvec, tvec;
+    cv::solvePnP(object, image, camera.CameraMatrix(), camera.DistortionCoefficients(), rvec, tvec, false,
+                 cv::SOLVEPNP_IPPE);
+    cv::Mat r;
+    cv::Rodrigues(rvec, r);
+    Eigen::Matrix3d monitor_rotation;
+    cv::cv2eigen(r, monitor_rotation);
+    to_sample = plane.rotation.transpose() * monitor_rotation;
+    origin = plane.rotation.transpose() * (Vec3(tvec[0], tvec[1], tvec[2]) - plane.translation);
+    monitor.normal = -to_sample.col(2).normalized();
+    if (!(monitor.normal.z() > 0)) {
+      ThrowFormatError(ImageFile(session, keys.front()),
+                       "fits a monitor whose pixel axes, seen from the sample, form a mirror image of a screen "
+                       "(u x v toward the sample)",
+                       "turn off the display's mirror or flip mode, or check rig.dots.positions_px");
+    }
+    if (pass == 1) break;
+    // Drop the dots far off this grid, if any, and fit once more without them.
+    outliers = 0;
+    for (size_t q = 0; q < match.size(); ++q) {
+      if (match[q] < 0) continue;
+      const Vec3 position = origin + to_sample * Vec3(monitor_point(q).x, monitor_point(q).y, 0.0);
+      if (DotResidualMm(blobs[match[q]], position, monitor.normal, camera, plane) > kOutlierResidualMm) {
+        match[q] = -1;
+        ++outliers;
+      }
+    }
+    if (outliers == 0) break;
+  }
+  if (outliers > kMaxOutlierFraction * match.size()) {
+    ThrowFormatError(ImageFile(session, keys.front()), "shows " + std::to_string(outliers) + " of the " +
+                                                           std::to_string(match.size()) +
+                                                           " dots more than 1 mm off any flat grid of the displayed "
+                                                           "layout",
+                     "check rig.dots.positions_px and rig.monitor.pixel_pitch_m against what the display showed");
+  }
   monitor.distance_m = std::abs(monitor.normal.dot(origin)) / std::max(1e-9, std::abs(monitor.normal.z()));
-  monitor.pixel_pitch_m = nominal.pitch_m;
-  monitor.dot_radius_m = nominal.radius_px * nominal.pitch_m;
+  monitor.pixel_pitch_m = grid.pixel_pitch_m;
+  monitor.dot_radius_m = nominal.radius_px * grid.pixel_pitch_m;
   monitor.emission = session.rig().value("monitor", nlohmann::json::object()).value("emission", "isotropic");
   if (monitor.emission != "lambertian" && monitor.emission != "lcd") monitor.emission = "isotropic";
+  // The screen's u axis in the sample plane, as measured by the pose.
+  const Vec3 right = to_sample.col(0);
+  monitor.orientation_deg = std::fmod(360.0 + std::atan2(right.y(), right.x()) * 180.0 / kPi, 360.0);
+  monitor.identified_by = id.identified_by == "fiducials" ? fiducial_keys.front() : id.identified_by;
+  monitor.fiducial_agreement = id.chosen.fiducial_agreement;
+  monitor.fiducial_runner_up = id.runner_up_agreement;
   double sum = 0;
   int found = 0;
   for (size_t q = 0; q < match.size(); ++q) {
     DotPosition dot;
-    dot.monitor_px = nominal.monitor_px[q] - Eigen::Vector2d(0.5, 0.5);
-    dot.position = origin + to_sample * Vec3(nominal.monitor_px[q].x() * nominal.pitch_m,
-                                             nominal.monitor_px[q].y() * nominal.pitch_m, 0.0);
+    dot.monitor_px = grid.monitor_px[q] - Eigen::Vector2d(0.5, 0.5);
+    dot.position = origin + to_sample * Vec3(monitor_point(q).x, monitor_point(q).y, 0.0);
     dot.image_px = match[q] >= 0 ? blobs[match[q]] : Eigen::Vector2d(-1.0, -1.0);  // -1: not found
     if (match[q] >= 0) {
-      // The centroid's ray on the fitted monitor plane, against the fitted grid.
-      const Vec3 centre = plane.CameraCentre();
-      std::vector<cv::Point2d> in = {{blobs[match[q]].x(), blobs[match[q]].y()}}, out;
-      cv::undistortPoints(in, out, camera.CameraMatrix(), camera.DistortionCoefficients());
-      const Vec3 direction = plane.rotation.transpose() * Vec3(out[0].x, out[0].y, 1.0);
-      const double t = monitor.normal.dot(dot.position - centre) / monitor.normal.dot(direction);
-      dot.residual_mm = 1000.0 * (centre + t * direction - dot.position).norm();
+      dot.residual_mm = DotResidualMm(blobs[match[q]], dot.position, monitor.normal, camera, plane);
       sum += dot.residual_mm * dot.residual_mm;
       monitor.residual_max_mm = std::max(monitor.residual_max_mm, dot.residual_mm);
       ++found;
@@ -292,6 +395,12 @@ MonitorCalibration CalibrateMonitor(const Session& session, const CameraModel& c
     monitor.dots.push_back(dot);
   }
   monitor.residual_rms_mm = std::sqrt(sum / found);
+  if (monitor.residual_rms_mm > kMaxResidualRmsMm) {
+    ThrowFormatError(ImageFile(session, keys.front()),
+                     "shows dots " + std::to_string(monitor.residual_rms_mm) +
+                         " mm RMS off the fitted grid, far above the blob noise",
+                     "check rig.dots.positions_px, rig.monitor.pixel_pitch_m, and that the monitor is flat");
+  }
   return monitor;
 }
 

@@ -109,6 +109,10 @@ nlohmann::json ToJson(const SessionCalibration& calibration) {
         {"emission_exponent", m.emission_exponent},
         {"residual_rms_mm", m.residual_rms_mm},
         {"residual_max_mm", m.residual_max_mm},
+        {"orientation_deg", m.orientation_deg},
+        {"identification",
+         {{"by", m.identified_by}, {"fiducial_agreement", m.fiducial_agreement},
+          {"fiducial_runner_up", m.fiducial_runner_up}}},
         {"dots", dots}}},
       {"radiometry",
        {{"response", r.response},
@@ -148,6 +152,13 @@ SessionCalibration SessionCalibrationFromJson(const nlohmann::json& json, const 
     c.monitor.emission_exponent = m.value("emission_exponent", 0.0);
     c.monitor.residual_rms_mm = m.value("residual_rms_mm", 0.0);
     c.monitor.residual_max_mm = m.value("residual_max_mm", 0.0);
+    c.monitor.orientation_deg = m.value("orientation_deg", 0.0);
+    if (m.contains("identification")) {
+      const nlohmann::json& id = m.at("identification");
+      c.monitor.identified_by = id.value("by", "");
+      c.monitor.fiducial_agreement = id.value("fiducial_agreement", -1.0);
+      c.monitor.fiducial_runner_up = id.value("fiducial_runner_up", -1.0);
+    }
     for (const nlohmann::json& d : m.at("dots")) {
       DotPosition dot;
       dot.position = Vec3FromJson(d.at("position_m"));

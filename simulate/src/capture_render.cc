@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/fiducials.h"
 #include "svbtdf/common/error.h"
 
 namespace svbtdf {
@@ -56,6 +57,9 @@ void RenderCaptureRadiance(const RigRenderer& renderer, const CaptureTruth& plan
     renderer.RenderHolderBoard(plan.holder_board, radiance);
   } else if (id.kind == "all_dots") {
     renderer.RenderAllDots(radiance);
+  } else if (id.kind == "fiducials") {
+    const DotGridConfig& grid = renderer.rig().config().dots;
+    renderer.RenderDotSet(FiducialDots(grid.cols, grid.rows), radiance);
   } else if (id.kind == "flat") {
     renderer.RenderFlatField(1.0, radiance);
   } else if (id.kind == "dots") {
@@ -96,6 +100,10 @@ std::unique_ptr<SimulatedSetup> LoadSimulatedSetup(const fs::path& out, int thre
   }
   SimulationPreset preset = MakePreset(truth.capture.preset);
   preset.eta = EtaOfTruthMaterial(out / "truth" / "material.json");
+  // The screen as it was simulated (svbtdf simulate may have turned, tilted or mirrored it).
+  preset.rig.monitor.orientation_deg = truth.monitor.orientation_deg;
+  preset.rig.monitor.tilt_deg = truth.monitor.tilt_deg;
+  preset.rig.monitor.mirrored = truth.monitor.mirrored;
   std::unique_ptr<SimulatedSetup> setup = MakeSimulatedSetup(std::move(preset), truth.capture.seed, threads);
   setup->plan.truth_kind = truth.capture.truth_kind;
   RequireSameRig(*setup, truth, rig_path);

@@ -53,6 +53,7 @@ std::vector<CaptureId> CaptureList(const Rig& rig, const CaptureTruth& plan) {
   }
   list.push_back({"holder_board", 0, 0, plan.board_exposure_s});
   list.push_back({"all_dots", 0, 0, plan.all_dots_exposure_s});
+  list.push_back({"fiducials", 0, 0, plan.all_dots_exposure_s});
   list.push_back({"flat", 0, 0, plan.flat_exposure_s});
   for (size_t q = 0; q < rig.dots().size(); ++q) {
     for (size_t e = 0; e < plan.dot_exposures_s.size(); ++e) {

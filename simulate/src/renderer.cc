@@ -160,6 +160,7 @@ void RigRenderer::PrecomputeBackground() {
   // The whole active area glows at the black level: integrate it as a grid of patches, each a
   // point emitter at its centre (the monitor is 4+ cm away, patches are a few mm).
   const MonitorConfig& m = rig_.config().monitor;
+  const MonitorFrame& frame = rig_.monitor_frame();
   constexpr int kPatchesX = 48, kPatchesY = 32;
   const double patch_w = m.width / kPatchesX, patch_h = m.height / kPatchesY;
   const double patch_intensity = m.white_exitance * m.Luminance(0.0) * patch_w * patch_h;
@@ -173,12 +174,11 @@ void RigRenderer::PrecomputeBackground() {
       Vec3 sum = Vec3::Zero();
       for (int py = 0; py < kPatchesY; ++py) {
         for (int px = 0; px < kPatchesX; ++px) {
-          const Vec3 p(m.centre.x() - m.width / 2 + (px + 0.5) * patch_w,
-                       m.centre.y() - m.height / 2 + (py + 0.5) * patch_h, -m.distance);
+          const Vec3 p = frame.PointAt(Vec2((px + 0.5) * frame.width_px / kPatchesX, (py + 0.5) * frame.height_px / kPatchesY));
           const Vec3 to_light = p - x;
           const double r2 = to_light.squaredNorm();
           const Vec3 i = to_light / std::sqrt(r2);
-          const double intensity = patch_intensity * m.emission(-i.z());
+          const double intensity = patch_intensity * m.emission(-frame.normal.dot(i));
           const Rgb rgb = material_->Evaluate(group.texel, i, o);
           sum += Vec3(rgb[0], rgb[1], rgb[2]) * (std::abs(i.z()) * intensity / r2);
         }
@@ -192,16 +192,17 @@ Vec3 RigRenderer::DotRadianceAt(const Dot& dot, const Group& group) const {
   const Vec3 x(group.x, group.y, 0.0);
   const Vec3 o = (rig_.camera().Centre() - x).normalized();
   const EmissionProfile& profile = rig_.config().monitor.emission;
+  const MonitorFrame& frame = rig_.monitor_frame();
   const double angular_radius = dot.radius / (dot.position - x).norm();
   const bool point = angular_radius < 0.1 * material_->MinRoughness(group.texel);
   Vec3 sum = Vec3::Zero();
   const int points = point ? 1 : kRadonPoints;
   for (int k = 0; k < points; ++k) {
-    const Vec3 p = dot.position + dot.radius * Vec3(RadonNodes()[k].x(), RadonNodes()[k].y(), 0.0);
+    const Vec3 p = dot.position + dot.radius * (RadonNodes()[k].x() * frame.right + RadonNodes()[k].y() * frame.down);
     const Vec3 to_light = p - x;
     const double r2 = to_light.squaredNorm();
     const Vec3 i = to_light / std::sqrt(r2);
-    const double intensity = dot.intensity * (point ? 1.0 : kRadonWeights[k]) * profile(-i.z());
+    const double intensity = dot.intensity * (point ? 1.0 : kRadonWeights[k]) * profile(-frame.normal.dot(i));
     const Rgb rgb = material_->Evaluate(group.texel, i, o);
     sum += Vec3(rgb[0], rgb[1], rgb[2]) * (std::abs(i.z()) * intensity / r2);
   }
@@ -226,65 +227,53 @@ void RigRenderer::RenderDot(const Dot& dot, FloatImage* radiance) const {
 }
 
 void RigRenderer::RenderAllDots(FloatImage* radiance) const {
+  std::vector<int> all(rig_.dots().size());
+  for (size_t q = 0; q < all.size(); ++q) all[q] = static_cast<int>(q);
+  RenderDotSet(all, radiance);
+}
+
+void RigRenderer::RenderDotSet(const std::vector<int>& lit, FloatImage* radiance) const {
   const MonitorConfig& m = rig_.config().monitor;
-  const Vec2 origin = m.centre - Vec2(m.width, m.height) / 2.0;
+  const MonitorFrame& frame = rig_.monitor_frame();
   const double radius_px = rig_.config().dots.radius_px;
   // Dot centres by monitor pixel, to test a point against the few nearby dots only.
   std::map<std::pair<int, int>, int> by_pixel;
-  for (size_t q = 0; q < rig_.dots().size(); ++q) {
-    by_pixel[{rig_.dots()[q].monitor_x, rig_.dots()[q].monitor_y}] = static_cast<int>(q);
-  }
+  for (int q : lit) by_pixel[{rig_.dots().at(q).monitor_x, rig_.dots().at(q).monitor_y}] = q;
   const double on = m.white_exitance * m.Luminance(rig_.config().dots.level);
   const double off = m.white_exitance * m.Luminance(0.0);
   const int reach = static_cast<int>(std::ceil(radius_px)) + 1;
   // Nearby lookups scan a small window of monitor pixels around the hit.
-  auto exitance = [&](const Vec2& xy) -> double {
-    const Vec2 u = (xy - origin) / m.pixel_pitch;
-    if (u.x() < 0 || u.y() < 0 || u.x() >= m.width / m.pixel_pitch ||
-        u.y() >= m.height / m.pixel_pitch) {
-      return 0.0;
-    }
-    const int ux = static_cast<int>(u.x()), uy = static_cast<int>(u.y());
+  auto exitance = [&](const Vec3& p) -> double {
+    const Vec2 uv = frame.PixelCoordinates(p);
+    if (!frame.InActiveArea(uv)) return 0.0;
+    const int ux = static_cast<int>(uv.x()), uy = static_cast<int>(uv.y());
     for (int dy = -reach; dy <= reach; ++dy) {
       for (int dx = -reach; dx <= reach; ++dx) {
         const auto it = by_pixel.find({ux + dx, uy + dy});
         if (it == by_pixel.end()) continue;
         const Dot& dot = rig_.dots()[it->second];
-        const Vec2 centre(dot.position.x(), dot.position.y());
-        if ((xy - centre).norm() <= dot.radius) return on;
+        if ((p - dot.position).norm() <= dot.radius) return on;
       }
     }
     return off;
   };
-  const CameraIntrinsics& k = rig_.config().intrinsics;
-  const int n = rig_.config().board_samples;
-  const Vec3 camera = rig_.camera().Centre();
-  *radiance = FloatImage(k.width, k.height, 3);
-  ParallelFor(k.height, threads_, 4, [&](int begin, int end) {
-    for (int y = begin; y < end; ++y) {
-      for (int x = 0; x < k.width; ++x) {
-        double sum = 0.0;
-        for (int sy = 0; sy < n; ++sy) {
-          for (int sx = 0; sx < n; ++sx) {
-            const auto ray = rig_.camera().PixelRay(Vec2(x + SubSample(sx, n), y + SubSample(sy, n)));
-            if (!ray || !(ray->z() < 0.0)) continue;
-            const Vec3 p = camera + ((-m.distance - camera.z()) / ray->z()) * (*ray);
-            const double cos_e = -ray->z();
-            sum += exitance(p.head<2>()) * m.emission(cos_e) / cos_e;
-          }
-        }
-        for (int c = 0; c < 3; ++c) radiance->at(x, y, c) = static_cast<float>(sum / (n * n));
-      }
-    }
-  });
+  RenderMonitor(exitance, radiance);
 }
 
 void RigRenderer::RenderFlatField(double level, FloatImage* radiance) const {
   const MonitorConfig& m = rig_.config().monitor;
+  const MonitorFrame& frame = rig_.monitor_frame();
+  const double exitance = m.white_exitance * m.Luminance(level);
+  RenderMonitor([&](const Vec3& p) { return frame.InActiveArea(frame.PixelCoordinates(p)) ? exitance : 0.0; },
+                radiance);
+}
+
+void RigRenderer::RenderMonitor(const std::function<double(const Vec3&)>& exitance, FloatImage* radiance) const {
+  const MonitorConfig& m = rig_.config().monitor;
+  const MonitorFrame& frame = rig_.monitor_frame();
   const CameraIntrinsics& k = rig_.config().intrinsics;
   const int n = rig_.config().board_samples;
   const Vec3 camera = rig_.camera().Centre();
-  const double exitance = m.white_exitance * m.Luminance(level);
   *radiance = FloatImage(k.width, k.height, 3);
   ParallelFor(k.height, threads_, 4, [&](int begin, int end) {
     for (int y = begin; y < end; ++y) {
@@ -293,14 +282,12 @@ void RigRenderer::RenderFlatField(double level, FloatImage* radiance) const {
         for (int sy = 0; sy < n; ++sy) {
           for (int sx = 0; sx < n; ++sx) {
             const auto ray = rig_.camera().PixelRay(Vec2(x + SubSample(sx, n), y + SubSample(sy, n)));
-            if (!ray || !(ray->z() < 0.0)) continue;
-            const Vec3 p = camera + ((-m.distance - camera.z()) / ray->z()) * (*ray);
-            if (std::abs(p.x() - m.centre.x()) > m.width / 2 ||
-                std::abs(p.y() - m.centre.y()) > m.height / 2) {
-              continue;
-            }
-            const double cos_e = -ray->z();
-            sum += exitance * m.emission(cos_e) / cos_e;
+            if (!ray) continue;
+            const std::optional<Vec3> p = frame.Intersect(camera, *ray);
+            const double cos_e = -frame.normal.dot(*ray);
+            if (!p || !(cos_e > 0.0)) continue;
+            // Radiance of an emitter of radiant intensity per area I P(theta_e): I P / cos.
+            sum += exitance(*p) * m.emission(cos_e) / cos_e;
           }
         }
         for (int c = 0; c < 3; ++c) radiance->at(x, y, c) = static_cast<float>(sum / (n * n));
@@ -543,9 +530,9 @@ CameraImage RigRenderer::Expose(const FloatImage& radiance, double exposure_s, u
 
 double RigRenderer::ProbePeakRadiance() const {
   if (!material_) ThrowInvalidInput("renderer", "the probe needs a truth material");
+  // The dot nearest to where the view of the sample centre goes on, straight through it.
   const Vec3 camera = rig_.camera().Centre();
-  const double d = rig_.config().monitor.distance;
-  const Vec3 straight = camera + ((camera.z() + d) / camera.z()) * (-camera);
+  const Vec3 straight = rig_.monitor_frame().Intersect(camera, -camera.normalized()).value_or(Vec3::Zero());
   const Dot* best = &rig_.dots().front();
   for (const Dot& dot : rig_.dots()) {
     if ((dot.position - straight).norm() < (best->position - straight).norm()) best = &dot;

@@ -101,6 +101,42 @@ double MonitorConfig::Luminance(double level) const {
   return black_level + (1.0 - black_level) * std::pow(std::clamp(level, 0.0, 1.0), gamma);
 }
 
+double NominalOrientationDeg(const MonitorConfig& monitor) {
+  const double quarter_turns = std::round(monitor.orientation_deg / 90.0);
+  return std::fmod(std::fmod(90.0 * quarter_turns, 360.0) + 360.0, 360.0);
+}
+
+MonitorFrame MonitorFrame::Of(const MonitorConfig& m) {
+  const double phi = m.orientation_deg * kPi / 180.0, tau = m.tilt_deg * kPi / 180.0;
+  // Orientation 0 seen from the sample (from +z): u along +x, v along -y; then turned by phi
+  // about z and tilted by tau about x.
+  const Eigen::AngleAxisd turn(phi, Vec3::UnitZ()), tilt(tau, Vec3::UnitX());
+  MonitorFrame f;
+  f.right = tilt * (turn * Vec3::UnitX());
+  f.down = tilt * (turn * -Vec3::UnitY());
+  f.normal = tilt * Vec3::UnitZ();
+  if (m.mirrored) f.down = -f.down;
+  f.pixel_pitch = m.pixel_pitch;
+  f.width_px = m.width / m.pixel_pitch;
+  f.height_px = m.height / m.pixel_pitch;
+  const Vec3 centre(m.centre.x(), m.centre.y(), -m.distance);
+  f.origin = centre - 0.5 * (m.width * f.right + m.height * f.down);
+  return f;
+}
+
+Vec2 MonitorFrame::PixelCoordinates(const Vec3& point) const {
+  const Vec3 d = point - origin;
+  return Vec2(d.dot(right), d.dot(down)) / pixel_pitch;
+}
+
+std::optional<Vec3> MonitorFrame::Intersect(const Vec3& from, const Vec3& direction) const {
+  const double along = normal.dot(direction);
+  if (std::abs(along) < 1e-12) return std::nullopt;
+  const double t = normal.dot(origin - from) / along;
+  if (!(t > 0.0)) return std::nullopt;
+  return from + t * direction;
+}
+
 CameraPose RigConfig::PaperPose(double distance, double theta) {
   const Vec3 eye(0.0, -distance * std::sin(theta), distance * std::cos(theta));
   return CameraPose::LookAt(eye, Vec3::Zero(), Vec3::UnitZ());
@@ -131,7 +167,8 @@ CameraIntrinsics WholeSensor(const CameraIntrinsics& window_intrinsics, const Se
 Rig::Rig(RigConfig config)
     : config_(std::move(config)),
       camera_(config_.intrinsics, config_.pose),
-      sensor_camera_(WholeSensor(config_.intrinsics, config_.window), config_.pose) {
+      sensor_camera_(WholeSensor(config_.intrinsics, config_.window), config_.pose),
+      monitor_frame_(MonitorFrame::Of(config_.monitor)) {
   Validate();
   LayOutDots();
 }
@@ -186,6 +223,10 @@ void Rig::Validate() const {
   if (!(m.distance > 0.0) || !std::isfinite(m.distance)) {
     ThrowInvalidInput("monitor.distance", "the monitor must lie behind the sample (d > 0), got d = " +
                       Fmt(m.distance) + " m", "the monitor plane is z = -d, on the far side from the camera");
+  }
+  if (!std::isfinite(m.orientation_deg) || !(std::abs(m.tilt_deg) < 30.0)) {
+    ThrowInvalidInput("monitor.orientation/tilt", "the orientation must be finite and the tilt within 30 degrees",
+                      "the screen must face the sample");
   }
   RequirePositive(m.width, "monitor.width");
   RequirePositive(m.height, "monitor.height");
@@ -248,34 +289,34 @@ void Rig::LayOutDots() {
   const SampleConfig& s = config_.sample;
   const MonitorConfig& m = config_.monitor;
   const DotGridConfig& g = config_.dots;
+  const MonitorFrame& frame = monitor_frame_;
   const Vec3 camera = camera_.Centre();
   // Away from the camera along its azimuth (the camera sits above some point of the plane).
   Vec2 away = -camera.head<2>();
   away = away.norm() > 1e-12 ? away.normalized() : Vec2::Zero();
   const double shift = g.shift >= 0.0 ? g.shift : m.distance * std::cos(CameraTheta());
   const Vec2 grid_centre = shift * away;
-  const double span_x = g.span_scale * s.width;
-  const double span_y = g.span_scale * s.height();
-  const Vec2 monitor_origin = m.centre - Vec2(m.width, m.height) / 2.0;  // corner of pixel (0, 0)
-  const int monitor_px_x = static_cast<int>(std::floor(m.width / m.pixel_pitch));
-  const int monitor_px_y = static_cast<int>(std::floor(m.height / m.pixel_pitch));
+  const Vec2 centre_px = frame.PixelCoordinates(Vec3(grid_centre.x(), grid_centre.y(), -m.distance));
+  // The grid covers span_scale times the sample's extent along each of the screen's axes.
+  const auto extent = [&](const Vec3& axis) { return std::abs(axis.x()) * s.width + std::abs(axis.y()) * s.height(); };
+  const Vec2 span_px = g.span_scale * Vec2(extent(frame.right), extent(frame.down)) / m.pixel_pitch;
   dots_.clear();
   dots_.reserve(static_cast<size_t>(g.cols) * g.rows);
   for (int row = 0; row < g.rows; ++row) {
     for (int col = 0; col < g.cols; ++col) {
-      // Row 0 at +y like the texels; a 1 x N grid sits on the centre line.
-      const double fx = g.cols > 1 ? static_cast<double>(col) / (g.cols - 1) - 0.5 : 0.0;
-      const double fy = g.rows > 1 ? 0.5 - static_cast<double>(row) / (g.rows - 1) : 0.0;
-      const Vec2 nominal = grid_centre + Vec2(fx * span_x, fy * span_y);
-      // Dots are drawn centred on a monitor pixel.
-      const Vec2 in_monitor = (nominal - monitor_origin) / m.pixel_pitch;
+      // Column along u, row down the screen along v; a 1 x N grid sits on the centre line.
+      const double fu = g.cols > 1 ? static_cast<double>(col) / (g.cols - 1) - 0.5 : 0.0;
+      const double fv = g.rows > 1 ? static_cast<double>(row) / (g.rows - 1) - 0.5 : 0.0;
+      const Vec2 in_monitor = centre_px + Vec2(fu * span_px.x(), fv * span_px.y());
       if (in_monitor.x() - g.radius_px < 0.0 || in_monitor.y() - g.radius_px < 0.0 ||
-          in_monitor.x() + g.radius_px > monitor_px_x || in_monitor.y() + g.radius_px > monitor_px_y) {
+          in_monitor.x() + g.radius_px > frame.width_px || in_monitor.y() + g.radius_px > frame.height_px) {
+        const Vec3 nominal = frame.PointAt(in_monitor);
         ThrowInvalidInput("monitor", "dot (" + std::to_string(col) + ", " + std::to_string(row) +
                           ") at (" + Fmt(nominal.x()) + ", " + Fmt(nominal.y()) +
                           ") m is off the monitor's active area",
                           "use a larger monitor, move its centre or shrink dots.span_scale");
       }
+      // Dots are drawn centred on a monitor pixel.
       Dot dot = DotAt(std::floor(in_monitor.x()), std::floor(in_monitor.y()), g.radius_px,
                       m.Luminance(g.level));
       dot.col = col;
@@ -297,22 +338,18 @@ void Rig::LayOutDots() {
 
 Dot Rig::DotAt(double x_px, double y_px, double radius_px, double luminance) const {
   const MonitorConfig& m = config_.monitor;
-  const Vec2 monitor_origin = m.centre - Vec2(m.width, m.height) / 2.0;
   Dot dot;
   dot.col = dot.row = -1;
   dot.monitor_x = static_cast<int>(std::floor(x_px));
   dot.monitor_y = static_cast<int>(std::floor(y_px));
-  const Vec2 xy = monitor_origin + (Vec2(x_px, y_px) + Vec2(0.5, 0.5)) * m.pixel_pitch;
-  dot.position = Vec3(xy.x(), xy.y(), -m.distance);
+  dot.position = monitor_frame_.PointAt(Vec2(x_px + 0.5, y_px + 0.5));
   dot.radius = radius_px * m.pixel_pitch;
   dot.intensity = m.white_exitance * luminance * kPi * dot.radius * dot.radius;
   return dot;
 }
 
 double Rig::DotIntensityToward(const Dot& dot, const Vec3& x) const {
-  const Vec3 d = x - dot.position;
-  const double cos_e = d.z() / d.norm();
-  return dot.intensity * config_.monitor.emission(cos_e);
+  return dot.intensity * config_.monitor.emission(monitor_frame_.CosEmission(dot.position, x));
 }
 
 std::optional<Vec3> Rig::SampleHit(const Vec2& pixel) const {

@@ -1,10 +1,12 @@
 #include "svbtdf/simulate/session_writer.h"
 
+#include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/fiducials.h"
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/common/session.h"
 #include "svbtdf/model/ndf_factory.h"
@@ -58,9 +60,11 @@ nlohmann::json NominalRig(const Rig& rig, const SimulationPreset& preset, const 
                    {"gamma", c.monitor.gamma},
                    {"black_level", c.monitor.black_level},
                    {"distance_m", c.monitor.distance},
+                   // Which way the screen lies, to the nearest quarter turn, as a lab notes it.
+                   {"orientation_deg", NominalOrientationDeg(c.monitor)},
                    {"emission", c.monitor.emission.kind}}},
       {"dots", {{"cols", c.dots.cols}, {"rows", c.dots.rows}, {"radius_px", c.dots.radius_px},
-                {"positions_px", dots}}},
+                {"positions_px", dots}, {"fiducials", FiducialDots(c.dots.cols, c.dots.rows)}}},
       // The texel grid and eta a lab would choose for processing and fitting (defaults there).
       {"sample", {{"width_m", c.sample.width}, {"height_m", c.sample.height()},
                   {"texels_x", c.sample.texels_x}, {"texels_y", c.sample.texels_y}, {"eta", preset.eta}}},
@@ -194,6 +198,7 @@ std::string SessionKey(const CaptureId& id) {
   if (id.kind == "board") return "board/v" + Padded(id.index, 2);
   if (id.kind == "holder_board") return "sample_plane/v" + Padded(id.index, 2);
   if (id.kind == "all_dots") return "all_dots/e" + std::to_string(id.exposure_index);
+  if (id.kind == "fiducials") return "fiducials/e" + std::to_string(id.exposure_index);
   if (id.kind == "flat") return "flat_white/e" + std::to_string(id.exposure_index);
   if (id.kind == "dots") return "dot/q" + Padded(id.index, 4) + "/e" + std::to_string(id.exposure_index) + "/r0";
   ThrowInvalidInput("capture", "unknown simulated capture kind '" + id.kind + "'");
@@ -242,6 +247,9 @@ SimulationPreset PresetWithOptions(const SimulationOptions& options) {
     preset.rig.sensor.shot_noise = false;
     preset.rig.sensor.read_noise = 0.0;
   }
+  if (!std::isnan(options.monitor_orientation_deg)) preset.rig.monitor.orientation_deg = options.monitor_orientation_deg;
+  if (!std::isnan(options.monitor_tilt_deg)) preset.rig.monitor.tilt_deg = options.monitor_tilt_deg;
+  if (options.mirror_monitor) preset.rig.monitor.mirrored = true;
   if (options.eta != 0.0) {
     if (!(options.eta > 1.0) || !std::isfinite(options.eta)) {
       ThrowInvalidInput("--eta", "must be > 1, got " + std::to_string(options.eta));

@@ -51,7 +51,7 @@ void WriteRigTruth(const std::filesystem::path& path, const Rig& rig, const Capt
   out["seed"] = capture.seed;
   out["truth"] = capture.truth_kind;
   out["frame"] = "sample frame: sample in z = 0 centred on the origin, z toward the camera, "
-                 "monitor at z = -d; metres";
+                 "monitor behind it, its centre at z = -d; metres";
   out["camera"] = {
       {"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy},
       {"distortion", {k.distortion[0], k.distortion[1], k.distortion[2], k.distortion[3], k.distortion[4]}},
@@ -72,7 +72,14 @@ void WriteRigTruth(const std::filesystem::path& path, const Rig& rig, const Capt
                     {"centre", ToJson(m.centre)}, {"pixel_pitch", m.pixel_pitch},
                     {"gamma", m.gamma}, {"black_level", m.black_level},
                     {"white_exitance", m.white_exitance},
-                    {"emission", {{"kind", m.emission.kind}, {"exponent", m.emission.exponent}}}};
+                    {"emission", {{"kind", m.emission.kind}, {"exponent", m.emission.exponent}}},
+                    {"orientation_deg", m.orientation_deg}, {"tilt_deg", m.tilt_deg}, {"mirrored", m.mirrored}};
+  // The screen's frame: monitor pixel coordinates (u, v) sit at origin + pitch (u right + v down).
+  const MonitorFrame& frame = rig.monitor_frame();
+  out["monitor"]["frame"] = {{"origin", ToJson(frame.origin)}, {"right", ToJson(frame.right)},
+                             {"down", ToJson(frame.down)}, {"normal", ToJson(frame.normal)},
+                             {"convention", "point(u, v) = origin + pixel_pitch (u right + v down); normal toward "
+                                            "the sample; a physical screen has right x down = -normal"}};
   const SampleConfig& s = config.sample;
   out["sample"] = {{"width", s.width}, {"height", s.height()}, {"texels_x", s.texels_x},
                    {"texels_y", s.texels_y}, {"texel_pitch", s.texel_pitch()},
@@ -144,6 +151,9 @@ RigTruth ReadRigTruth(const std::filesystem::path& path) {
     truth.monitor.white_exitance = m.at("white_exitance");
     truth.monitor.emission.kind = m.at("emission").at("kind");
     truth.monitor.emission.exponent = m.at("emission").at("exponent");
+    truth.monitor.orientation_deg = m.at("orientation_deg");
+    truth.monitor.tilt_deg = m.at("tilt_deg");
+    truth.monitor.mirrored = m.at("mirrored");
     const json& s = in.at("sample");
     truth.sample.width = s.at("width");
     truth.sample.texels_x = s.at("texels_x");

@@ -3,11 +3,13 @@
 // a svbtdf::Error naming the file, never a crash.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 
 #include "svbtdf/acquire/capture_plan.h"
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/fiducials.h"
 #include "svbtdf/simulate/capture_render.h"
 #include "svbtdf/simulate/session_writer.h"
 
@@ -52,8 +54,20 @@ TEST(CapturePlan, GridsInMillimetresResolveToMonitorPixelsAndRoundTrip) {
   EXPECT_EQ(plan.rig.monitor_distance_mm, 40.0);
   EXPECT_EQ(plan.rig.board, "chessboard:9x6:25");
   const std::vector<PlannedCapture> captures = ExpandPlan(plan);
-  // 2 x 1 dark, 4 boards, 1 sample plane, all dots, flat, 6 dots x 2 brackets x 2 repeats.
-  EXPECT_EQ(captures.size(), 2u + 4 + 1 + 1 + 1 + 24);
+  // 2 x 1 dark, 4 boards, 1 sample plane, all dots, fiducials, flat, 6 dots x 2 brackets x 2 repeats.
+  EXPECT_EQ(captures.size(), 2u + 4 + 1 + 1 + 1 + 1 + 24);
+  // The fiducial dots, lit at once at the all-dots exposure, right after all the dots.
+  const auto fiducials = std::find_if(captures.begin(), captures.end(),
+                                      [](const PlannedCapture& c) { return c.key == "fiducials/e0"; });
+  ASSERT_NE(fiducials, captures.end());
+  EXPECT_EQ((fiducials - 1)->key, "all_dots/e0");
+  EXPECT_EQ(fiducials->pattern.kind, Pattern::Kind::kAllDots);
+  EXPECT_EQ(fiducials->exposure_s, plan.all_dots_exposure_s);
+  ASSERT_EQ(plan.fiducial_dots, FiducialDots(3, 2));
+  ASSERT_EQ(fiducials->pattern.all_dots_px.size(), plan.fiducial_dots.size());
+  for (size_t k = 0; k < plan.fiducial_dots.size(); ++k) {
+    EXPECT_EQ(fiducials->pattern.all_dots_px[k], plan.dots_px[plan.fiducial_dots[k]]);
+  }
   EXPECT_EQ(captures.front().key, "dark/e0/r0");
   EXPECT_EQ(captures.back().key, "dot/q0005/e1/r1");
   EXPECT_EQ(captures.back().pattern.x_px, 160.0);

@@ -98,7 +98,8 @@ TEST_F(AcquireOnSimulatedRig, TinyPlanStoresTheSimulatorsImages) {
   const nlohmann::json a = Session::Open(out).rig(), b = Session::Open(SimulatedSession()).rig();
   for (const char* key : {"/camera/width", "/camera/height", "/camera/bit_depth", "/camera/channels",
                           "/camera/response", "/board/spec", "/board/views", "/monitor/emission",
-                          "/dots/radius_px", "/dots/positions_px", "/dots/cols", "/exposures_s"}) {
+                          "/dots/radius_px", "/dots/positions_px", "/dots/fiducials", "/dots/cols",
+                          "/monitor/orientation_deg", "/exposures_s"}) {
     EXPECT_EQ(a.at(nlohmann::json::json_pointer(key)), b.at(nlohmann::json::json_pointer(key))) << key;
   }
   for (const char* key : {"/monitor/pixel_pitch_m", "/monitor/distance_m", "/sample/width_m", "/sample/height_m"}) {
@@ -106,8 +107,8 @@ TEST_F(AcquireOnSimulatedRig, TinyPlanStoresTheSimulatorsImages) {
                 b.at(nlohmann::json::json_pointer(key)).get<double>(), 1e-12) << key;
   }
   // Each pattern is shown once for all its brackets: 1 black, the boards + 1 holder share the black
-  // pattern too (no re-show), all dots, flat, 36 dots.
-  EXPECT_EQ(world_->patterns_shown, 1 + 1 + 1 + 36);
+  // pattern too (no re-show), all dots, fiducials, flat, 36 dots.
+  EXPECT_EQ(world_->patterns_shown, 1 + 1 + 1 + 1 + 36);
   // A second run finds nothing to do and touches nothing.
   const AcquireResult again = Run(*camera_, out);
   EXPECT_EQ(again.already, Planned());
@@ -241,7 +242,7 @@ TEST_F(AcquireOnSimulatedRig, AnInterruptStopsCleanlyAndTheSessionResumesToTheSa
 TEST_F(AcquireOnSimulatedRig, UnattendedSkipTakesOnlyWhatNeedsNobody) {
   UnattendedOperator skip(UnattendedPolicy::kSkip);
   const AcquireResult result = Acquire(*plan_, *camera_, *display_, skip, root_ / "skip", options_);
-  const int needs_operator = BoardViews() + 1 + 2;  // board views, sample plane, all dots + flat white
+  const int needs_operator = BoardViews() + 1 + 3;  // board views, sample plane, all dots, fiducials, flat white
   EXPECT_EQ(result.skipped, needs_operator);
   EXPECT_EQ(result.captured, Planned() - needs_operator);
   EXPECT_FALSE(result.complete());

@@ -97,9 +97,10 @@ TEST_F(CalibrateSessionTest, RecoversTheRigWithinTheStatedTolerances) {
   std::printf("fx %.2f +- %.2f (true %.2f), fy %.2f (true %.2f), cx %.2f +- %.2f (true %.2f), cy %.2f +- %.2f (true %.2f)\n",
               camera.fx, c.camera.intrinsics_std[0], truth_.camera.fx, camera.fy, truth_.camera.fy, camera.cx,
               c.camera.intrinsics_std[2], truth_.camera.cx, camera.cy, c.camera.intrinsics_std[3], truth_.camera.cy);
-  std::printf("camera centre %.2f mm off, monitor %.3f mm (true %.3f), worst dot %.3f mm off, dot residual RMS %.3f mm\n",
+  std::printf("camera centre %.2f mm off, monitor %.3f mm (its centre %.3f), worst dot %.3f mm off, dot residual RMS "
+              "%.3f mm, orientation %.2f degrees (true %.2f)\n",
               centre_error_mm, 1000 * c.monitor.distance_m, 1000 * truth_.monitor.distance, dot_error_mm,
-              c.monitor.residual_rms_mm);
+              c.monitor.residual_rms_mm, c.monitor.orientation_deg, truth_.monitor.orientation_deg);
   EXPECT_TRUE(c.camera.narrow_lens_because.empty()) << c.camera.narrow_lens_because;
   EXPECT_EQ(camera.width, truth_.camera.width);  // the window's intrinsics
   EXPECT_NEAR(camera.fx / truth_.camera.fx, 1.0, 0.005);
@@ -107,9 +108,14 @@ TEST_F(CalibrateSessionTest, RecoversTheRigWithinTheStatedTolerances) {
   EXPECT_LT(std::abs(camera.cx - truth_.camera.cx), 2.0);
   EXPECT_LT(std::abs(camera.cy - truth_.camera.cy), 2.0);
   EXPECT_LT(centre_error_mm, 10.0);
-  EXPECT_NEAR(c.monitor.distance_m, truth_.monitor.distance, 0.5e-3);
+  // d is where the monitor's plane crosses the sample's normal through its centre: the screen
+  // is tilted, so not its centre's depth.
+  const MonitorFrame screen = MonitorFrame::Of(truth_.monitor);
+  EXPECT_NEAR(c.monitor.distance_m, -screen.normal.dot(screen.origin) / screen.normal.z(), 0.5e-3);
+  EXPECT_LT(std::acos(std::min(1.0, c.monitor.normal.dot(screen.normal))), 0.2 * kPi / 180);  // the tilt, within 0.2 degrees
   EXPECT_LT(dot_error_mm, 0.2);
   EXPECT_EQ(c.monitor.dots.size(), truth_.dots.size());
+  EXPECT_NEAR(c.monitor.orientation_deg, truth_.monitor.orientation_deg, 0.2);  // the preset's 91.5
 }
 
 // calibration.json is what `svbtdf process` and `svbtdf run` read back, and users may edit or

@@ -55,10 +55,10 @@ TEST(Capture, TinyIsCompleteDeterministicAndResumable) {
   RunCapture(tiny.renderer, tiny.plan, first, options);
   const RigConfig& rig = tiny.preset.rig;
   const size_t dots = static_cast<size_t>(rig.dots.cols * rig.dots.rows);
-  // darks (per bracket), boards, holder, all-dots, flat, one image per dot and bracket
+  // darks (per bracket), boards, holder, all-dots, fiducials, flat, one image per dot and bracket
   const size_t brackets = tiny.plan.dot_exposures_s.size();
   const size_t expected =
-      static_cast<size_t>(rig.dark_frames) * brackets + static_cast<size_t>(rig.board.views) + 3 + dots * brackets;
+      static_cast<size_t>(rig.dark_frames) * brackets + static_cast<size_t>(rig.board.views) + 4 + dots * brackets;
   ASSERT_EQ(brackets, 2u);  // the tiny preset brackets its dots twice
   EXPECT_EQ(first.images.size(), expected);
   EXPECT_EQ(CaptureList(tiny.rig, tiny.plan).size(), expected);

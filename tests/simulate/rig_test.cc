@@ -80,12 +80,19 @@ TEST(Rig, PaperGeometryByDefault) {
   const auto px = rig.camera().Project(Vec3::Zero());
   EXPECT_NEAR(px->x(), rig.config().intrinsics.cx, 1e-6);
   EXPECT_NEAR(px->y(), rig.config().intrinsics.cy, 1e-6);
-  // The grid is centred d cos(theta) away from the camera (+y) and spans 1.2 sample widths.
+  // Every dot lies on the (turned and tilted) screen.
+  const MonitorFrame& frame = rig.monitor_frame();
+  for (const Dot& dot : rig.dots()) EXPECT_NEAR(frame.normal.dot(dot.position - frame.origin), 0.0, 1e-12);
+  // A screen square to the sample: the grid is centred d cos(theta) away from the camera (+y) and
+  // spans 1.2 sample widths.
+  RigConfig upright = MakePreset("tiny").rig;
+  upright.monitor.orientation_deg = upright.monitor.tilt_deg = 0.0;
+  const Rig square(upright);
   double x_min = 1, x_max = -1, y_mean = 0;
-  for (const Dot& dot : rig.dots()) {
+  for (const Dot& dot : square.dots()) {
     x_min = std::min(x_min, dot.position.x());
     x_max = std::max(x_max, dot.position.x());
-    y_mean += dot.position.y() / rig.dots().size();
+    y_mean += dot.position.y() / square.dots().size();
     EXPECT_DOUBLE_EQ(dot.position.z(), -0.04);
   }
   const double pitch = rig.config().monitor.pixel_pitch;
@@ -231,6 +238,7 @@ double RectangleFormFactor(double x0, double x1, double y0, double y1, double d)
 TEST(RigRenderer, DotsTilingTheMonitorGiveItsIrradiance) {
   RigConfig config = NoiseFreeTiny();
   config.monitor.emission.kind = "lambertian";
+  config.monitor.orientation_deg = config.monitor.tilt_deg = 0.0;  // the closed form's square monitor
   config.monitor.pixel_pitch = 0.00005;
   config.dots.cols = config.dots.rows = 24;
   config.dots.shift = 0.0;
@@ -286,10 +294,12 @@ TEST(RigRenderer, FlatFieldOfIsotropicMonitor) {
   FloatImage image;
   renderer.RenderFlatField(1.0, &image);
   const double exitance = rig.config().monitor.white_exitance;
+  const Vec3 normal = rig.monitor_frame().normal;  // the preset's screen is tilted a little
   for (int y = 5; y < image.height; y += 20) {
     for (int x = 5; x < image.width; x += 20) {
       const Vec3 ray = *rig.camera().PixelRay(Vec2(x, y));
-      EXPECT_NEAR(image.at(x, y, 1), exitance / -ray.z(), 1e-4 * exitance / -ray.z());
+      const double cos_e = -normal.dot(ray);
+      EXPECT_NEAR(image.at(x, y, 1), exitance / cos_e, 1e-4 * exitance / cos_e);
     }
   }
 }

@@ -29,7 +29,7 @@ inline calib::SessionCalibration CalibrationFromTruth(const std::filesystem::pat
   c.sample_plane.translation = truth.pose.translation;
   c.sample_plane.width_m = truth.sample.width;
   c.sample_plane.height_m = truth.sample.height();
-  c.monitor.normal = Vec3::UnitZ();
+  c.monitor.normal = MonitorFrame::Of(truth.monitor).normal;  // the screen may be tilted
   c.monitor.distance_m = truth.monitor.distance;
   c.monitor.pixel_pitch_m = truth.monitor.pixel_pitch;
   c.monitor.dot_radius_m = truth.dots.front().radius;

@@ -5,6 +5,7 @@
 // and processing read acquired and simulated sessions alike.
 
 #include <cstdint>
+#include <limits>
 #include <filesystem>
 #include <string>
 #include <utility>
@@ -41,6 +42,9 @@ struct RigNotes {
   int texels_x = 0, texels_y = 0;    // the texel grid for processing
   double eta = 0.0;                  // the sample's relative index of refraction, if known
   std::string camera_response;       // linear | srgb
+  // Which way the screen lies (rig.monitor.orientation_deg, docs/calibration-format.md); NaN: not
+  // noted. Calibration checks it against the fiducial capture.
+  double monitor_orientation_deg = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct CapturePlan {
@@ -60,6 +64,8 @@ struct CapturePlan {
   int board_views = 0;
   int sample_plane_views = 0;
   bool all_dots = false;
+  bool fiducials = false;           // fiducial_dots lit at once, at the all-dots exposure
+  std::vector<int> fiducial_dots;   // FiducialDots(cols, rows) when fiducials are planned
   bool flat_white = false;
   double board_exposure_s = 0.0;
   double all_dots_exposure_s = 0.0;

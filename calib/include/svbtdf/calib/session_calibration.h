@@ -50,6 +50,14 @@ struct MonitorCalibration {
   std::string emission = "isotropic";  // angular profile: "isotropic" | "lambertian" | "lcd"
   double emission_exponent = 0.0;      // "lcd": P(theta) = cos^n theta
   double residual_rms_mm = 0.0, residual_max_mm = 0.0;  // dots vs the fitted grid
+  // Which way the screen lies: the direction of its u axis (pixel x) in the sample plane,
+  // counter-clockwise from +x seen from the camera side, degrees in [0, 360).
+  double orientation_deg = 0.0;
+  // What told which blob is which dot: the fiducial capture's key, or "declared orientation"
+  // (rig.monitor.orientation_deg); the fraction of dots agreeing with the chosen orientation and
+  // with the next best (-1: not measured).
+  std::string identified_by;
+  double fiducial_agreement = -1.0, fiducial_runner_up = -1.0;
   std::vector<DotPosition> dots;  // in plan order (q row-major over the grid)
 
   // The angular emission profile P(theta_e) relative to the normal direction.

@@ -46,9 +46,11 @@ class RigRenderer {
   // is opaque). Includes the monitor's black-level glow when black_level > 0.
   void RenderDot(const Dot& dot, FloatImage* radiance) const;
 
-  // The monitor seen directly (sample and holder removed): every dot lit, or a flat field of
-  // `level` over the whole active area. Anti-aliased with board_samples^2 sub-samples.
+  // The monitor seen directly (sample and holder removed): every dot lit, the dots `lit` (grid
+  // indices) at once, or a flat field of `level` over the whole active area. Anti-aliased with
+  // board_samples^2 sub-samples.
   void RenderAllDots(FloatImage* radiance) const;
+  void RenderDotSet(const std::vector<int>& lit, FloatImage* radiance) const;
   void RenderFlatField(double level, FloatImage* radiance) const;
 
   // A chessboard lit uniformly: a Zhang view (the rig's `board`) as a whole-sensor image, or the
@@ -93,6 +95,9 @@ class RigRenderer {
   void PrecomputeGroups();
   void PrecomputeBackground();
   Vec3 DotRadianceAt(const Dot& dot, const Group& group) const;
+  // The monitor seen directly, emitting `exitance(p)` (radiant intensity per area along its
+  // normal) at each point p of the screen.
+  void RenderMonitor(const std::function<double(const Vec3&)>& exitance, FloatImage* radiance) const;
 
   const Rig& rig_;
   const SpatialBtdf* material_;

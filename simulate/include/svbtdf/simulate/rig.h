@@ -4,7 +4,8 @@
 // showing a grid of dots, and the camera's radiometric chain.
 //
 // World frame = the sample frame of docs/model.md: the sample lies in z = 0 centred on the origin,
-// z points toward the camera, the monitor is the plane z = -d. Lengths are in metres.
+// z points toward the camera, the monitor lies behind it near the plane z = -d (MonitorFrame).
+// Lengths are in metres.
 // Camera conventions are OpenCV's: x_cam = R x_world + t, the camera looks along +z_cam with
 // x_cam to the right and y_cam down in the image, and pixel centres sit at integer coordinates
 // (pixel (u, v) covers [u - 0.5, u + 0.5] x [v - 0.5, v + 0.5]).
@@ -80,11 +81,24 @@ struct EmissionProfile {
   double operator()(double cos_theta_e) const;
 };
 
+// The monitor is a physical screen (docs/calibration-format.md, "The monitor frame"): its pixel
+// coordinates (u, v) run to the right and down as seen from its front, from the sample and the
+// camera, so that u x v points into the screen, away from the sample. Monitor pixel (i, j) covers
+// [i, i + 1) x [j, j + 1) of (u, v) and its centre is (i + 0.5, j + 0.5).
 struct MonitorConfig {
-  double distance = 0.04;        // d: the monitor plane is z = -d
-  double width = 0.30;           // active area (m)
-  double height = 0.20;
+  double distance = 0.04;        // d: the screen's centre lies on the plane z = -d
+  double width = 0.30;           // active area (m), along u
+  double height = 0.20;          // ... along v
   Vec2 centre = Vec2::Zero();    // centre of the active area in (x, y)
+  // How the screen lies, as a lab puts it down. orientation_deg turns it about its normal,
+  // counter-clockwise seen from the sample: at 0 its u axis runs along +x and v along -y (its
+  // top edge toward +y), at 90 u runs along +y. tilt_deg then tilts it about the x axis through
+  // its centre (the screen is not quite parallel to the sample).
+  double orientation_deg = 0.0;
+  double tilt_deg = 0.0;
+  // A mirror image of the screen (v reversed, u x v toward the sample), which no monitor seen
+  // from its front gives but a mirrored display mode does: for tests that calibration refuses it.
+  bool mirrored = false;
   double pixel_pitch = 0.00025;  // m
   double gamma = 2.2;            // displayed level v -> luminance black + (1 - black) v^gamma
   double black_level = 0.0;      // luminance of level 0 as a fraction of white
@@ -96,6 +110,31 @@ struct MonitorConfig {
   double Luminance(double level) const;
 };
 
+// The screen's orientation to the nearest quarter turn, in [0, 360): what a lab notes down as
+// rig.monitor.orientation_deg.
+double NominalOrientationDeg(const MonitorConfig& monitor);
+
+// Where the screen is: monitor pixel coordinates (u, v) <-> points of the sample frame.
+struct MonitorFrame {
+  Vec3 origin;       // the corner (u, v) = (0, 0): the top-left corner seen from the front
+  Vec3 right, down;  // unit vectors along u and v
+  Vec3 normal;       // out of the screen's front, toward the sample
+  double pixel_pitch = 0;
+  double width_px = 0, height_px = 0;  // the active area in pixels
+
+  static MonitorFrame Of(const MonitorConfig& monitor);
+  Vec3 PointAt(const Vec2& uv) const { return origin + pixel_pitch * (uv.x() * right + uv.y() * down); }
+  // (u, v) of the foot of `point` on the screen's plane.
+  Vec2 PixelCoordinates(const Vec3& point) const;
+  bool InActiveArea(const Vec2& uv) const {
+    return uv.x() >= 0 && uv.y() >= 0 && uv.x() < width_px && uv.y() < height_px;
+  }
+  // Where the ray from `from` along `direction` meets the screen's plane, when it does ahead.
+  std::optional<Vec3> Intersect(const Vec3& from, const Vec3& direction) const;
+  // cos(theta_e): the angle between the screen's normal and the direction from `emitter` to `x`.
+  double CosEmission(const Vec3& emitter, const Vec3& x) const { return normal.dot((x - emitter).normalized()); }
+};
+
 // The grid of dots shown one at a time behind the sample.
 struct DotGridConfig {
   int cols = 40;
@@ -104,6 +143,8 @@ struct DotGridConfig {
   // Shift of the grid's centre away from the camera (along the camera's azimuth), in metres;
   // negative: d cos(theta) with theta the camera's angle from vertical (the paper's choice).
   double shift = -1.0;
+  // The grid runs along the screen's pixel axes: column c along u, row r along v (down the
+  // screen), dot q = r * cols + c, as a lab lays dots out on its monitor.
   double radius_px = 2.0;       // dot radius in monitor pixels
   double level = 1.0;           // displayed level of a dot
 };
@@ -191,7 +232,7 @@ struct RigConfig {
 struct Dot {
   int col = 0;
   int row = 0;
-  Vec3 position;        // on the monitor plane z = -d, at a monitor pixel centre
+  Vec3 position;        // on the screen, at a monitor pixel centre
   int monitor_x = 0;    // monitor pixel coordinates of its centre
   int monitor_y = 0;
   double intensity = 0; // L_q: radiant intensity along the monitor normal (P(0) = 1)
@@ -212,11 +253,11 @@ class Rig {
   const PinholeCamera& camera() const { return camera_; }
   const PinholeCamera& sensor_camera() const { return sensor_camera_; }
   const std::vector<Dot>& dots() const { return dots_; }
+  const MonitorFrame& monitor_frame() const { return monitor_frame_; }
 
   // The dot drawn centred on monitor coordinate (x_px, y_px) with a radius of `radius_px` monitor
   // pixels at `luminance` (a fraction of white, black level included: MonitorConfig::Luminance).
-  // Monitor pixel (i, j) is centred (i + 0.5, j + 0.5) pitches from the active area's corner,
-  // as the grid's dots are. For the simulated camera of `svbtdf acquire`, which renders whatever
+  // Monitor pixel (i, j) is centred on (u, v) = (i + 0.5, j + 0.5), as the grid's dots are. For the simulated camera of `svbtdf acquire`, which renders whatever
   // dot a capture plan shows; col = row = -1.
   Dot DotAt(double x_px, double y_px, double radius_px, double luminance) const;
 
@@ -241,6 +282,7 @@ class Rig {
   RigConfig config_;
   PinholeCamera camera_;
   PinholeCamera sensor_camera_;
+  MonitorFrame monitor_frame_;
   std::vector<Dot> dots_;
 };
 

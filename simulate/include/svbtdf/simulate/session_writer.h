@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <string>
 
 #include "svbtdf/simulate/capture_simulator.h"
@@ -24,6 +25,10 @@ struct SimulationOptions {
   int threads = 0;
   bool progress = true;
   bool noise = true;  // false: no shot or read noise (quantisation stays), for accuracy checks
+  // The screen's pose (MonitorConfig) instead of the preset's; NaN: the preset's.
+  double monitor_orientation_deg = std::numeric_limits<double>::quiet_NaN();
+  double monitor_tilt_deg = std::numeric_limits<double>::quiet_NaN();
+  bool mirror_monitor = false;  // a mirrored display, which calibration must refuse (tests)
 };
 
 struct SimulationOutput {

@@ -15,8 +15,9 @@
 namespace svbtdf {
 
 inline constexpr int kTruthFormatVersion = 1;  // material.json of the analytic truth
-// rig.json; 2: the Zhang views are whole-sensor images (camera.sensor), the holder board is its own.
-inline constexpr int kRigTruthVersion = 2;
+// rig.json; 2: the Zhang views are whole-sensor images (camera.sensor), the holder board is its own;
+// 3: the monitor is a physical screen with a pose (monitor.frame), the dots run along its axes.
+inline constexpr int kRigTruthVersion = 3;
 
 // What the capture did besides the rig itself: the exposures used and where the boards were.
 struct CaptureTruth {

@@ -1,0 +1,198 @@
+// Sessions of a physical screen lying in each of the four ways a lab may put it down. The dots'
+// expected positions are written here from first principles (the screen's top-left corner and its
+// right and down vectors in the sample frame, as seen from the sample), not taken from the
+// simulator's own frame, so that the simulator and the calibration cannot share a wrong
+// convention unnoticed (they once did: both assumed a mirror image of a screen). A mirrored
+// display and a lab note that contradicts the fiducials are refused.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "svbtdf/calib/calibrate_session.h"
+#include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/progress.h"
+#include "svbtdf/common/session.h"
+#include "svbtdf/fit/process_session.h"
+#include "svbtdf/fit/slice_store.h"
+#include "svbtdf/simulate/session_writer.h"
+#include "svbtdf/simulate/truth_io.h"
+
+namespace svbtdf::calib {
+namespace {
+namespace fs = std::filesystem;
+
+// Seen from the camera's side (+z toward the viewer, +x right, +y up): a screen's pixel x axis
+// runs `right` and its pixel y axis `down`; right x down points into the screen (-z).
+struct Orientation {
+  double degrees;
+  Vec3 right, down;
+};
+
+void PrintTo(const Orientation& o, std::ostream* out) { *out << o.degrees << " degrees"; }
+
+const Orientation kOrientations[] = {
+    {0, {1, 0, 0}, {0, -1, 0}},
+    {90, {0, 1, 0}, {1, 0, 0}},
+    {180, {-1, 0, 0}, {0, 1, 0}},
+    {270, {0, -1, 0}, {-1, 0, 0}},
+};
+
+fs::path Root() {
+  static const fs::path root = fs::temp_directory_path() / ("svbtdf_physical_monitor_" + std::to_string(::getpid()));
+  return root;
+}
+
+fs::path Simulate(const std::string& name, double orientation_deg, bool mirrored) {
+  const fs::path out = Root() / name;
+  if (fs::exists(out / "session" / "session.json")) return out;
+  SimulationOptions options;
+  options.preset = "tiny";
+  options.progress = false;
+  options.monitor_orientation_deg = orientation_deg;
+  options.monitor_tilt_deg = 0.0;
+  options.mirror_monitor = mirrored;
+  SimulateSession(out, options);
+  return out;
+}
+
+CalibrateSessionOptions Quiet() {
+  CalibrateSessionOptions options;
+  options.progress = false;
+  return options;
+}
+
+class PhysicalMonitorTest : public ::testing::TestWithParam<Orientation> {
+ protected:
+  static void SetUpTestSuite() { ProgressBar::SetEnabled(false); }
+  static void TearDownTestSuite() { fs::remove_all(Root()); }
+};
+
+TEST_P(PhysicalMonitorTest, DotsLandWhereAScreenLyingSoShowsThem) {
+  const Orientation& o = GetParam();
+  const fs::path out = Simulate("o" + std::to_string(static_cast<int>(o.degrees)), o.degrees, false);
+  const Session session = Session::Open(out / "session");
+  const RigTruth truth = ReadRigTruth(out / "truth" / "rig.json");
+  // The screen's active area: centre, size and distance are the rig's; its axes are the test's.
+  const MonitorConfig& m = truth.monitor;
+  const Vec3 corner = Vec3(m.centre.x(), m.centre.y(), -m.distance) - 0.5 * m.width * o.right - 0.5 * m.height * o.down;
+  const nlohmann::json& positions = session.rig().at("dots").at("positions_px");
+  std::vector<Vec3> expected;
+  for (const nlohmann::json& p : positions) {
+    const double i = p.at(0).get<double>(), j = p.at(1).get<double>();
+    expected.push_back(corner + m.pixel_pitch * ((i + 0.5) * o.right + (j + 0.5) * o.down));
+  }
+  ASSERT_EQ(expected.size(), truth.dots.size());
+  // The simulator shows a physical screen ...
+  for (size_t q = 0; q < expected.size(); ++q) {
+    EXPECT_LT((truth.dots[q].position - expected[q]).norm(), 1e-9) << "dot " << q;
+  }
+  // ... and calibration finds every dot where the screen put it.
+  const SessionCalibration c = CalibrateSession(session, Quiet());
+  double worst_mm = 0;
+  for (size_t q = 0; q < expected.size(); ++q) {
+    worst_mm = std::max(worst_mm, 1000.0 * (c.monitor.dots[q].position - expected[q]).norm());
+  }
+  std::printf("orientation %3.0f: measured %.2f degrees, worst dot %.3f mm, fiducials agree %.3f (next best %.3f)\n",
+              o.degrees, c.monitor.orientation_deg, worst_mm, c.monitor.fiducial_agreement, c.monitor.fiducial_runner_up);
+  EXPECT_LT(worst_mm, 0.2);
+  EXPECT_NEAR(std::remainder(c.monitor.orientation_deg - o.degrees, 360.0), 0.0, 0.5);
+  EXPECT_GT(c.monitor.normal.z(), 0.999);  // toward the sample
+  EXPECT_NE(c.monitor.identified_by.find("fiducials/e0"), std::string::npos);
+  EXPECT_GT(c.monitor.fiducial_agreement, 0.95);
+
+  // With the right dots, processing measures the true BTDF (a mislabelled grid puts every sample
+  // at another dot's direction: errors of tens of percent).
+  fit::ProcessOptions options;
+  options.progress = false;
+  fit::ProcessSession(session, c, out / "processed", options);
+  const fit::SliceStore store = fit::SliceStore::Open(out / "processed");
+  const MaterialTruth material = ReadMaterialTruth(out / "truth");
+  std::vector<double> errors;
+  std::vector<float> samples;
+  const fit::TexelGeometry& g = store.geometry();
+  for (int64_t t = 0; t < g.num_texels(); ++t) {
+    const int x = static_cast<int>(t % g.texels_x), y = static_cast<int>(t / g.texels_x);
+    if (store.mask().at(x, y) == 0) continue;
+    store.ReadSamples(t, &samples);
+    const auto ndf = material.TexelNdf(x, y);
+    const DualMicrofacetParams params = material.Params(x, y);
+    const Vec3 centre = g.TexelCentre(t);
+    const Vec3 view = (truth.pose.Centre() - centre).normalized();
+    std::vector<double> r_true;
+    for (const Vec3& p : expected) r_true.push_back(Luminance(EvaluateMaterial(*ndf, params, (p - centre).normalized(), view)));
+    const double peak = *std::max_element(r_true.begin(), r_true.end());
+    for (size_t q = 0; q < r_true.size(); ++q) {
+      const double measured = (samples[3 * q] + samples[3 * q + 1] + samples[3 * q + 2]) / 3.0;
+      if (r_true[q] >= 0.05 * peak && std::isfinite(measured)) errors.push_back(std::abs(measured / r_true[q] - 1));
+    }
+  }
+  ASSERT_FALSE(errors.empty());
+  std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
+  std::printf("orientation %3.0f: median |R/R_true - 1| %.4f over %zu samples\n", o.degrees, errors[errors.size() / 2],
+              errors.size());
+  EXPECT_LT(errors[errors.size() / 2], 0.03);
+}
+
+INSTANTIATE_TEST_SUITE_P(FourWaysDown, PhysicalMonitorTest, ::testing::ValuesIn(kOrientations),
+                         [](const ::testing::TestParamInfo<Orientation>& info) {
+                           return "Deg" + std::to_string(static_cast<int>(info.param.degrees));
+                         });
+
+void ExpectRefused(const fs::path& session, const std::string& file, const std::string& words) {
+  try {
+    CalibrateSession(Session::Open(session), Quiet());
+    ADD_FAILURE() << session << " was calibrated; expected an error saying '" << words << "'";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kFormat);
+    EXPECT_NE(std::string(e.what()).find(file), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+  }
+}
+
+TEST(PhysicalMonitor, AMirroredDisplayIsRefusedNamingTheFiducialCapture) {
+  ProgressBar::SetEnabled(false);
+  const fs::path out = Simulate("mirrored", 0.0, /*mirrored=*/true);
+  ExpectRefused(out / "session", "fiducials/e0.png", "mirrored");
+}
+
+TEST(PhysicalMonitor, ALabNoteThatContradictsTheFiducialsIsRefused) {
+  ProgressBar::SetEnabled(false);
+  const fs::path out = Simulate("o0", 0.0, false);
+  const fs::path copy = Root() / "contradicted";
+  fs::remove_all(copy);
+  fs::copy(out / "session", copy, fs::copy_options::recursive);
+  nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(copy / "session.json"));
+  manifest["rig"]["monitor"]["orientation_deg"] = 180.0;  // the lab noted the screen upside down
+  std::ofstream(copy / "session.json", std::ios::trunc) << manifest.dump(2);
+  ExpectRefused(copy, "fiducials/e0.png", "rig.monitor.orientation_deg says 180");
+}
+
+// Dots displayed elsewhere than the session says (here each moved by up to 4 monitor pixels, 1 mm)
+// fit no flat grid of the stated layout: refused, naming the all-dots image, not turned into
+// wrong dot positions.
+TEST(PhysicalMonitor, DotsFarOffAnyGridOfTheStatedLayoutAreRefused) {
+  ProgressBar::SetEnabled(false);
+  const fs::path out = Simulate("o90", 90.0, false);
+  const fs::path copy = Root() / "moved";
+  fs::remove_all(copy);
+  fs::copy(out / "session", copy, fs::copy_options::recursive);
+  nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(copy / "session.json"));
+  int k = 0;
+  for (nlohmann::json& p : manifest["rig"]["dots"]["positions_px"]) {
+    p[0] = p[0].get<int>() + (k % 3 - 1) * 4;
+    p[1] = p[1].get<int>() + ((k / 3) % 3 - 1) * 4;
+    ++k;
+  }
+  std::ofstream(copy / "session.json", std::ios::trunc) << manifest.dump(2);
+  ExpectRefused(copy, "all_dots/e0.png", "off");
+}
+
+}  // namespace
+}  // namespace svbtdf::calib
