@@ -357,14 +357,13 @@ MonitorCalibration CalibrateMonitor(const Session& session, const CameraModel& c
         ++outliers;
       }
     }
+    if (outliers > kMaxOutlierFraction * match.size()) {
+      ThrowFormatError(ImageFile(session, keys.front()),
+                       "shows " + std::to_string(outliers) + " of the " + std::to_string(match.size()) +
+                           " dots more than 1 mm off any flat grid of the layout rig.dots.positions_px describes",
+                       "check rig.dots.positions_px and rig.monitor.pixel_pitch_m against what the display showed");
+    }
     if (outliers == 0) break;
-  }
-  if (outliers > kMaxOutlierFraction * match.size()) {
-    ThrowFormatError(ImageFile(session, keys.front()), "shows " + std::to_string(outliers) + " of the " +
-                                                           std::to_string(match.size()) +
-                                                           " dots more than 1 mm off any flat grid of the displayed "
-                                                           "layout",
-                     "check rig.dots.positions_px and rig.monitor.pixel_pitch_m against what the display showed");
   }
   monitor.distance_m = std::abs(monitor.normal.dot(origin)) / std::max(1e-9, std::abs(monitor.normal.z()));
   monitor.pixel_pitch_m = grid.pixel_pitch_m;
