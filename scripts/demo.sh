@@ -36,7 +36,7 @@ echo "== 5/5 validating the dual-microfacet model against a Monte Carlo slab (ab
 
 # A small report page: the simulated images next to the model validation.
 mkdir -p "$OUT/images"
-for key in board/v00 sample_plane/v00 all_dots/e0 dot/q0010/e1/r0; do
+for key in board/v00 sample_plane/v00 all_dots/e0 fiducials/e0 dot/q0010/e1/r0; do
   name=$(echo "$key" | tr / _)
   source="$OUT/simulated/session/images/$key.png"
   # Camera values fill only the sensor's bit depth: stretch the brightest to white, gamma 2.2.
@@ -52,8 +52,8 @@ cat > "$OUT/index.html" <<HTML
 <h1>svbtdf demo report</h1>
 <h2>1. Simulated capture session</h2>
 <p>$images images in <code>simulated/session</code> (format: docs/session-format.md), ground truth in
-<code>simulated/truth</code>. A calibration board view, the board in the sample holder, all dots, and one dot seen through the sample:</p>
-<p><img src="images/board_v00.png"><img src="images/sample_plane_v00.png"><img src="images/all_dots_e0.png"><img src="images/dot_q0010_e1_r0.png"></p>
+<code>simulated/truth</code>. A calibration board view, the board in the sample holder, all dots, the fiducial dots (which tell calibration which dot is which and which way up the monitor lies), and one dot seen through the sample:</p>
+<p><img src="images/board_v00.png"><img src="images/sample_plane_v00.png"><img src="images/all_dots_e0.png"><img src="images/fiducials_e0.png"><img src="images/dot_q0010_e1_r0.png"></p>
 <h2>2. The fitted material</h2>
 <p><code>svbtdf run</code> calibrated the session (<code>simulated/session/calibration.json</code>), processed it into
 per-texel BTDF samples and fitted the dual-microfacet material <code>material/</code> (format: docs/material-format.md),
