@@ -316,16 +316,23 @@ DiffuseEstimate EstimateDiffuse(const std::vector<Rgb>& r, const std::vector<dou
   // The shot noise's constant c (Var(y_q) = c s_q E[y_q]) from the second differences across
   // neighbouring dots, y_q - (y_a + y_b) / 2, over the samples of the floor set: the lobe is smooth
   // from dot to dot (its slope cancels), the noise is not.
-  std::vector<double> work;
+  // Only triples wholly in the set when there are enough of them (at least 5), so that the edge
+  // of the floor, where the tails begin, does not count.
+  std::vector<double> work, inner;
   const auto noise_constant = [&](const std::vector<uint8_t>& set) {
     work.clear();
+    inner.clear();
     for (size_t q = 0; q < n; ++q) {
       const int a = neighbours[q][0], b = neighbours[q][1];
       if (!set[q] || a < 0 || b < 0 || a >= static_cast<int>(n) || b >= static_cast<int>(n)) continue;
       const double variance =
           scale[q] * std::abs(y[q]) + 0.25 * (scale[a] * std::abs(y[a]) + scale[b] * std::abs(y[b]));
-      if (variance > 0) work.push_back(std::abs(y[q] - 0.5 * (y[a] + y[b])) / std::sqrt(variance));
+      if (!(variance > 0)) continue;
+      const double d = std::abs(y[q] - 0.5 * (y[a] + y[b])) / std::sqrt(variance);
+      work.push_back(d);
+      if (set[a] && set[b]) inner.push_back(d);
     }
+    if (inner.size() >= 5) work.swap(inner);
     if (work.empty()) return 0.0;
     std::nth_element(work.begin(), work.begin() + work.size() / 2, work.end());
     return std::pow(work[work.size() / 2] / 0.6745, 2);  // the median of |N(0, 1)| is 0.6745

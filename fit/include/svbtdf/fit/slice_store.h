@@ -156,7 +156,7 @@ std::vector<uint8_t> TexelsWithDotBeneath(const TexelGeometry& geometry);
 // that turns the camera's rate into R: under shot noise Var(R_q) = c s_q E[R_q] with one unknown c
 // per texel. `neighbours[q]` are the samples of two dots on either side of q's on the grid
 // ({-1, -1}: none): the lobe is smooth from dot to dot and the noise is not, so the median of the
-// second differences R_q - (R_a + R_b) / 2 over the texel measures c whatever the lobe.
+// second differences R_q - (R_a + R_b) / 2 over the floor set measures c whatever the lobe.
 // The floor is the set of samples within `clip` standard deviations (sqrt(c floor s_q)) of its
 // inverse-variance weighted mean, found by iterating from the lowest tenth of the samples;
 // symmetric clipping keeps the mean unbiased for symmetric noise, where the paper's minimum
