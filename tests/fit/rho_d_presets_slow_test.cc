@@ -94,7 +94,8 @@ Errors Measure(const std::string& preset) {
     const double rho_d = (store.rho_d().at(col, row, 0) + store.rho_d().at(col, row, 1) + store.rho_d().at(col, row, 2)) / 3;
     store_errors.push_back(std::abs(rho_d / true_rho_d - 1));
     // The paper's eq. 14 as the store computed it before: the minimum over the dots whose pixel
-    // value R |i.z| / r^2 exceeds the threshold times the texel's mean.
+    // value R |i.z| / r^2 exceeds the threshold times the texel's mean (of the luminance here; the
+    // store took it per channel, which is lower still).
     store.ReadSamples(t, &samples);
     std::vector<double> value(g.dots.size(), std::numeric_limits<double>::quiet_NaN()), pixel(g.dots.size(), 0);
     double mean = 0;
