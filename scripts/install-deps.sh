@@ -4,7 +4,7 @@
 set -euo pipefail
 
 PACKAGES=(
-  build-essential cmake ninja-build pkg-config
+  build-essential cmake ninja-build pkg-config python3
   libeigen3-dev libceres-dev
   libopencv-dev
   libopenimageio-dev openimageio-tools libopenexr-dev libpng-dev zlib1g-dev

@@ -6,6 +6,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 bash scripts/install-deps.sh
+# The layers of docs/architecture.md, before building (python3 comes with install-deps.sh).
+# Two commands, not `a && b`: under set -e a failing `a` in an && list would not stop the script.
+python3 scripts/check_layers.py --self-test
+python3 scripts/check_layers.py
 BUILD_DIR=${SVBTDF_BUILD_DIR:-build}
 cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$BUILD_DIR" --parallel "$(nproc)"
