@@ -16,7 +16,7 @@
 #include <filesystem>
 
 #include "svbtdf/common/error.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 #include "svbtdf/fit/process_session.h"
 #include "truth_calibration.h"
 
@@ -42,7 +42,7 @@ int main(int argc, char** argv) {
   namespace fs = std::filesystem;
   try {
     const fs::path simulation = argv[1];
-    const svbtdf::Session session = svbtdf::Session::Open(simulation / "session");
+    const svbtdf::session::Session session = svbtdf::session::Session::Open(simulation / "session");
     const svbtdf::calib::SessionCalibration calibration = svbtdf::CalibrationFromTruth(simulation);
     auto start = std::chrono::steady_clock::now();
     for (const std::string& key : session.planned_keys()) session.ReadImage(key);

@@ -18,7 +18,7 @@
 #include "quality_output.h"
 #include "svbtdf/calib/calibrate_session.h"
 #include "svbtdf/calib/camera_calibration.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/progress.h"
@@ -113,7 +113,7 @@ void RunCalibrateImages(const CalibrateOptions& options) {
 }
 
 void RunCalibrateSession(const CalibrateOptions& options) {
-  const Session session = Session::Open(options.session);
+  const session::Session session = session::Session::Open(options.session);
   calib::CalibrateSessionOptions calibrate_options;
   calibrate_options.camera.fix_k3 = options.fix_k3;
   if (options.full_lens_model) calibrate_options.camera.max_principal_point_std_fraction = 0;

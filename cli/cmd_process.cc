@@ -9,7 +9,7 @@
 #include "quality_output.h"
 #include "svbtdf/calib/session_calibration.h"
 #include "svbtdf/common/error.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 #include "svbtdf/fit/process_session.h"
 
 namespace svbtdf::cli {
@@ -35,7 +35,7 @@ void ParseTexels(const std::string& text, fit::ProcessOptions* options) {
 
 void RunProcess(ProcessCommandOptions options) {
   ParseTexels(options.texels, &options.process);
-  const Session session = Session::Open(options.session);
+  const session::Session session = session::Session::Open(options.session);
   const std::filesystem::path calibration_path = std::filesystem::path(options.session) / "calibration.json";
   if (!std::filesystem::exists(calibration_path)) {
     ThrowInvalidInput(options.session, "has no calibration.json", "run 'svbtdf calibrate " + options.session + "' first");

@@ -13,7 +13,7 @@
 #include "quality_output.h"
 #include "svbtdf/calib/calibrate_session.h"
 #include "svbtdf/common/error.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 #include "svbtdf/fit/process_session.h"
 #include "svbtdf/fit/slice_store.h"
 
@@ -29,7 +29,7 @@ struct RunOptions {
   bool strict = false;
 };
 
-calib::SessionCalibration CalibrationOf(const Session& session) {
+calib::SessionCalibration CalibrationOf(const session::Session& session) {
   const fs::path path = session.folder() / "calibration.json";
   if (fs::exists(path)) {
     std::printf("== 1/3 calibration: using %s\n", path.c_str());
@@ -44,7 +44,7 @@ calib::SessionCalibration CalibrationOf(const Session& session) {
   return calibration;
 }
 
-void ProcessUnlessDone(const Session& session, const calib::SessionCalibration& calibration, const fs::path& processed,
+void ProcessUnlessDone(const session::Session& session, const calib::SessionCalibration& calibration, const fs::path& processed,
                        const fit::ProcessOptions& options) {
   try {
     fit::SliceStore::Open(processed);
@@ -65,8 +65,8 @@ void Run(const RunOptions& options) {
     ThrowInvalidInput(out.string(), "exists and is not empty; a material is never overwritten", "choose a new --out folder");
   }
   const fs::path work = options.work.empty() ? fs::path(out.string() + ".work") : fs::path(options.work);
-  const Session session = Session::Open(options.session);
-  const SessionVerification verification = session.Verify(/*check_crc=*/false);
+  const session::Session session = session::Session::Open(options.session);
+  const session::SessionVerification verification = session.Verify(/*check_crc=*/false);
   if (!verification.complete()) {
     ThrowInvalidInput(options.session, "is not a complete session: " + verification.Summary(),
                       "finish the capture (re-run 'svbtdf acquire' with the same --out) or check it with 'svbtdf session verify'");

@@ -6,7 +6,7 @@
 
 #include "commands.h"
 #include "svbtdf/common/error.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 
 namespace svbtdf::cli {
 namespace {
@@ -30,8 +30,8 @@ void AddSessionCommand(CLI::App& app) {
   verify->add_option("session", options->session, "session folder")->required();
   verify->add_flag("--no-crc", options->skip_crc, "check sizes only (fast), not the CRC-32 of every image");
   verify->callback([options] {
-    const Session session = Session::Open(options->session);
-    const SessionVerification report = session.Verify(!options->skip_crc);
+    const session::Session session = session::Session::Open(options->session);
+    const session::SessionVerification report = session.Verify(!options->skip_crc);
     std::printf("%s: %zu of %zu planned images journalled; %s\n", options->session.c_str(), session.entries().size(),
                 session.planned_keys().size(), report.Summary().c_str());
     const auto list = [](const char* what, const std::vector<std::string>& keys) {

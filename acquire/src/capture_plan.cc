@@ -7,7 +7,8 @@
 
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
-#include "svbtdf/common/fiducials.h"
+#include "svbtdf/session/capture_key.h"
+#include "svbtdf/session/fiducials.h"
 #include "svbtdf/simulate/capture_render.h"
 #include "svbtdf/simulate/presets.h"
 
@@ -17,12 +18,6 @@ namespace {
 using nlohmann::json;
 
 constexpr const char* kFormatName = "svbtdf-capture-plan";
-
-std::string Padded(int value, int width) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%0*d", width, value);
-  return buffer;
-}
 
 // Typed, range-checked access to one JSON object of the plan; errors name the file and field.
 // Unknown fields are refused, so that a misspelt setting is not silently ignored.
@@ -141,7 +136,7 @@ void ParseCalibration(const json& object, const std::string& source, CapturePlan
   plan->flat_white = f.Flag("flat_white", true);
   // The fiducial dots tell calibration which blob is which dot; they need the all-dots capture.
   plan->fiducials = plan->all_dots && f.Flag("fiducials", true);
-  if (plan->fiducials) plan->fiducial_dots = FiducialDots(plan->dot_cols, plan->dot_rows);
+  if (plan->fiducials) plan->fiducial_dots = session::FiducialDots(plan->dot_cols, plan->dot_rows);
   const bool boards = plan->board_views + plan->sample_plane_views > 0;
   plan->board_exposure_s = boards ? f.Number("board_exposure_s", 1e-7, kMaxExposure) : 0.0;
   plan->all_dots_exposure_s = plan->all_dots ? f.Number("all_dots_exposure_s", 1e-7, kMaxExposure) : 0.0;
@@ -297,7 +292,7 @@ CapturePlan PlanFromSimulation(const SimulatedSetup& setup) {
   plan.board_views = static_cast<int>(capture.zhang_boards.size());
   plan.sample_plane_views = 1;
   plan.all_dots = plan.flat_white = plan.fiducials = true;
-  plan.fiducial_dots = FiducialDots(plan.dot_cols, plan.dot_rows);
+  plan.fiducial_dots = session::FiducialDots(plan.dot_cols, plan.dot_rows);
   plan.board_exposure_s = capture.board_exposure_s;
   plan.all_dots_exposure_s = capture.all_dots_exposure_s;
   plan.flat_white_exposure_s = capture.flat_exposure_s;
@@ -318,50 +313,68 @@ CapturePlan PlanFromSimulation(const SimulatedSetup& setup) {
   return plan;
 }
 
+namespace {
+
+session::CaptureCounts CountsOf(const CapturePlan& plan) {
+  session::CaptureCounts counts;
+  counts.brackets = static_cast<int>(plan.exposures_s.size());
+  counts.dark_frames = plan.dark_frames;
+  counts.board_views = plan.board_views;
+  counts.sample_plane_views = plan.sample_plane_views;
+  counts.all_dots = plan.all_dots;
+  counts.fiducials = plan.fiducials;
+  counts.flat_white = plan.flat_white;
+  counts.dots = static_cast<int>(plan.dots_px.size());
+  counts.repeats = plan.repeats;
+  return counts;
+}
+
+// Some of the plan's dots lit at once.
+Pattern DotsLit(const CapturePlan& plan, const std::vector<std::pair<double, double>>& dots_px) {
+  Pattern pattern;
+  pattern.kind = Pattern::Kind::kAllDots;
+  pattern.all_dots_px = dots_px;
+  pattern.dot_radius_px = plan.dot_radius_px;
+  pattern.intensity = plan.dot_intensity;
+  return pattern;
+}
+
+// What the display shows, the exposure and the scene of one capture of the plan.
+PlannedCapture Planned(const CapturePlan& plan, const session::CaptureKey& key) {
+  using session::CaptureKind;
+  const Pattern black;  // boards are lit by the room, and dark frames see a black monitor
+  switch (key.kind) {
+    case CaptureKind::kDark:
+      return {key.Format(), black, plan.exposures_s.at(key.bracket), Scene::kSample};
+    case CaptureKind::kBoardView:
+      return {key.Format(), black, plan.board_exposure_s, Scene::kBoardView, key.view};
+    case CaptureKind::kSamplePlaneView:
+      return {key.Format(), black, plan.board_exposure_s, Scene::kBoardInHolder, key.view};
+    case CaptureKind::kAllDots:
+      return {key.Format(), DotsLit(plan, plan.dots_px), plan.all_dots_exposure_s, Scene::kNoSample};
+    case CaptureKind::kFiducials: {
+      std::vector<std::pair<double, double>> fiducials_px;
+      for (int q : plan.fiducial_dots) fiducials_px.push_back(plan.dots_px.at(q));
+      return {key.Format(), DotsLit(plan, fiducials_px), plan.all_dots_exposure_s, Scene::kNoSample};
+    }
+    case CaptureKind::kFlatWhite: {
+      Pattern white;
+      white.kind = Pattern::Kind::kFlatWhite;
+      return {key.Format(), white, plan.flat_white_exposure_s, Scene::kNoSample};
+    }
+    case CaptureKind::kDot:
+      return {key.Format(), DotPattern(plan, key.dot), plan.exposures_s.at(key.bracket), Scene::kSample};
+    case CaptureKind::kMonitorPoseView:
+      break;
+  }
+  ThrowInvalidInput(plan.name, "plans a capture the acquisition cannot take: " + key.Format());
+}
+
+}  // namespace
+
 std::vector<PlannedCapture> ExpandPlan(const CapturePlan& plan) {
   std::vector<PlannedCapture> list;
-  const Pattern black;
-  for (size_t e = 0; e < plan.exposures_s.size(); ++e) {
-    for (int n = 0; n < plan.dark_frames; ++n) {
-      list.push_back({"dark/e" + std::to_string(e) + "/r" + std::to_string(n), black, plan.exposures_s[e], Scene::kSample});
-    }
-  }
-  // Boards are lit by the room, so the monitor stays black.
-  for (int v = 0; v < plan.board_views; ++v) {
-    list.push_back({"board/v" + Padded(v, 2), black, plan.board_exposure_s, Scene::kBoardView, v});
-  }
-  for (int v = 0; v < plan.sample_plane_views; ++v) {
-    list.push_back({"sample_plane/v" + Padded(v, 2), black, plan.board_exposure_s, Scene::kBoardInHolder, v});
-  }
-  if (plan.all_dots) {
-    Pattern all;
-    all.kind = Pattern::Kind::kAllDots;
-    all.all_dots_px = plan.dots_px;
-    all.dot_radius_px = plan.dot_radius_px;
-    all.intensity = plan.dot_intensity;
-    list.push_back({"all_dots/e0", all, plan.all_dots_exposure_s, Scene::kNoSample});
-  }
-  if (plan.fiducials) {
-    Pattern some;
-    some.kind = Pattern::Kind::kAllDots;
-    for (int q : plan.fiducial_dots) some.all_dots_px.push_back(plan.dots_px.at(q));
-    some.dot_radius_px = plan.dot_radius_px;
-    some.intensity = plan.dot_intensity;
-    list.push_back({"fiducials/e0", some, plan.all_dots_exposure_s, Scene::kNoSample});
-  }
-  if (plan.flat_white) {
-    Pattern white;
-    white.kind = Pattern::Kind::kFlatWhite;
-    list.push_back({"flat_white/e0", white, plan.flat_white_exposure_s, Scene::kNoSample});
-  }
-  for (size_t q = 0; q < plan.dots_px.size(); ++q) {
-    for (size_t e = 0; e < plan.exposures_s.size(); ++e) {
-      for (int r = 0; r < plan.repeats; ++r) {
-        list.push_back({"dot/q" + Padded(static_cast<int>(q), 4) + "/e" + std::to_string(e) + "/r" + std::to_string(r),
-                        DotPattern(plan, q), plan.exposures_s[e], Scene::kSample});
-      }
-    }
-  }
+  for (const session::CaptureKey& key : session::CaptureOrder(CountsOf(plan))) list.push_back(Planned(plan, key));
   return list;
 }
 

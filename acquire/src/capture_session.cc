@@ -16,7 +16,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/common/progress.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 
 namespace svbtdf::acquire {
 namespace fs = std::filesystem;
@@ -51,9 +51,9 @@ void RequireDotsOnDisplay(const CapturePlan& plan, const DisplayInfo& display) {
 
 // An existing session must be this plan's, and intact: the journal is append-only, so a corrupt
 // image cannot be re-captured under its key by resuming.
-std::optional<Session> OpenExisting(const fs::path& folder, const CapturePlan& plan) {
+std::optional<session::Session> OpenExisting(const fs::path& folder, const CapturePlan& plan) {
   if (!fs::exists(folder / "session.json")) return std::nullopt;
-  Session session = Session::Open(folder);
+  session::Session session = session::Session::Open(folder);
   const nlohmann::json& rig = session.rig();
   if (!rig.contains("acquisition_plan")) {
     ThrowInvalidInput(folder.string(), "holds a session that `svbtdf acquire` did not write; it will not be changed",
@@ -63,7 +63,7 @@ std::optional<Session> OpenExisting(const fs::path& folder, const CapturePlan& p
     ThrowInvalidInput(folder.string(), "holds a session of a different capture plan; it will not be changed",
                       "resume with the plan it was started with (its session.json records it), or choose a new --out");
   }
-  const SessionVerification report = session.Verify(/*check_crc=*/true);
+  const session::SessionVerification report = session.Verify(/*check_crc=*/true);
   if (!report.corrupt.empty() || !report.duplicated.empty()) {
     ThrowFormatError(folder.string(), "cannot be resumed: " + report.Summary(),
                      "run `svbtdf session verify " + folder.string() + "` for the list");
@@ -100,7 +100,7 @@ CameraImage ToImage(const Frame& frame, const std::string& camera_id) {
 // pattern is shown (and settled) once for all its brackets and repeats.
 class CaptureRun {
  public:
-  CaptureRun(const CapturePlan& plan, Camera& camera, Display& display, Operator& op, Session& session,
+  CaptureRun(const CapturePlan& plan, Camera& camera, Display& display, Operator& op, session::Session& session,
              const AcquireOptions& options, AcquireResult& result)
       : plan_(plan), camera_(camera), display_(display), op_(op), session_(session), options_(options),
         result_(result), info_(camera.Info()), camera_id_(info_.id), windowed_(info_.sensor_width > 0) {}
@@ -232,7 +232,7 @@ class CaptureRun {
   Camera& camera_;
   Display& display_;
   Operator& op_;
-  Session& session_;
+  session::Session& session_;
   const AcquireOptions& options_;
   AcquireResult& result_;
   CameraInfo info_;
@@ -339,7 +339,7 @@ AcquireResult Acquire(const CapturePlan& plan, Camera& camera, Display& display,
   const CameraInfo camera_info = camera.Info();
   const DisplayInfo display_info = display.Info();
   RequireDotsOnDisplay(plan, display_info);
-  std::optional<Session> session = OpenExisting(session_folder, plan);
+  std::optional<session::Session> session = OpenExisting(session_folder, plan);
 
   AcquireResult result;
   result.planned = static_cast<int64_t>(keys.size());
@@ -348,7 +348,7 @@ AcquireResult Acquire(const CapturePlan& plan, Camera& camera, Display& display,
   constexpr uint64_t kManifestAndJournal = 1 << 20;
   RequireFreeSpace(session_folder, EstimatedBytesPerImage(plan, camera_info) * missing + kManifestAndJournal, missing,
                    options);
-  if (!session) session = Session::Create(session_folder, AcquisitionRig(plan, camera_info, display_info), keys);
+  if (!session) session = session::Session::Create(session_folder, AcquisitionRig(plan, camera_info, display_info), keys);
 
   CaptureRun(plan, camera, display, op, *session, options, result).Run(captures);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -7,7 +7,7 @@
 
 #include "svbtdf/acquire/pattern_raster.h"
 #include "svbtdf/common/error.h"
-#include "svbtdf/common/fiducials.h"
+#include "svbtdf/session/fiducials.h"
 #include "svbtdf/simulate/capture_render.h"
 
 namespace svbtdf::acquire {
@@ -101,38 +101,37 @@ int SimCamera::ExposureIndex() const {
 }
 
 SimCamera::Identified SimCamera::Identify() const {
+  using session::CaptureKey;
   const Pattern& p = world_->pattern;
   const Rig& rig = *setup_->rig;
   // Calibration captures are bracket 0 in `svbtdf simulate` (all_dots/e0, flat_white/e0).
   const int e = std::max(ExposureIndex(), 0);
-  const auto known = [&](const char* kind, int index, int bracket) {
-    return Identified{{kind, index, bracket, settings_.exposure_s}, std::nullopt};
-  };
+  const auto known = [&](const CaptureKey& key) { return Identified{{key, settings_.exposure_s}, std::nullopt}; };
   if (p.kind == Pattern::Kind::kBlack) {
     if (world_->scene == Scene::kBoardView) {
       if (world_->view >= static_cast<int>(setup_->plan.zhang_boards.size())) {
         NotSimulated(id_, "board view " + std::to_string(world_->view) + ": the simulation has " +
                               std::to_string(setup_->plan.zhang_boards.size()) + " board poses");
       }
-      return known("board", world_->view, 0);
+      return known(CaptureKey::BoardView(world_->view));
     }
-    if (world_->scene == Scene::kBoardInHolder) return known("holder_board", world_->view, 0);
-    return known("dark", 0, e);
+    if (world_->scene == Scene::kBoardInHolder) return known(CaptureKey::SamplePlaneView(world_->view));
+    return known(CaptureKey::Dark(e, 0));
   }
   if (world_->scene == Scene::kNoSample && p.kind == Pattern::Kind::kAllDots) {
-    if (p.all_dots_px.size() == rig.dots().size()) return known("all_dots", 0, 0);
+    if (p.all_dots_px.size() == rig.dots().size()) return known(CaptureKey::AllDots());
     // The fiducial dots, which the simulator renders as its `fiducials` capture.
-    const std::vector<int> fiducials = FiducialDots(rig.config().dots.cols, rig.config().dots.rows);
+    const std::vector<int> fiducials = session::FiducialDots(rig.config().dots.cols, rig.config().dots.rows);
     bool same = p.all_dots_px.size() == fiducials.size();
     for (size_t k = 0; same && k < fiducials.size(); ++k) {
       const Dot& dot = rig.dots()[fiducials[k]];
       same = p.all_dots_px[k] == std::pair<double, double>(dot.monitor_x, dot.monitor_y);
     }
     if (!same) NotSimulated(id_, "a set of lit dots other than the rig's dots or its fiducial dots");
-    return known("fiducials", 0, 0);
+    return known(CaptureKey::Fiducials());
   }
   if (world_->scene == Scene::kNoSample && p.kind == Pattern::Kind::kFlatWhite && p.intensity == 1.0) {
-    return known("flat", 0, 0);
+    return known(CaptureKey::FlatWhite());
   }
   if (world_->scene == Scene::kSample && p.kind == Pattern::Kind::kDot) {
     const MonitorConfig& m = rig.config().monitor;
@@ -140,10 +139,10 @@ SimCamera::Identified SimCamera::Identify() const {
                           p.intensity == m.Luminance(rig.config().dots.level);
     for (size_t q = 0; rig_like && q < rig.dots().size(); ++q) {
       const Dot& dot = rig.dots()[q];
-      if (p.x_px == dot.monitor_x && p.y_px == dot.monitor_y) return known("dots", static_cast<int>(q), e);
+      if (p.x_px == dot.monitor_x && p.y_px == dot.monitor_y) return known(CaptureKey::Dot(static_cast<int>(q), e));
     }
     // Any other dot: rendered by the simulator all the same, with a noise stream of its own.
-    return {{"free_dot", 0, e, settings_.exposure_s},
+    return {{CaptureKey::Dot(-1, e), settings_.exposure_s},
             rig.DotAt(p.x_px, p.y_px, p.dot_radius_px, m.Luminance(std::pow(p.intensity, 1.0 / m.gamma)))};
   }
   NotSimulated(id_, "this pattern in this scene (" + SceneInstruction(world_->scene, world_->view) + ")");
@@ -152,29 +151,32 @@ SimCamera::Identified SimCamera::Identify() const {
 Frame SimCamera::Capture() {
   Identified what = Identify();
   CaptureId& id = what.id;
-  // The n-th capture of the same thing: dark frame n, or a repeat with its own noise.
-  const int n = taken_[{id.kind, id.index, id.exposure_index}]++;
+  const bool dark = id.key.kind == session::CaptureKind::kDark;
+  // The n-th capture of the same thing: dark frame n, or a repeat with its own noise. (All
+  // free dots of a bracket share one count.)
+  const std::string scene = what.free_dot ? "free_dot" : SceneOf(id.key);
+  const int n = taken_[{scene, id.key.bracket}]++;
   uint64_t stream;
-  if (id.kind == "dark") {
-    id.index = n;
+  if (dark) {
+    id.key.repeat = n;
     stream = id.Stream();
   } else {
-    stream = id.Stream() ^ (static_cast<uint64_t>(n) * 0xd1b54a32d192ed03ULL);
+    const uint64_t base = what.free_dot ? NoiseStream("free_dot", 0, id.key.bracket) : id.Stream();
+    stream = base ^ (static_cast<uint64_t>(n) * 0xd1b54a32d192ed03ULL);
   }
   // Another plan's dot brackets: noise streams of their own rather than bracket 0's. (The
   // calibration captures have one exposure each, bracket 0 in the simulator whatever it is.)
-  const bool bracketed = id.kind == "dots" || id.kind == "dark" || id.kind == "free_dot";
+  const bool bracketed = id.key.kind == session::CaptureKind::kDot || dark;
   if (bracketed && ExposureIndex() < 0) stream ^= std::hash<double>{}(settings_.exposure_s) * 0x9e3779b97f4a7c15ULL;
   // Brackets and repeats of one scene share its radiance image, as in the simulator.
-  const std::string scene_key = id.kind + "/" + std::to_string(id.index);
   if (what.free_dot) {
     const Dot& dot = *what.free_dot;
     stream ^= std::hash<double>{}(dot.position.x()) * 31 + std::hash<double>{}(dot.position.y());
     setup_->renderer->RenderDot(dot, &radiance_);
     rendered_.clear();
-  } else if (id.kind == "dark" || scene_key != rendered_) {
+  } else if (dark || scene != rendered_) {
     RenderCaptureRadiance(*setup_->renderer, setup_->plan, id, &radiance_);
-    rendered_ = id.kind == "dark" ? std::string() : scene_key;
+    rendered_ = dark ? std::string() : scene;
   }
   const CameraImage image = setup_->renderer->Expose(radiance_, settings_.exposure_s, setup_->seed, stream,
                                                      CaptureWindowOrigin(*setup_->rig, id));

@@ -19,22 +19,14 @@
 namespace svbtdf::calib {
 namespace {
 
-std::string ImageFile(const Session& session, const std::string& key) {
+std::string ImageFile(const session::Session& session, const std::string& key) {
   return (session.folder() / session.Entry(key).file).string();
-}
-
-std::vector<std::string> KeysWithPrefix(const Session& session, const std::string& prefix) {
-  std::vector<std::string> keys;
-  for (const std::string& key : session.planned_keys()) {
-    if (key.rfind(prefix, 0) == 0) keys.push_back(key);
-  }
-  return keys;
 }
 
 double MaxDn(int bits) { return std::ldexp(1.0, bits) - 1.0; }
 
 // The mean of the channels as float, checked for size.
-cv::Mat GrayImage(const Session& session, const std::string& key, const cv::Size& expected) {
+cv::Mat GrayImage(const session::Session& session, const std::string& key, const cv::Size& expected) {
   if (!session.Contains(key)) {
     ThrowInvalidInput(session.folder().string(), "has no image '" + key + "'", "complete the capture first");
   }
@@ -61,9 +53,9 @@ cv::Mat ToEightBit(const cv::Mat& gray, int bits) {
   return eight;
 }
 
-CalibrationReport CalibrateCameraFromBoards(const Session& session, const BoardSpec& board, const cv::Size& size,
+CalibrationReport CalibrateCameraFromBoards(const session::Session& session, const BoardSpec& board, const cv::Size& size,
                                             int bits, const CalibrateSessionOptions& options) {
-  const std::vector<std::string> keys = KeysWithPrefix(session, "board/");
+  const std::vector<std::string> keys = session.PlannedKeys(session::CaptureKind::kBoardView);
   std::vector<BoardDetection> detections;
   std::unique_ptr<ProgressBar> progress;
   if (options.progress) progress = std::make_unique<ProgressBar>("detecting boards", static_cast<int64_t>(keys.size()), "images");
@@ -79,8 +71,8 @@ CalibrationReport CalibrateCameraFromBoards(const Session& session, const BoardS
 // with its x axis along the sample's x and its y axis along the sample's -y (it faces the camera);
 // OpenCV may number the corners from either end, which turns the pose by 180 degrees about the
 // normal: the camera is on the sample's -y side (docs/calibration-format.md) decides.
-SamplePlane SamplePlaneFromBoard(const Session& session, const BoardSpec& board, const CameraModel& camera, int bits) {
-  const std::vector<std::string> keys = KeysWithPrefix(session, "sample_plane/");
+SamplePlane SamplePlaneFromBoard(const session::Session& session, const BoardSpec& board, const CameraModel& camera, int bits) {
+  const std::vector<std::string> keys = session.PlannedKeys(session::CaptureKind::kSamplePlaneView);
   if (keys.empty()) ThrowInvalidInput(session.folder().string(), "plans no sample_plane/ capture (the board in the sample holder)");
   const cv::Size size(camera.width, camera.height);
   const BoardDetection detection = DetectBoard(ToEightBit(GrayImage(session, keys.front(), size), bits), board, keys.front());
@@ -187,7 +179,7 @@ struct NominalDots {
   std::optional<double> orientation_deg;  // rig.monitor.orientation_deg, as the lab noted it
 };
 
-NominalDots ReadNominalDots(const Session& session) {
+NominalDots ReadNominalDots(const session::Session& session) {
   const std::string source = (session.folder() / "session.json").string();
   NominalDots n;
   DisplayedGrid& grid = n.grid;
@@ -255,9 +247,9 @@ std::vector<double> BlobSignals(const cv::Mat& gray, const std::vector<Eigen::Ve
 
 // Which all-dots blobs the fiducial capture shows lit: those keeping at least half of their
 // all-dots signal (the same dots at the same exposure give the same signal).
-std::vector<bool> FiducialBlobs(const Session& session, const std::string& all_dots_key, const cv::Mat& all_dots,
+std::vector<bool> FiducialBlobs(const session::Session& session, const std::string& all_dots_key, const cv::Mat& all_dots,
                                 const std::vector<Eigen::Vector2d>& blobs, const cv::Size& size) {
-  const std::vector<std::string> keys = KeysWithPrefix(session, "fiducials/");
+  const std::vector<std::string> keys = session.PlannedKeys(session::CaptureKind::kFiducials);
   if (keys.empty() || blobs.size() < 2) return {};
   const cv::Mat fiducial = GrayImage(session, keys.front(), size);
   // Half the distance to the nearest other blob: each window holds one dot.
@@ -286,8 +278,8 @@ constexpr double kMaxOutlierFraction = 0.1;
 // worse is no measurement of the dots.
 constexpr double kMaxResidualRmsMm = 0.5;
 
-MonitorCalibration CalibrateMonitor(const Session& session, const CameraModel& camera, const SamplePlane& plane) {
-  const std::vector<std::string> keys = KeysWithPrefix(session, "all_dots/");
+MonitorCalibration CalibrateMonitor(const session::Session& session, const CameraModel& camera, const SamplePlane& plane) {
+  const std::vector<std::string> keys = session.PlannedKeys(session::CaptureKind::kAllDots);
   if (keys.empty()) ThrowInvalidInput(session.folder().string(), "plans no all_dots/ capture (every dot lit, sample removed)");
   const NominalDots nominal = ReadNominalDots(session);
   const DisplayedGrid& grid = nominal.grid;
@@ -297,7 +289,7 @@ MonitorCalibration CalibrateMonitor(const Session& session, const CameraModel& c
   std::vector<Eigen::Vector2d> on_plane;
   for (const auto& b : blobs) on_plane.push_back(BackProject(b, camera, plane, -nominal.distance_m).head<2>());
   const std::vector<bool> lit = FiducialBlobs(session, keys.front(), gray, blobs, size);
-  const std::vector<std::string> fiducial_keys = KeysWithPrefix(session, "fiducials/");
+  const std::vector<std::string> fiducial_keys = session.PlannedKeys(session::CaptureKind::kFiducials);
   const std::string decider = fiducial_keys.empty() ? (session.folder() / "session.json").string()
                                                     : ImageFile(session, fiducial_keys.front());
   if (!fiducial_keys.empty() && grid.fiducial.empty()) {
@@ -403,7 +395,7 @@ MonitorCalibration CalibrateMonitor(const Session& session, const CameraModel& c
   return monitor;
 }
 
-Radiometry RadiometryOf(const Session& session, int bits, const cv::Size& size) {
+Radiometry RadiometryOf(const session::Session& session, int bits, const cv::Size& size) {
   Radiometry r;
   r.bit_depth = bits;
   r.saturation_dn = MaxDn(bits);  // clipped values sit at full scale
@@ -423,7 +415,7 @@ Radiometry RadiometryOf(const Session& session, int bits, const cv::Size& size) 
                      "use 'linear' or 'srgb', or recover the curve with calib::RecoverResponse");
   }
   // The black offset: the median of the first dark frame (dark current adds little to it).
-  const std::vector<std::string> darks = KeysWithPrefix(session, "dark/");
+  const std::vector<std::string> darks = session.PlannedKeys(session::CaptureKind::kDark);
   if (!darks.empty()) {
     const cv::Mat dark = GrayImage(session, darks.front(), size);
     std::vector<float> values(dark.begin<float>(), dark.end<float>());
@@ -472,7 +464,7 @@ void MoveToWindow(const SensorWindow& w, const cv::Size& window, CameraModel* ca
 
 }  // namespace
 
-SessionCalibration CalibrateSession(const Session& session, const CalibrateSessionOptions& options) {
+SessionCalibration CalibrateSession(const session::Session& session, const CalibrateSessionOptions& options) {
   const std::string manifest = (session.folder() / "session.json").string();
   int bits = 16, width = 0, height = 0;
   std::string board_text;

@@ -1,8 +1,5 @@
 #include "svbtdf/fit/fit_material.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -11,8 +8,10 @@
 #include <map>
 #include <mutex>
 #include <numeric>
+#include <optional>
 #include <random>
 
+#include "svbtdf/common/durable_log.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/common/parallel.h"
@@ -138,65 +137,43 @@ TexelFitResult FitFromJson(const nlohmann::json& j) {
 // rather than mixing fits.
 class Checkpoint {
  public:
-  Checkpoint(const fs::path& path, const nlohmann::json& identity) : path_(path) {
+  Checkpoint(const fs::path& path, const nlohmann::json& identity) {
     if (path.empty()) return;
-    DropTornTail(path);
-    std::ifstream in(path);
-    std::string line;
-    if (in && std::getline(in, line)) {
-      nlohmann::json header;
-      try {
-        header = nlohmann::json::parse(line);
-      } catch (const nlohmann::json::exception&) {
-      }
-      if (header != nlohmann::json{{"fit", identity}}) {
-        ThrowInvalidInput(path.string(), "is the checkpoint of a fit with other inputs or options",
-                          "re-run with the same options, or delete it to start over");
-      }
-      while (std::getline(in, line)) {
-        try {  // a damaged line does not count: that representative is fitted again
-          const nlohmann::json entry = nlohmann::json::parse(line);
-          done_[entry.at("representative").get<int>()] = entry.at("result");
-        } catch (const nlohmann::json::exception&) {
-        }
-      }
+    log_ = DurableLog::Open(path, IsJsonObjectLine);
+    const std::vector<std::string>& lines = log_->lines();
+    if (lines.empty()) {
+      log_->Append(nlohmann::json{{"fit", identity}}.dump());
       return;
     }
-    Append(nlohmann::json{{"fit", identity}});
+    nlohmann::json header;
+    try {
+      header = nlohmann::json::parse(lines[0]);
+    } catch (const nlohmann::json::exception&) {
+    }
+    if (header != nlohmann::json{{"fit", identity}}) {
+      ThrowInvalidInput(path.string(), "is the checkpoint of a fit with other inputs or options",
+                        "re-run with the same options, or delete it to start over");
+    }
+    for (size_t n = 1; n < lines.size(); ++n) {
+      try {  // a damaged line does not count: that representative is fitted again
+        const nlohmann::json entry = nlohmann::json::parse(lines[n]);
+        done_[entry.at("representative").get<int>()] = entry.at("result");
+      } catch (const nlohmann::json::exception&) {
+      }
+    }
   }
 
   const std::map<int, nlohmann::json>& done() const { return done_; }
 
   void Record(int representative, const nlohmann::json& result) {
-    if (path_.empty()) return;
+    if (!log_) return;
+    const std::string line = nlohmann::json{{"representative", representative}, {"result", result}}.dump();
     std::lock_guard<std::mutex> lock(mutex_);
-    Append({{"representative", representative}, {"result", result}});
+    log_->Append(line);
   }
 
  private:
-  // A kill during a write can leave a last line without its newline; the next append would be
-  // glued to it and lost too, so cut the file back to its last complete line first.
-  static void DropTornTail(const fs::path& path) {
-    std::error_code error;
-    const auto size = fs::file_size(path, error);
-    if (error || size == 0) return;
-    std::ifstream in(path, std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(in)), {});
-    const size_t keep = bytes.rfind('\n') == std::string::npos ? 0 : bytes.rfind('\n') + 1;
-    if (keep < bytes.size()) fs::resize_file(path, keep, error);
-    if (error) ThrowIoError(path.string(), "cannot repair the checkpoint: " + error.message());
-  }
-
-  void Append(const nlohmann::json& entry) {
-    const std::string line = entry.dump() + "\n";
-    const int fd = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
-    if (fd < 0) ThrowIoError(path_.string(), std::string("cannot write the checkpoint: ") + std::strerror(errno));
-    const bool ok = ::write(fd, line.data(), line.size()) == static_cast<ssize_t>(line.size()) && ::fsync(fd) == 0;
-    ::close(fd);
-    if (!ok) ThrowIoError(path_.string(), "cannot write the checkpoint", "is the disk full?");
-  }
-
-  fs::path path_;
+  std::optional<DurableLog> log_;  // none when no checkpoint was asked for
   std::map<int, nlohmann::json> done_;
   std::mutex mutex_;
 };

@@ -9,7 +9,7 @@
 #include <map>
 #include <memory>
 #include <numbers>
-#include <regex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,6 +18,7 @@
 #include "svbtdf/common/parallel.h"
 #include "svbtdf/common/progress.h"
 #include "svbtdf/fit/slice_store.h"
+#include "svbtdf/session/capture_key.h"
 
 namespace svbtdf::fit {
 namespace fs = std::filesystem;
@@ -32,24 +33,22 @@ struct CapturePlan {
   std::vector<std::vector<std::pair<int, std::string>>> dot_keys;  // dot -> (bracket, key)
 };
 
-CapturePlan ParsePlan(const Session& session, int num_dots) {
-  static const std::regex dot_key(R"(dot/q(\d+)/e(\d+)/r(\d+))");
-  static const std::regex dark_key(R"(dark/e(\d+)(/r\d+)?)");
+CapturePlan ParsePlan(const session::Session& session, int num_dots) {
   CapturePlan plan;
   plan.dot_keys.resize(num_dots);
-  std::smatch m;
   for (const std::string& key : session.planned_keys()) {
-    if (std::regex_match(key, m, dot_key)) {
-      const int q = std::stoi(m[1]);
-      if (q >= num_dots) {
-        ThrowInvalidInput(session.folder().string(), "plans dot " + std::to_string(q) + " but the calibration has " +
+    const std::optional<session::CaptureKey> capture = session::CaptureKey::Parse(key);
+    if (!capture) continue;
+    if (capture->kind == session::CaptureKind::kDot) {
+      if (capture->dot >= num_dots) {
+        ThrowInvalidInput(session.folder().string(), "plans dot " + std::to_string(capture->dot) + " but the calibration has " +
                                                          std::to_string(num_dots) + " dots",
                           "re-run 'svbtdf calibrate' on this session");
       }
-      plan.dot_keys[q].push_back({std::stoi(m[2]), key});
-    } else if (std::regex_match(key, m, dark_key)) {
-      plan.dark_keys[std::stoi(m[1])].push_back(key);
-    } else if (key.rfind("flat_white/", 0) == 0 && plan.flat_key.empty()) {
+      plan.dot_keys[capture->dot].push_back({capture->bracket, key});
+    } else if (capture->kind == session::CaptureKind::kDark) {
+      plan.dark_keys[capture->bracket].push_back(key);
+    } else if (capture->kind == session::CaptureKind::kFlatWhite && plan.flat_key.empty()) {
       plan.flat_key = key;
     }
   }
@@ -154,7 +153,7 @@ class Rectifier {
 // Reads session images and turns them into linear values (dark-subtracted) with saturation flags.
 class ImageReader {
  public:
-  ImageReader(const Session& session, const calib::SessionCalibration& calibration)
+  ImageReader(const session::Session& session, const calib::SessionCalibration& calibration)
       : session_(session), calibration_(calibration), table_(LinearizationTable(calibration.radiometry)) {}
 
   struct Linear {
@@ -210,7 +209,7 @@ class ImageReader {
   int64_t images_read() const { return images_read_; }
 
  private:
-  const Session& session_;
+  const session::Session& session_;
   const calib::SessionCalibration& calibration_;
   std::vector<float> table_;
   std::atomic<int64_t> images_read_{0};
@@ -247,7 +246,7 @@ class ReadAhead {
   std::future<ImageReader::Linear> pending_;
 };
 
-void ResolveTexelGrid(const Session& session, const calib::SessionCalibration& calibration, ProcessOptions* options) {
+void ResolveTexelGrid(const session::Session& session, const calib::SessionCalibration& calibration, ProcessOptions* options) {
   if (options->texels_x > 0 && options->texels_y > 0) return;
   const nlohmann::json& sample = session.rig().value("sample", nlohmann::json::object());
   if (sample.contains("texels_x") && sample.contains("texels_y")) {
@@ -329,7 +328,7 @@ void ToBtdf(const TexelGeometry& geometry, const calib::MonitorCalibration& moni
 
 }  // namespace
 
-ProcessReport ProcessSession(const Session& session, const calib::SessionCalibration& calibration, const fs::path& out,
+ProcessReport ProcessSession(const session::Session& session, const calib::SessionCalibration& calibration, const fs::path& out,
                              const ProcessOptions& requested) {
   const auto start = std::chrono::steady_clock::now();
   ProcessOptions options = requested;

@@ -12,10 +12,12 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <set>
 #include <sstream>
 
 #include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/durable_log.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/parallel.h"
 #include "svbtdf/common/progress.h"
@@ -521,31 +523,25 @@ struct SliceStoreWriter::State {
   TexelGeometry geometry;
   std::unique_ptr<File> samples;
   std::set<int> dots_done;
+  std::optional<DurableLog> progress;  // progress.jsonl: one line per dot written
 };
 
 namespace {
 
 bool FolderIsEmpty(const fs::path& folder) { return fs::is_directory(folder) && fs::is_empty(folder); }
 
-std::set<int> ReadProgress(const fs::path& path) {
+// The dots whose samples are on disk. A line torn by a crash is left out and cut off before the
+// next append; a damaged line (glued to a torn one by a version that did not cut it off) names
+// no dot. Either way that dot is processed again, which rewrites its samples in place.
+std::set<int> ReadProgress(const DurableLog& log) {
   std::set<int> done;
-  std::ifstream in(path);
-  std::string line;
-  while (std::getline(in, line)) {
-    // A crash can cut the last line short: only complete lines count.
+  for (const std::string& line : log.lines()) {
     try {
       done.insert(nlohmann::json::parse(line).at("dot").get<int>());
     } catch (const nlohmann::json::exception&) {
     }
   }
   return done;
-}
-
-void AppendLineSynced(const fs::path& path, const std::string& line) {
-  const File file(path, O_WRONLY | O_CREAT | O_APPEND);
-  const std::string text = line + "\n";
-  file.WriteAt(text.data(), text.size(), 0);  // O_APPEND: the offset is ignored
-  file.Sync();
 }
 
 }  // namespace
@@ -578,7 +574,8 @@ SliceStoreWriter::SliceStoreWriter(const fs::path& folder, const SliceStoreInfo&
     }
     s.samples = std::make_unique<File>(folder / kSamples, O_RDWR);
     if (s.samples->Size() != bytes) ThrowFormatError((folder / kSamples).string(), "has the wrong size to resume");
-    s.dots_done = ReadProgress(folder / kProgress);
+    s.progress = DurableLog::Open(folder / kProgress);
+    s.dots_done = ReadProgress(*s.progress);
     return;
   }
   if (fs::exists(folder) && !FolderIsEmpty(folder)) {
@@ -616,7 +613,8 @@ void SliceStoreWriter::WriteDot(int dot, const std::vector<float>& rgb) {
     s.samples->WriteAt(run.data(), run.size() * sizeof(Half), offset);
   }
   s.samples->Sync();
-  AppendLineSynced(s.folder / kProgress, nlohmann::json{{"dot", dot}}.dump());
+  if (!s.progress) s.progress = DurableLog::Open(s.folder / kProgress);
+  s.progress->Append(nlohmann::json{{"dot", dot}}.dump());
   s.dots_done.insert(dot);
 }
 

@@ -4,7 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "svbtdf/common/atomic_file.h"
-#include "svbtdf/common/fiducials.h"
+#include "svbtdf/session/fiducials.h"
 #include "svbtdf/common/error.h"
 
 namespace svbtdf {
@@ -48,30 +48,42 @@ void RequireSameRig(const SimulatedSetup& setup, const RigTruth& truth, const fs
 
 void RenderCaptureRadiance(const RigRenderer& renderer, const CaptureTruth& plan, const CaptureId& id,
                            FloatImage* radiance) {
+  using session::CaptureKind;
   const CameraIntrinsics& k = renderer.rig().config().intrinsics;
-  if (id.kind == "dark") {
-    *radiance = FloatImage(k.width, k.height, 3);
-  } else if (id.kind == "board") {
-    renderer.RenderZhangBoard(plan.zhang_boards.at(id.index), radiance);
-  } else if (id.kind == "holder_board") {
-    renderer.RenderHolderBoard(plan.holder_board, radiance);
-  } else if (id.kind == "all_dots") {
-    renderer.RenderAllDots(radiance);
-  } else if (id.kind == "fiducials") {
-    const DotGridConfig& grid = renderer.rig().config().dots;
-    renderer.RenderDotSet(FiducialDots(grid.cols, grid.rows), radiance);
-  } else if (id.kind == "flat") {
-    renderer.RenderFlatField(1.0, radiance);
-  } else if (id.kind == "dots") {
-    renderer.RenderDot(renderer.rig().dots().at(id.index), radiance);
-  } else {
-    ThrowInvalidInput("capture", "unknown simulated capture kind '" + id.kind + "'");
+  switch (id.key.kind) {
+    case CaptureKind::kDark:
+      *radiance = FloatImage(k.width, k.height, 3);
+      return;
+    case CaptureKind::kBoardView:
+      renderer.RenderZhangBoard(plan.zhang_boards.at(id.key.view), radiance);
+      return;
+    case CaptureKind::kSamplePlaneView:
+      renderer.RenderHolderBoard(plan.holder_board, radiance);
+      return;
+    case CaptureKind::kAllDots:
+      renderer.RenderAllDots(radiance);
+      return;
+    case CaptureKind::kFiducials: {
+      const DotGridConfig& grid = renderer.rig().config().dots;
+      renderer.RenderDotSet(session::FiducialDots(grid.cols, grid.rows), radiance);
+      return;
+    }
+    case CaptureKind::kFlatWhite:
+      renderer.RenderFlatField(1.0, radiance);
+      return;
+    case CaptureKind::kDot:
+      renderer.RenderDot(renderer.rig().dots().at(id.key.dot), radiance);
+      return;
+    case CaptureKind::kMonitorPoseView:
+      break;
   }
+  ThrowInvalidInput("capture", "the simulator does not render " + id.key.Format());
 }
 
 Vec2 CaptureWindowOrigin(const Rig& rig, const CaptureId& id) {
+  // Board views are whole-sensor images; every other capture is the window.
+  if (id.key.kind != session::CaptureKind::kBoardView) return Vec2::Zero();
   const SensorWindow& window = rig.config().window;
-  if (id.kind != "board") return Vec2::Zero();
   return -Vec2(window.offset_x, window.offset_y);
 }
 

@@ -9,9 +9,49 @@
 
 namespace svbtdf {
 
+uint64_t NoiseStream(std::string_view what, int index, int bracket) {
+  const uint64_t name_hash = std::hash<std::string_view>{}(what);
+  return name_hash * 0x9e3779b97f4a7c15ULL ^ (uint64_t(index) << 16) ^ uint64_t(bracket);
+}
+
 uint64_t CaptureId::Stream() const {
-  const uint64_t kind_hash = std::hash<std::string>{}(kind);
-  return kind_hash * 0x9e3779b97f4a7c15ULL ^ (uint64_t(index) << 16) ^ uint64_t(exposure_index);
+  using session::CaptureKind;
+  switch (key.kind) {
+    case CaptureKind::kDark: return NoiseStream("dark", key.repeat, key.bracket);
+    case CaptureKind::kBoardView: return NoiseStream("board", key.view, 0);
+    case CaptureKind::kSamplePlaneView: return NoiseStream("holder_board", key.view, 0);
+    case CaptureKind::kMonitorPoseView: return NoiseStream("monitor_pose", key.view, 0);
+    case CaptureKind::kAllDots: return NoiseStream("all_dots", 0, key.bracket);
+    case CaptureKind::kFiducials: return NoiseStream("fiducials", 0, key.bracket);
+    case CaptureKind::kFlatWhite: return NoiseStream("flat", 0, key.bracket);
+    case CaptureKind::kDot: return NoiseStream("dots", key.dot, key.bracket);
+  }
+  return 0;
+}
+
+namespace {
+
+double ExposureOf(const CaptureTruth& plan, const session::CaptureKey& key) {
+  using session::CaptureKind;
+  switch (key.kind) {
+    case CaptureKind::kDark:
+    case CaptureKind::kDot: return plan.dot_exposures_s.at(key.bracket);
+    case CaptureKind::kBoardView:
+    case CaptureKind::kSamplePlaneView:
+    case CaptureKind::kMonitorPoseView: return plan.board_exposure_s;
+    case CaptureKind::kAllDots:
+    case CaptureKind::kFiducials: return plan.all_dots_exposure_s;
+    case CaptureKind::kFlatWhite: return plan.flat_exposure_s;
+  }
+  return 0.0;
+}
+
+}  // namespace
+
+std::string SceneOf(const session::CaptureKey& key) {
+  session::CaptureKey scene = key;
+  scene.bracket = scene.repeat = 0;
+  return scene.Format();
 }
 
 CaptureTruth PlanCapture(const SimulationPreset& preset, const RigRenderer& renderer,
@@ -42,23 +82,16 @@ CaptureTruth PlanCapture(const SimulationPreset& preset, const RigRenderer& rend
 }
 
 std::vector<CaptureId> CaptureList(const Rig& rig, const CaptureTruth& plan) {
+  session::CaptureCounts counts;
+  counts.brackets = static_cast<int>(plan.dot_exposures_s.size());
+  counts.dark_frames = rig.config().dark_frames;
+  counts.board_views = static_cast<int>(plan.zhang_boards.size());
+  counts.sample_plane_views = 1;
+  counts.all_dots = counts.fiducials = counts.flat_white = true;
+  counts.dots = static_cast<int>(rig.dots().size());
   std::vector<CaptureId> list;
-  for (size_t e = 0; e < plan.dot_exposures_s.size(); ++e) {
-    for (int n = 0; n < rig.config().dark_frames; ++n) {
-      list.push_back({"dark", n, static_cast<int>(e), plan.dot_exposures_s[e]});
-    }
-  }
-  for (size_t v = 0; v < plan.zhang_boards.size(); ++v) {
-    list.push_back({"board", static_cast<int>(v), 0, plan.board_exposure_s});
-  }
-  list.push_back({"holder_board", 0, 0, plan.board_exposure_s});
-  list.push_back({"all_dots", 0, 0, plan.all_dots_exposure_s});
-  list.push_back({"fiducials", 0, 0, plan.all_dots_exposure_s});
-  list.push_back({"flat", 0, 0, plan.flat_exposure_s});
-  for (size_t q = 0; q < rig.dots().size(); ++q) {
-    for (size_t e = 0; e < plan.dot_exposures_s.size(); ++e) {
-      list.push_back({"dots", static_cast<int>(q), static_cast<int>(e), plan.dot_exposures_s[e]});
-    }
+  for (const session::CaptureKey& key : session::CaptureOrder(counts)) {
+    list.push_back({key, ExposureOf(plan, key)});
   }
   return list;
 }
@@ -79,11 +112,12 @@ void RunCapture(const RigRenderer& renderer, const CaptureTruth& plan, CaptureSi
       if (progress) progress->SkipAlreadyDone(1);
       continue;
     }
-    const std::string key = id.kind + "/" + std::to_string(id.index);
-    if (key != rendered) {
+    // The brackets of one scene share its radiance image; dark frames differ only by their
+    // noise, so they are not cached by frame.
+    const std::string scene = SceneOf(id.key);
+    if (scene != rendered) {
       RenderCaptureRadiance(renderer, plan, id, &radiance);
-      // Dark frames differ only by their noise, so they are not cached by index.
-      rendered = id.kind == "dark" ? std::string() : key;
+      rendered = id.key.kind == session::CaptureKind::kDark ? std::string() : scene;
     }
     sink.Write(id, renderer.Expose(radiance, id.exposure_s, options.seed, id.Stream(), CaptureWindowOrigin(rig, id)));
     if (progress) progress->Advance(1);

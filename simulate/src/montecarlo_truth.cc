@@ -7,21 +7,16 @@
 
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/progress.h"
+#include "svbtdf/common/random.h"
 
 namespace svbtdf {
 namespace {
 
-uint64_t Mix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
 
 // Every slice gets its own seed, so that slices are independent and a material's slices do not
 // change when another material is added.
 uint64_t SliceSeed(uint64_t seed, int material, int node) {
-  return Mix64(Mix64(Mix64(seed) ^ static_cast<uint64_t>(material)) ^ static_cast<uint64_t>(node));
+  return SplitMix64(SplitMix64(SplitMix64(seed) ^ static_cast<uint64_t>(material)) ^ static_cast<uint64_t>(node));
 }
 
 double InterfaceRoughness(const SlabInterfaceSpec& spec) {
@@ -85,7 +80,7 @@ std::vector<SlabMaterial> DefaultSlabMaterials() {
 std::vector<int> SlabIndexMap(int texels_x, int texels_y, int num_materials, uint64_t seed) {
   // A disc of material 1 over a vertical boundary between 0 (left) and 2 (right); the seed moves
   // the disc and the boundary by up to 8% of the width, so seeds give different layouts.
-  const auto jitter = [&](int k) { return 0.16 * ((Mix64(Mix64(seed) + k) >> 11) * 0x1.0p-53 - 0.5); };
+  const auto jitter = [&](int k) { return 0.16 * ((SplitMix64(SplitMix64(seed) + k) >> 11) * 0x1.0p-53 - 0.5); };
   const double cx = 0.5 + jitter(1), cy = 0.5 + jitter(2), boundary = 0.5 + jitter(3);
   const double aspect = static_cast<double>(texels_y) / texels_x;
   std::vector<int> map(static_cast<size_t>(texels_x) * texels_y);

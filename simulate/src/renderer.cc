@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/random.h"
 
 namespace svbtdf {
 namespace {
@@ -23,11 +24,11 @@ namespace {
 class PixelRandom {
  public:
   PixelRandom(uint64_t seed, uint64_t stream, uint64_t pixel)
-      : state_(Mix(Mix(Mix(seed) ^ stream) ^ pixel)) {}
+      : state_(SplitMix64(SplitMix64(SplitMix64(seed) ^ stream) ^ pixel)) {}
 
   double Uniform() {
     state_ += 0x9e3779b97f4a7c15ULL;
-    return static_cast<double>(Mix(state_) >> 11) * 0x1.0p-53;
+    return static_cast<double>(SplitMix64(state_) >> 11) * 0x1.0p-53;
   }
   // Box-Muller, both of its outputs used.
   double Gaussian() {
@@ -58,12 +59,6 @@ class PixelRandom {
   }
 
  private:
-  static uint64_t Mix(uint64_t x) {
-    x += 0x9e3779b97f4a7c15ULL;
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-    return x ^ (x >> 31);
-  }
   uint64_t state_;
   double spare_ = 0.0;
   bool has_spare_ = false;

@@ -6,9 +6,9 @@
 
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
-#include "svbtdf/common/fiducials.h"
+#include "svbtdf/session/fiducials.h"
 #include "svbtdf/common/image_io.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 #include "svbtdf/model/ndf_factory.h"
 #include "svbtdf/simulate/capture_render.h"
 #include "svbtdf/simulate/capture_simulator.h"
@@ -20,23 +20,17 @@ namespace svbtdf {
 namespace fs = std::filesystem;
 namespace {
 
-std::string Padded(int value, int width) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%0*d", width, value);
-  return buffer;
-}
-
 // The sink that stores each rendered capture in the session, journalled.
 class SessionSink final : public CaptureSink {
  public:
-  explicit SessionSink(Session* session) : session_(session) {}
-  bool Contains(const CaptureId& id) const override { return session_->Contains(SessionKey(id)); }
+  explicit SessionSink(session::Session* session) : session_(session) {}
+  bool Contains(const CaptureId& id) const override { return session_->Contains(id.key.Format()); }
   void Write(const CaptureId& id, const CameraImage& image) override {
-    session_->AddImage(SessionKey(id), image, id.exposure_s, 1.0);
+    session_->AddImage(id.key.Format(), image, id.exposure_s, 1.0);
   }
 
  private:
-  Session* session_;
+  session::Session* session_;
 };
 
 // What the capture knew about its set-up: nominal values a lab would write down.
@@ -64,7 +58,7 @@ nlohmann::json NominalRig(const Rig& rig, const SimulationPreset& preset, const 
                    {"orientation_deg", NominalOrientationDeg(c.monitor)},
                    {"emission", c.monitor.emission.kind}}},
       {"dots", {{"cols", c.dots.cols}, {"rows", c.dots.rows}, {"radius_px", c.dots.radius_px},
-                {"positions_px", dots}, {"fiducials", FiducialDots(c.dots.cols, c.dots.rows)}}},
+                {"positions_px", dots}, {"fiducials", session::FiducialDots(c.dots.cols, c.dots.rows)}}},
       // The texel grid and eta a lab would choose for processing and fitting (defaults there).
       {"sample", {{"width_m", c.sample.width}, {"height_m", c.sample.height()},
                   {"texels_x", c.sample.texels_x}, {"texels_y", c.sample.texels_y}, {"eta", preset.eta}}},
@@ -193,17 +187,6 @@ TruthMaterial MaterialTruth::ToTruthMaterial() const {
   return TruthMaterial(width(), height(), eta, ndf_name, std::move(texels));
 }
 
-std::string SessionKey(const CaptureId& id) {
-  if (id.kind == "dark") return "dark/e" + std::to_string(id.exposure_index) + "/r" + std::to_string(id.index);
-  if (id.kind == "board") return "board/v" + Padded(id.index, 2);
-  if (id.kind == "holder_board") return "sample_plane/v" + Padded(id.index, 2);
-  if (id.kind == "all_dots") return "all_dots/e" + std::to_string(id.exposure_index);
-  if (id.kind == "fiducials") return "fiducials/e" + std::to_string(id.exposure_index);
-  if (id.kind == "flat") return "flat_white/e" + std::to_string(id.exposure_index);
-  if (id.kind == "dots") return "dot/q" + Padded(id.index, 4) + "/e" + std::to_string(id.exposure_index) + "/r0";
-  ThrowInvalidInput("capture", "unknown simulated capture kind '" + id.kind + "'");
-}
-
 namespace {
 
 // The truth the renderer shows the camera. The analytic material is cheap to regenerate; the
@@ -285,7 +268,7 @@ SimulationOutput SimulateSession(const fs::path& out, const SimulationOptions& o
   if (fs::exists(output.session / "session.json")) {
     // Resuming: the journal is append-only, so a damaged image could not be rendered again under
     // its key, and the run would end with it still damaged.
-    const SessionVerification check = Session::Open(output.session).Verify(/*check_crc=*/true);
+    const session::SessionVerification check = session::Session::Open(output.session).Verify(/*check_crc=*/true);
     if (check.complete()) {
       ThrowInvalidInput(output.session.string(), "holds a complete simulated session already; it is never overwritten",
                         "choose a new output folder");
@@ -300,9 +283,9 @@ SimulationOutput SimulateSession(const fs::path& out, const SimulationOptions& o
   CaptureTruth plan = PlanCapture(preset, renderer, options.seed);
   plan.truth_kind = options.truth;
   std::vector<std::string> keys;
-  for (const CaptureId& id : CaptureList(rig, plan)) keys.push_back(SessionKey(id));
+  for (const CaptureId& id : CaptureList(rig, plan)) keys.push_back(id.key.Format());
 
-  Session session = Session::CreateOrResume(output.session, NominalRig(rig, preset, plan), keys);
+  session::Session session = session::Session::CreateOrResume(output.session, NominalRig(rig, preset, plan), keys);
   if (!fs::exists(output.truth / "rig.json")) WriteRigTruth(output.truth / "rig.json", rig, plan);
 
   output.resumed = static_cast<int64_t>(session.entries().size());

@@ -5,20 +5,15 @@
 #include <string>
 
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/random.h"
 
 namespace svbtdf {
 namespace {
 
-uint64_t Hash(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
 
 // Uniform [0, 1) value attached to an integer lattice point.
 double LatticeValue(int64_t ix, int64_t iy, uint64_t seed) {
-  const uint64_t h = Hash(Hash(seed) ^ Hash(static_cast<uint64_t>(ix) * 0x632be59bd9b4e019ULL) ^
+  const uint64_t h = SplitMix64(SplitMix64(seed) ^ SplitMix64(static_cast<uint64_t>(ix) * 0x632be59bd9b4e019ULL) ^
                           static_cast<uint64_t>(iy) * 0x85157af5ULL);
   return static_cast<double>(h >> 11) * 0x1.0p-53;
 }

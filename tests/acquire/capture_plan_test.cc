@@ -9,7 +9,7 @@
 
 #include "svbtdf/acquire/capture_plan.h"
 #include "svbtdf/common/error.h"
-#include "svbtdf/common/fiducials.h"
+#include "svbtdf/session/fiducials.h"
 #include "svbtdf/simulate/capture_render.h"
 #include "svbtdf/simulate/session_writer.h"
 
@@ -33,7 +33,7 @@ TEST(CapturePlan, TinyPresetDescribesTheSimulatorsCaptures) {
   const std::vector<PlannedCapture> planned = ExpandPlan(plan);
   ASSERT_EQ(planned.size(), simulated.size());
   for (size_t n = 0; n < planned.size(); ++n) {
-    EXPECT_EQ(planned[n].key, SessionKey(simulated[n])) << n;
+    EXPECT_EQ(planned[n].key, simulated[n].key.Format()) << n;
     EXPECT_DOUBLE_EQ(planned[n].exposure_s, simulated[n].exposure_s) << planned[n].key;
   }
   ASSERT_EQ(plan.dots_px.size(), setup->rig->dots().size());
@@ -63,7 +63,7 @@ TEST(CapturePlan, GridsInMillimetresResolveToMonitorPixelsAndRoundTrip) {
   EXPECT_EQ((fiducials - 1)->key, "all_dots/e0");
   EXPECT_EQ(fiducials->pattern.kind, Pattern::Kind::kAllDots);
   EXPECT_EQ(fiducials->exposure_s, plan.all_dots_exposure_s);
-  ASSERT_EQ(plan.fiducial_dots, FiducialDots(3, 2));
+  ASSERT_EQ(plan.fiducial_dots, session::FiducialDots(3, 2));
   ASSERT_EQ(fiducials->pattern.all_dots_px.size(), plan.fiducial_dots.size());
   for (size_t k = 0; k < plan.fiducial_dots.size(); ++k) {
     EXPECT_EQ(fiducials->pattern.all_dots_px[k], plan.dots_px[plan.fiducial_dots[k]]);

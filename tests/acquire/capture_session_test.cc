@@ -12,7 +12,7 @@
 #include "svbtdf/acquire/sim_hardware.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/interrupt.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 #include "svbtdf/simulate/capture_render.h"
 #include "svbtdf/simulate/session_writer.h"
 
@@ -63,7 +63,7 @@ class AcquireOnSimulatedRig : public ::testing::Test {
     return root_ / "sim" / "session";
   }
   void ExpectEqualToTheSimulator(const fs::path& out) {
-    const Session acquired = Session::Open(out), simulated = Session::Open(SimulatedSession());
+    const session::Session acquired = session::Session::Open(out), simulated = session::Session::Open(SimulatedSession());
     EXPECT_TRUE(acquired.Verify().complete()) << acquired.Verify().Summary();
     ASSERT_EQ(acquired.planned_keys(), simulated.planned_keys());
     for (const std::string& key : simulated.planned_keys()) {
@@ -95,7 +95,7 @@ TEST_F(AcquireOnSimulatedRig, TinyPlanStoresTheSimulatorsImages) {
   EXPECT_TRUE(result.complete());
   ExpectEqualToTheSimulator(out);
   // The manifest holds the nominal rig values calibration reads, as `svbtdf simulate` writes them.
-  const nlohmann::json a = Session::Open(out).rig(), b = Session::Open(SimulatedSession()).rig();
+  const nlohmann::json a = session::Session::Open(out).rig(), b = session::Session::Open(SimulatedSession()).rig();
   for (const char* key : {"/camera/width", "/camera/height", "/camera/bit_depth", "/camera/channels",
                           "/camera/response", "/board/spec", "/board/views", "/monitor/emission",
                           "/dots/radius_px", "/dots/positions_px", "/dots/fiducials", "/dots/cols",
@@ -143,14 +143,14 @@ TEST_F(AcquireOnSimulatedRig, APulledCableStopsCleanlyAndTheSessionResumes) {
     EXPECT_NE(std::string(e.what()).find("resumable"), std::string::npos) << e.what();
   }
   EXPECT_EQ(unplugged.failures(), 3);
-  const Session stopped = Session::Open(out);
+  const session::Session stopped = session::Session::Open(out);
   EXPECT_EQ(stopped.entries().size(), 29u);
   EXPECT_TRUE(stopped.Verify().corrupt.empty());
   // Cable back in: the same command captures only the rest.
   const AcquireResult resumed = Run(*camera_, out);
   EXPECT_EQ(resumed.already, 29);
   EXPECT_EQ(resumed.captured, Planned() - 29);
-  EXPECT_TRUE(Session::Open(out).Verify().complete());
+  EXPECT_TRUE(session::Session::Open(out).Verify().complete());
 }
 
 TEST_F(AcquireOnSimulatedRig, NotEnoughFreeSpaceIsRefusedBeforeAnythingIsWritten) {
@@ -180,7 +180,7 @@ TEST_F(AcquireOnSimulatedRig, ADifferentPlanIsRefusedOnResume) {
   FaultInjectingCamera unplugged(*camera_, {20, 1, true});
   options_.retries = 0;
   EXPECT_THROW(Run(unplugged, out), Error);
-  const size_t stored = Session::Open(out).entries().size();
+  const size_t stored = session::Session::Open(out).entries().size();
   CapturePlan longer = *plan_;
   longer.exposures_s[1] *= 2.0;  // same keys, another exposure: still another plan
   try {
@@ -191,10 +191,10 @@ TEST_F(AcquireOnSimulatedRig, ADifferentPlanIsRefusedOnResume) {
     EXPECT_NE(std::string(e.what()).find("different capture plan"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find(out.string()), std::string::npos) << e.what();
   }
-  EXPECT_EQ(Session::Open(out).entries().size(), stored);
+  EXPECT_EQ(session::Session::Open(out).entries().size(), stored);
   // A session another program wrote (`svbtdf simulate`: no acquisition plan) is not resumed
   // either, even with the same keys.
-  Session::Create(root_ / "foreign", {{"simulated", true}}, PlanKeys(ExpandPlan(*plan_)));
+  session::Session::Create(root_ / "foreign", {{"simulated", true}}, PlanKeys(ExpandPlan(*plan_)));
   try {
     Run(*camera_, root_ / "foreign");
     FAIL() << "resumed a session acquire did not write";
@@ -230,7 +230,7 @@ TEST_F(AcquireOnSimulatedRig, AnInterruptStopsCleanlyAndTheSessionResumesToTheSa
     EXPECT_EQ(e.kind(), ErrorKind::kInterrupted);
     EXPECT_NE(std::string(e.what()).find("resumable"), std::string::npos) << e.what();
   }
-  EXPECT_EQ(Session::Open(out).entries().size(), 40u);  // the capture in flight is kept
+  EXPECT_EQ(session::Session::Open(out).entries().size(), 40u);  // the capture in flight is kept
   SetInterruptRequested(false);
   // A new camera (a new process): dark frames and dots are numbered as the simulator's were, as
   // the resumed part holds no dark frame.
@@ -246,7 +246,7 @@ TEST_F(AcquireOnSimulatedRig, UnattendedSkipTakesOnlyWhatNeedsNobody) {
   EXPECT_EQ(result.skipped, needs_operator);
   EXPECT_EQ(result.captured, Planned() - needs_operator);
   EXPECT_FALSE(result.complete());
-  const SessionVerification report = Session::Open(root_ / "skip").Verify();
+  const session::SessionVerification report = session::Session::Open(root_ / "skip").Verify();
   EXPECT_EQ(report.missing.size(), static_cast<size_t>(needs_operator));
   EXPECT_TRUE(report.corrupt.empty());
 }
@@ -303,7 +303,7 @@ TEST_F(AcquireOnSimulatedRig, AnyPlansDotsAreRenderedByTheSimulator) {
     for (uint16_t v : image.pixels) total += v;
     return total;
   };
-  const Session a = Session::Open(root_ / "own"), b = Session::Open(root_ / "own-half");
+  const session::Session a = session::Session::Open(root_ / "own"), b = session::Session::Open(root_ / "own-half");
   const double dark = sum(a.ReadImage("dark/e0/r0"));
   const double bright = sum(a.ReadImage("dot/q0000/e0/r0")) - dark;
   const double half = sum(b.ReadImage("dot/q0000/e0/r0")) - dark;
@@ -340,7 +340,7 @@ TEST_F(AcquireOnSimulatedRig, ACameraOfAnotherFrameSizeCannotResumeTheSession) {
     EXPECT_NE(std::string(e.what()).find("1280x512x3 frames but the camera's sensor is 1280x1024x3"), std::string::npos)
         << e.what();
   }
-  EXPECT_EQ(Session::Open(out).entries().size(), 4u);
+  EXPECT_EQ(session::Session::Open(out).entries().size(), 4u);
 }
 
 TEST(ConsoleOperator, EnterCapturesSSkipsAndEndOfInputSkips) {

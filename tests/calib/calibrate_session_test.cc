@@ -16,7 +16,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/common/progress.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 #include "svbtdf/fit/process_session.h"
 #include "svbtdf/fit/slice_store.h"
 #include "svbtdf/simulate/session_writer.h"
@@ -62,9 +62,9 @@ class CalibrateSessionTest : public ::testing::Test {
                              const std::function<void(CameraImage*)>& edit) {
     const fs::path copy = root_ / name;
     fs::remove_all(copy);
-    const Session original = Session::Open(root_ / "sim" / "session");
+    const session::Session original = session::Session::Open(root_ / "sim" / "session");
     fs::copy(original.folder(), copy, fs::copy_options::recursive);
-    const SessionEntry& entry = original.Entry(key);
+    const session::SessionEntry& entry = original.Entry(key);
     CameraImage image = original.ReadImage(key);
     edit(&image);
     std::ifstream journal_in(copy / "journal.jsonl");
@@ -75,7 +75,7 @@ class CalibrateSessionTest : public ::testing::Test {
     journal_in.close();
     std::ofstream(copy / "journal.jsonl", std::ios::trunc) << kept;
     fs::remove(copy / entry.file);
-    Session edited = Session::Open(copy);
+    session::Session edited = session::Session::Open(copy);
     EXPECT_FALSE(edited.Contains(key));
     edited.AddImage(key, image, entry.exposure_s, entry.gain);
     return copy;
@@ -90,7 +90,7 @@ class CalibrateSessionTest : public ::testing::Test {
 // lens), the Zhang views whole-sensor images of an 11 x 8 board of 25 mm squares. Focal lengths
 // within 0.5%, principal point within 2 px, dots within 0.2 mm.
 TEST_F(CalibrateSessionTest, RecoversTheRigWithinTheStatedTolerances) {
-  const SessionCalibration c = CalibrateSession(Session::Open(root_ / "sim" / "session"), Quiet());
+  const SessionCalibration c = CalibrateSession(session::Session::Open(root_ / "sim" / "session"), Quiet());
   const CameraModel& camera = c.camera.camera;
   const double centre_error_mm = 1000 * (c.sample_plane.CameraCentre() - truth_.pose.Centre()).norm();
   const double dot_error_mm = WorstDotErrorMm(c);
@@ -122,7 +122,7 @@ TEST_F(CalibrateSessionTest, RecoversTheRigWithinTheStatedTolerances) {
 // bring one: it must read back as written, and damaged copies must be an Error naming the file,
 // never a crash or another exception.
 TEST_F(CalibrateSessionTest, CalibrationFileRoundTripsAndDamageIsAClearError) {
-  SessionCalibration c = CalibrateSession(Session::Open(root_ / "sim" / "session"), Quiet());
+  SessionCalibration c = CalibrateSession(session::Session::Open(root_ / "sim" / "session"), Quiet());
   c.camera.narrow_lens_because = "a test reason";  // the lens model must survive the trip too
   const fs::path path = root_ / "calibration.json";
   WriteSessionCalibration(path, c);
@@ -164,7 +164,7 @@ TEST_F(CalibrateSessionTest, CalibrationFileRoundTripsAndDamageIsAClearError) {
 }
 
 TEST_F(CalibrateSessionTest, ProcessingWithTheCalibrationMeasuresTheTrueBtdf) {
-  const Session session = Session::Open(root_ / "sim" / "session");
+  const session::Session session = session::Session::Open(root_ / "sim" / "session");
   const SessionCalibration c = CalibrateSession(session, Quiet());
   fit::ProcessOptions options;
   options.progress = false;
@@ -200,7 +200,7 @@ TEST_F(CalibrateSessionTest, ProcessingWithTheCalibrationMeasuresTheTrueBtdf) {
 }
 
 TEST_F(CalibrateSessionTest, MissingAndExtraDotsAreMatchedCorrectly) {
-  const SessionCalibration reference = CalibrateSession(Session::Open(root_ / "sim" / "session"), Quiet());
+  const SessionCalibration reference = CalibrateSession(session::Session::Open(root_ / "sim" / "session"), Quiet());
   // Black out two dots and add a bright speck far from the grid.
   const fs::path edited = EditedCopy("edited", "all_dots/e0", [&](CameraImage* image) {
     for (int q : {7, 20}) {
@@ -217,7 +217,7 @@ TEST_F(CalibrateSessionTest, MissingAndExtraDotsAreMatchedCorrectly) {
       }
     }
   });
-  const SessionCalibration c = CalibrateSession(Session::Open(edited), Quiet());
+  const SessionCalibration c = CalibrateSession(session::Session::Open(edited), Quiet());
   EXPECT_LT(c.monitor.dots[7].residual_mm, 0.0);   // reported as not found
   EXPECT_LT(c.monitor.dots[20].residual_mm, 0.0);
   int found = 0;
@@ -234,7 +234,7 @@ TEST_F(CalibrateSessionTest, ABoardThatIsNotFoundIsAnErrorNamingTheImage) {
     std::fill(image->pixels.begin(), image->pixels.end(), 100);
   });
   try {
-    CalibrateSession(Session::Open(edited), Quiet());
+    CalibrateSession(session::Session::Open(edited), Quiet());
     FAIL() << "a blank sample-plane view was accepted";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("sample_plane/v00.png"), std::string::npos) << e.what();

@@ -13,7 +13,7 @@
 
 #include "svbtdf/calib/dot_identification.h"
 #include "svbtdf/common/error.h"
-#include "svbtdf/common/fiducials.h"
+#include "svbtdf/session/fiducials.h"
 
 namespace svbtdf::calib {
 namespace {
@@ -49,7 +49,7 @@ Scene MakeScene(const Screen& screen, int cols, int rows, bool mirrored, uint64_
   Scene s;
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> noise(0.0, 2e-5);
-  const std::vector<int> fiducials = FiducialDots(cols, rows);
+  const std::vector<int> fiducials = session::FiducialDots(cols, rows);
   s.grid.pixel_pitch_m = kPitch;
   s.grid.spacing_m = 24 * kPitch;
   s.grid.fiducial.assign(cols * rows, false);
@@ -154,13 +154,13 @@ TEST(DotIdentification, FiducialDotsAreFarFromEverySymmetricImage) {
     for (int rows = 1; rows <= 40; rows += (rows < 8 ? 1 : 7)) {
       const int n = cols * rows;
       if (n < 9) continue;
-      const std::vector<int> dots = FiducialDots(cols, rows);
+      const std::vector<int> dots = session::FiducialDots(cols, rows);
       std::vector<bool> lit(n, false);
       for (int q : dots) lit[q] = true;
       EXPECT_TRUE(std::is_sorted(dots.begin(), dots.end()));
       EXPECT_GT(dots.size(), n / 5u) << cols << "x" << rows;
       EXPECT_LT(dots.size(), n - n / 5u) << cols << "x" << rows;
-      const std::vector<std::vector<int>> symmetries = GridSymmetries(cols, rows);
+      const std::vector<std::vector<int>> symmetries = session::GridSymmetries(cols, rows);
       EXPECT_EQ(symmetries.size(), cols == rows ? 8u : 4u);
       std::vector<int> identity(n);
       std::iota(identity.begin(), identity.end(), 0);
@@ -170,7 +170,7 @@ TEST(DotIdentification, FiducialDotsAreFarFromEverySymmetricImage) {
         EXPECT_EQ(std::set<int>(symmetries[s].begin(), symmetries[s].end()).size(), static_cast<size_t>(n));
         // 1-wide grids have symmetries that move nothing (a mirror across the line).
         if (symmetries[s] == identity) continue;
-        EXPECT_GE(SymmetryDistance(lit, symmetries[s]), n / 4) << cols << "x" << rows << " symmetry " << s;
+        EXPECT_GE(session::SymmetryDistance(lit, symmetries[s]), n / 4) << cols << "x" << rows << " symmetry " << s;
       }
     }
   }

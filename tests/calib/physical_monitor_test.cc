@@ -18,7 +18,7 @@
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/progress.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 #include "svbtdf/fit/process_session.h"
 #include "svbtdf/fit/slice_store.h"
 #include "svbtdf/simulate/session_writer.h"
@@ -77,7 +77,7 @@ class PhysicalMonitorTest : public ::testing::TestWithParam<Orientation> {
 TEST_P(PhysicalMonitorTest, DotsLandWhereAScreenLyingSoShowsThem) {
   const Orientation& o = GetParam();
   const fs::path out = Simulate("o" + std::to_string(static_cast<int>(o.degrees)), o.degrees, false);
-  const Session session = Session::Open(out / "session");
+  const session::Session session = session::Session::Open(out / "session");
   const RigTruth truth = ReadRigTruth(out / "truth" / "rig.json");
   // The screen's active area: centre, size and distance are the rig's; its axes are the test's.
   const MonitorConfig& m = truth.monitor;
@@ -147,7 +147,7 @@ INSTANTIATE_TEST_SUITE_P(FourWaysDown, PhysicalMonitorTest, ::testing::ValuesIn(
 
 void ExpectRefused(const fs::path& session, const std::string& file, const std::string& words) {
   try {
-    CalibrateSession(Session::Open(session), Quiet());
+    CalibrateSession(session::Session::Open(session), Quiet());
     ADD_FAILURE() << session << " was calibrated; expected an error saying '" << words << "'";
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::kFormat);

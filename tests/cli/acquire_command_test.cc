@@ -18,7 +18,7 @@
 
 #include "run_command.h"
 #include "svbtdf/common/atomic_file.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 
 namespace svbtdf {
 namespace {
@@ -45,7 +45,7 @@ class AcquireCommand : public ::testing::Test {
     return static_cast<size_t>(std::count(text.begin(), text.end(), '\n'));
   }
   // The number of images the tiny plan captures (the simulated session holds all of them).
-  size_t PlannedImages() const { return Session::Open(Sim() / "session").planned_keys().size(); }
+  size_t PlannedImages() const { return session::Session::Open(Sim() / "session").planned_keys().size(); }
   // Starts `svbtdf acquire` into `out` in a child process and returns once `lines` captures are
   // journalled (or after 8 s), for the test to stop it.
   pid_t StartAcquisitionUntilJournalled(const fs::path& out, size_t lines) const {
@@ -74,9 +74,9 @@ TEST_F(AcquireCommand, TinyAcquireIsACompleteSessionWithTheSimulatorsImages) {
       << result.output;
   const auto verify = RunSvbtdf("session verify " + out.string());
   EXPECT_EQ(verify.exit_code, 0) << verify.output;
-  const Session acquired = Session::Open(out), simulated = Session::Open(Sim() / "session");
+  const session::Session acquired = session::Session::Open(out), simulated = session::Session::Open(Sim() / "session");
   ASSERT_EQ(acquired.planned_keys(), simulated.planned_keys());
-  for (const SessionEntry& entry : simulated.entries()) {
+  for (const session::SessionEntry& entry : simulated.entries()) {
     EXPECT_EQ(acquired.Entry(entry.key).crc32, entry.crc32) << entry.key;
   }
   std::printf("tiny acquire: %zu images in %.2f s (wall, including start-up)\n", acquired.entries().size(), seconds);
@@ -117,7 +117,7 @@ TEST_F(AcquireCommand, KilledMidCaptureResumesWithNoMissingDuplicatedOrCorruptIm
   int status = 0;
   ::waitpid(child, &status, 0);
   ASSERT_TRUE(WIFSIGNALED(status)) << "the acquisition ended before it was killed";
-  const size_t before = Session::Open(out).entries().size();
+  const size_t before = session::Session::Open(out).entries().size();
   EXPECT_GE(before, 30u);
   EXPECT_LT(before, PlannedImages());
   const auto resume = RunSvbtdf(AcquireArgs(out));
@@ -130,7 +130,7 @@ TEST_F(AcquireCommand, KilledMidCaptureResumesWithNoMissingDuplicatedOrCorruptIm
   for (std::string line; std::getline(lines, line);) {
     if (!line.empty()) ++times[nlohmann::json::parse(line).at("key").get<std::string>()];
   }
-  const Session session = Session::Open(out);
+  const session::Session session = session::Session::Open(out);
   EXPECT_EQ(times.size(), session.planned_keys().size());
   for (const std::string& key : session.planned_keys()) EXPECT_EQ(times[key], 1) << key;
 }
@@ -143,7 +143,7 @@ TEST_F(AcquireCommand, CtrlCStopsCleanlyWithExitCode130AndTheRunResumes) {
   ::waitpid(child, &status, 0);
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 130);
-  const Session stopped = Session::Open(out);
+  const session::Session stopped = session::Session::Open(out);
   EXPECT_LT(stopped.entries().size(), PlannedImages());
   EXPECT_TRUE(stopped.Verify().corrupt.empty());
   const auto resume = RunSvbtdf(AcquireArgs(out));

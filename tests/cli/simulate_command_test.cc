@@ -14,7 +14,7 @@
 
 #include "run_command.h"
 #include "svbtdf/common/atomic_file.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 
 namespace svbtdf {
 namespace {
@@ -34,8 +34,8 @@ class SimulateCommand : public ::testing::Test {
 
 // `map` is one of the truth's maps: alpha.exr for the analytic truth, slices.exr for Monte Carlo.
 void ExpectCompleteSimulation(const fs::path& out, const char* map = "alpha.exr") {
-  const Session session = Session::Open(out / "session");
-  const SessionVerification verification = session.Verify();
+  const session::Session session = session::Session::Open(out / "session");
+  const session::SessionVerification verification = session.Verify();
   EXPECT_TRUE(verification.complete()) << verification.Summary();
   const nlohmann::json rig = nlohmann::json::parse(ReadTextFile(out / "truth" / "rig.json"));
   for (const char* key : {"fx", "fy", "cx", "cy", "distortion", "rms_px"}) {
@@ -55,7 +55,7 @@ TEST_F(SimulateCommand, TinyPresetWritesACompleteSessionAndRefusesToOverwriteIt)
   EXPECT_NE(again.output.find("never overwritten"), std::string::npos) << again.output;
   // `session verify` accepts the session, then names a damaged image and exits 3.
   EXPECT_EQ(RunSvbtdf("session verify " + (out / "session").string()).exit_code, 0);
-  fs::remove(out / "session" / Session::FileForKey("dot/q0003/e0/r0"));
+  fs::remove(out / "session" / session::Session::FileForKey("dot/q0003/e0/r0"));
   const auto verify = RunSvbtdf("session verify " + (out / "session").string());
   EXPECT_EQ(verify.exit_code, 3) << verify.output;
   EXPECT_NE(verify.output.find("dot/q0003/e0/r0"), std::string::npos) << verify.output;
@@ -91,14 +91,14 @@ void ExpectInterruptedRunResumes(const fs::path& root, const std::vector<std::st
   ::kill(child, SIGINT);
   int status = 0;
   ::waitpid(child, &status, 0);
-  const size_t journalled = Session::Open(resumed / "session").entries().size();
+  const size_t journalled = session::Session::Open(resumed / "session").entries().size();
   EXPECT_GT(journalled, 0u);
   const auto resume = RunSvbtdf("-q simulate" + joined + " --out " + resumed.string());
   ASSERT_EQ(resume.exit_code, 0) << resume.output;
   ExpectCompleteSimulation(resumed, map);
-  const Session a = Session::Open(whole / "session"), b = Session::Open(resumed / "session");
+  const session::Session a = session::Session::Open(whole / "session"), b = session::Session::Open(resumed / "session");
   ASSERT_EQ(a.entries().size(), b.entries().size());
-  for (const SessionEntry& entry : a.entries()) {
+  for (const session::SessionEntry& entry : a.entries()) {
     EXPECT_EQ(entry.crc32, b.Entry(entry.key).crc32) << entry.key;
   }
 }

@@ -19,7 +19,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/common/progress.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 #include "svbtdf/common/statistics.h"
 #include "svbtdf/fit/process_session.h"
 #include "svbtdf/fit/slice_store.h"
@@ -107,7 +107,7 @@ ProcessOptions QuietOptions() {
 // Issue 4's acceptance through the user's path: the session calibrated from its own captures
 // (board views on the whole sensor, tests/calib), then processed.
 Accuracy AccuracyWithItsOwnCalibration(const Simulation& sim) {
-  const Session session = Session::Open(sim.folder / "session");
+  const session::Session session = session::Session::Open(sim.folder / "session");
   calib::CalibrateSessionOptions quiet;
   quiet.progress = false;
   const calib::SessionCalibration own = calib::CalibrateSession(session, quiet);
@@ -120,7 +120,7 @@ TEST(ProcessSession, NoiseFreeSessionGivesTheTrueBtdfWithinOnePercent) {
   const Simulation sim = Simulate("noise_free", /*noise=*/false);
   const fs::path out = sim.folder / "processed";
   const ProcessReport report =
-      ProcessSession(Session::Open(sim.folder / "session"), sim.calibration, out, QuietOptions());
+      ProcessSession(session::Session::Open(sim.folder / "session"), sim.calibration, out, QuietOptions());
   EXPECT_EQ(report.dots, 36);
   const SliceStore store = SliceStore::Open(out);
   const Accuracy a = MeasureAccuracy(store, sim.folder / "truth");
@@ -145,7 +145,7 @@ std::string FileBytes(const fs::path& path) {
 
 TEST(ProcessSession, DefaultNoiseWithinThreePercentAndResumesWhereItStopped) {
   const Simulation sim = Simulate("noisy", /*noise=*/true);
-  const Session session = Session::Open(sim.folder / "session");
+  const session::Session session = session::Session::Open(sim.folder / "session");
   const fs::path out = sim.folder / "processed";
   const ProcessReport report = ProcessSession(session, sim.calibration, out, QuietOptions());
   EXPECT_EQ(report.dots, 36);
@@ -188,7 +188,7 @@ TEST(ProcessSession, DefaultNoiseWithinThreePercentAndResumesWhereItStopped) {
 
 TEST(ProcessSession, ErrorsNameTheFile) {
   const Simulation sim = Simulate("errors", /*noise=*/true);
-  const Session session = Session::Open(sim.folder / "session");
+  const session::Session session = session::Session::Open(sim.folder / "session");
   // A finished store is never overwritten.
   const fs::path out = sim.folder / "processed";
   ProcessSession(session, sim.calibration, out, QuietOptions());

@@ -18,7 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "svbtdf/common/progress.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 #include "svbtdf/common/statistics.h"
 #include "svbtdf/fit/process_session.h"
 #include "svbtdf/fit/slice_store.h"
@@ -56,7 +56,7 @@ Errors Measure(const std::string& preset) {
     fs::remove_all(out);
     ProcessOptions options;
     options.progress = false;
-    ProcessSession(Session::Open(folder / "session"), CalibrationFromTruth(folder), out, options);
+    ProcessSession(session::Session::Open(folder / "session"), CalibrationFromTruth(folder), out, options);
   }
   if (std::getenv("SVBTDF_RHO_D_CACHE") != nullptr) {
     // Only the diffuse separation again: the cached store, unfinished, finished anew.

@@ -21,9 +21,7 @@
 namespace svbtdf {
 namespace {
 
-std::string Key(const CaptureId& id) {
-  return id.kind + "/" + std::to_string(id.index) + "/" + std::to_string(id.exposure_index);
-}
+std::string Key(const CaptureId& id) { return id.key.Format(); }
 
 class MemorySink : public CaptureSink {
  public:
@@ -82,7 +80,7 @@ TEST(Capture, TinyIsCompleteDeterministicAndResumable) {
   MemorySink other;
   options.seed = 6;
   RunCapture(tiny.renderer, tiny.plan, other, options);
-  EXPECT_NE(other.images.at("dots/10/0"), first.images.at("dots/10/0"));
+  EXPECT_NE(other.images.at("dot/q0010/e0/r0"), first.images.at("dot/q0010/e0/r0"));
 }
 
 TEST(Capture, BrightestDotImageIsExposedAsPlanned) {
@@ -107,7 +105,8 @@ TEST(Capture, BoardImagesAreFoundAtTheTrueCorners) {
     const bool holder = &pose == &poses.back();
     const BoardConfig& b = holder ? tiny.rig.config().holder_board : tiny.rig.config().board;
     const PinholeCamera& camera = holder ? tiny.rig.camera() : tiny.rig.sensor_camera();
-    const CaptureId id{holder ? "holder_board" : "board", 0, 0, tiny.plan.board_exposure_s};
+    const CaptureId id{holder ? session::CaptureKey::SamplePlaneView(0) : session::CaptureKey::BoardView(0),
+                       tiny.plan.board_exposure_s};
     FloatImage radiance;
     if (holder) {
       tiny.renderer.RenderHolderBoard(pose, &radiance);

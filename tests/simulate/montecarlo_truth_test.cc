@@ -18,7 +18,7 @@
 
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 #include "svbtdf/simulate/montecarlo_truth.h"
 #include "svbtdf/simulate/presets.h"
 #include "svbtdf/simulate/session_writer.h"
@@ -277,7 +277,7 @@ TEST(SimulateMonteCarlo, TinyPresetWritesAReadableTruth) {
   options.threads = 2;
   options.progress = false;
   const SimulationOutput result = SimulateSession(out, options);
-  EXPECT_TRUE(Session::Open(result.session).Verify().complete());
+  EXPECT_TRUE(session::Session::Open(result.session).Verify().complete());
   EXPECT_EQ(ReadRigTruth(result.truth / "rig.json").capture.truth_kind, "montecarlo");
   const MonteCarloTruth truth = ReadMonteCarloTruth(result.truth);
   EXPECT_EQ(truth.texels_x(), 32);
@@ -296,13 +296,13 @@ TEST(SimulateMonteCarlo, TinyPresetWritesAReadableTruth) {
   const fs::path first_folder = out.string() + "-first";
   fs::remove_all(first_folder);
   fs::rename(result.session, first_folder);
-  const Session first = Session::Open(first_folder);
+  const session::Session first = session::Session::Open(first_folder);
   const std::string manifest = ReadTextFile(result.truth / "material.json");
   SimulateSession(out, options);
   EXPECT_EQ(ReadTextFile(result.truth / "material.json"), manifest);
-  const Session second = Session::Open(result.session);
+  const session::Session second = session::Session::Open(result.session);
   ASSERT_EQ(first.entries().size(), second.entries().size());
-  for (const SessionEntry& entry : first.entries()) EXPECT_EQ(entry.crc32, second.Entry(entry.key).crc32) << entry.key;
+  for (const session::SessionEntry& entry : first.entries()) EXPECT_EQ(entry.crc32, second.Entry(entry.key).crc32) << entry.key;
   // A truth of other settings in the folder is refused rather than rendered.
   fs::remove_all(result.session);
   options.seed = 3;

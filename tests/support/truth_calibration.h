@@ -7,7 +7,7 @@
 #include <filesystem>
 
 #include "svbtdf/calib/session_calibration.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 #include "svbtdf/simulate/truth_io.h"
 
 namespace svbtdf {
@@ -15,7 +15,7 @@ namespace svbtdf {
 // `simulation` is the folder holding session/ and truth/.
 inline calib::SessionCalibration CalibrationFromTruth(const std::filesystem::path& simulation) {
   const RigTruth truth = ReadRigTruth(simulation / "truth" / "rig.json");
-  const Session session = Session::Open(simulation / "session");
+  const session::Session session = session::Session::Open(simulation / "session");
   calib::SessionCalibration c;
   calib::CameraModel& camera = c.camera.camera;
   camera.width = truth.camera.width;

@@ -65,7 +65,7 @@ struct CapturePlan {
   int sample_plane_views = 0;
   bool all_dots = false;
   bool fiducials = false;           // fiducial_dots lit at once, at the all-dots exposure
-  std::vector<int> fiducial_dots;   // FiducialDots(cols, rows) when fiducials are planned
+  std::vector<int> fiducial_dots;   // session::FiducialDots(cols, rows) when fiducials are planned
   bool flat_white = false;
   double board_exposure_s = 0.0;
   double all_dots_exposure_s = 0.0;

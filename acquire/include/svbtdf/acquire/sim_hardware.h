@@ -79,9 +79,9 @@ class SimCamera : public Camera {
   std::shared_ptr<const SimulatedSetup> setup_;
   std::string id_;
   ExposureSettings settings_;
-  std::map<std::tuple<std::string, int, int>, int> taken_;  // captures per (kind, index, bracket)
+  std::map<std::pair<std::string, int>, int> taken_;  // captures per (scene, bracket)
   FloatImage radiance_;   // of the last capture
-  std::string rendered_;  // its kind/index, empty when it cannot be reused
+  std::string rendered_;  // its scene (SceneOf), empty when it cannot be reused
 };
 
 // `sim:DIR`: loads the simulation in DIR (simulate/capture_render.h, LoadSimulatedSetup).

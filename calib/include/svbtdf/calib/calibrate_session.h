@@ -5,7 +5,7 @@
 
 #include "svbtdf/calib/camera_calibration.h"
 #include "svbtdf/calib/session_calibration.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 
 namespace svbtdf::calib {
 
@@ -17,7 +17,7 @@ struct CalibrateSessionOptions {
 // Reads only the calibration captures (board/*, sample_plane/*, all_dots/*, dark/*). Throws
 // svbtdf::Error naming the image or file for anything it cannot use (a board not found in the
 // sample-plane view, a dot grid mostly not found, mismatched sizes, unreadable images).
-SessionCalibration CalibrateSession(const Session& session, const CalibrateSessionOptions& options = {});
+SessionCalibration CalibrateSession(const session::Session& session, const CalibrateSessionOptions& options = {});
 
 // The dots found in an all-dots image, matched to the displayed grid (exposed for tests).
 struct DotDetection {

@@ -11,7 +11,7 @@
 #include <filesystem>
 
 #include "svbtdf/calib/session_calibration.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 
 namespace svbtdf::fit {
 
@@ -34,7 +34,7 @@ struct ProcessReport {
 
 // Writes the slice store into `out` (new, empty, or an unfinished processing of the same session
 // to resume). Throws svbtdf::Error naming the image or file for anything wrong with the input.
-ProcessReport ProcessSession(const Session& session, const calib::SessionCalibration& calibration,
+ProcessReport ProcessSession(const session::Session& session, const calib::SessionCalibration& calibration,
                              const std::filesystem::path& out, const ProcessOptions& options);
 
 }  // namespace svbtdf::fit

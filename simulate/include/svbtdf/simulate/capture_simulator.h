@@ -11,22 +11,26 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 
+#include "svbtdf/session/capture_key.h"
 #include "svbtdf/simulate/presets.h"
 #include "svbtdf/simulate/renderer.h"
 #include "svbtdf/simulate/truth_io.h"
 
 namespace svbtdf {
 
-// The identity of one stored capture.
+// The identity of one stored capture: its session key and exposure.
 struct CaptureId {
-  std::string kind;      // dark | board | holder_board | all_dots | flat | dots
-  int index = 0;         // dot q (row-major over the grid), board view, dark frame number
-  int exposure_index = 0;
+  session::CaptureKey key;
   double exposure_s = 0.0;
-
   uint64_t Stream() const;  // the noise stream of this image
 };
+
+// The noise stream of an image of `what` (dot q, board view, dark frame number: `index`) at
+// exposure bracket `bracket`. The names are the simulator's own ("dots", "holder_board", "flat",
+// ...), kept from version 1 of the simulator: changing them would change every simulated image.
+uint64_t NoiseStream(std::string_view what, int index, int bracket);
 
 // Where the captures go: the session writer in the command line, memory in the tests.
 class CaptureSink {
@@ -53,7 +57,11 @@ CaptureTruth PlanCapture(const SimulationPreset& preset, const RigRenderer& rend
 void RunCapture(const RigRenderer& renderer, const CaptureTruth& plan, CaptureSink& sink,
                 const CaptureOptions& options);
 
-// The list of captures in the order they are made.
+// The list of captures in the order they are made (session::CaptureOrder), with their exposures.
 std::vector<CaptureId> CaptureList(const Rig& rig, const CaptureTruth& plan);
+
+// What the camera sees in a capture, whatever its bracket and repeat: captures of one scene share
+// its radiance image.
+std::string SceneOf(const session::CaptureKey& key);
 
 }  // namespace svbtdf

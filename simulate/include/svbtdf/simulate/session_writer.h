@@ -60,7 +60,5 @@ struct MaterialTruth {
 // Throws svbtdf::Error naming the file for anything missing or malformed.
 MaterialTruth ReadMaterialTruth(const std::filesystem::path& truth_folder);
 
-// The session key of a simulated capture (e.g. "dot/q0012/e1/r0").
-std::string SessionKey(const CaptureId& id);
 
 }  // namespace svbtdf

@@ -25,7 +25,7 @@
 #include "svbtdf/model/hemicube.h"
 #include "svbtdf/model/ndf.h"
 #include "svbtdf/model/vec.h"
-#include "svbtdf/simulate/rng.h"
+#include "svbtdf/common/random.h"
 
 namespace svbtdf {
 

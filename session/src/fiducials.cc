@@ -1,19 +1,11 @@
-#include "svbtdf/common/fiducials.h"
+#include "svbtdf/session/fiducials.h"
 
 #include <algorithm>
 #include <cstdint>
 
-namespace svbtdf {
-namespace {
+#include "svbtdf/common/random.h"
 
-uint64_t SplitMix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
-}  // namespace
+namespace svbtdf::session {
 
 std::vector<std::vector<int>> GridSymmetries(int cols, int rows) {
   // (c, r) -> (c', r') for the dihedral group of the rectangle, and of the square when it is one.
@@ -71,4 +63,4 @@ std::vector<int> FiducialDots(int cols, int rows) {
   return dots;
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::session

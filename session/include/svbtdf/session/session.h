@@ -22,9 +22,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "svbtdf/common/durable_log.h"
 #include "svbtdf/common/image_io.h"
+#include "svbtdf/session/capture_key.h"
 
-namespace svbtdf {
+namespace svbtdf::session {
 
 inline constexpr int kSessionFormatVersion = 1;
 
@@ -64,6 +66,8 @@ class Session {
   const std::filesystem::path& folder() const { return folder_; }
   const nlohmann::json& rig() const { return rig_; }
   const std::vector<std::string>& planned_keys() const { return planned_keys_; }
+  // The planned keys of one kind, in plan order.
+  std::vector<std::string> PlannedKeys(CaptureKind kind) const;
   const std::vector<SessionEntry>& entries() const { return entries_; }
 
   bool Contains(const std::string& key) const { return index_.count(key) > 0; }
@@ -83,9 +87,6 @@ class Session {
  private:
   Session() = default;
   void ReadJournal();
-  // After a crash mid-append: cuts off a torn last journal line, or ends a complete one that
-  // lost its newline, so that the next line appended stands on its own.
-  void RepairJournalTail();
 
   std::filesystem::path folder_;
   nlohmann::json rig_;
@@ -93,11 +94,10 @@ class Session {
   std::unordered_set<std::string> planned_;  // the same keys, for lookups
   std::vector<SessionEntry> entries_;
   std::unordered_map<std::string, size_t> index_;  // key -> first entry
-  std::optional<uint64_t> journal_truncate_to_;    // set when the last line is torn
-  bool journal_needs_newline_ = false;             // the journal does not end with '\n'
+  std::optional<DurableLog> journal_;  // journal.jsonl, repaired before the next append
 };
 
 // CRC-32 of a file's bytes; throws naming the file when it cannot be read.
 uint32_t FileCrc32(const std::filesystem::path& path);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::session

@@ -1,5 +1,7 @@
 #pragma once
-// A small, fast random number generator with independent streams: PCG32 (O'Neill 2014,
+// The house's random numbers. SplitMix64 (Steele, Lea, Flood 2014, "Fast splittable
+// pseudorandom number generators"), a bijective 64-bit mixer: hashing seeds, lattice points and
+// counters into well-spread bits. And a small, fast generator with independent streams: PCG32 (O'Neill 2014,
 // "PCG: A family of simple fast space-efficient statistically good algorithms for random number
 // generation"). The Monte Carlo tracer gives every fixed chunk of paths its own stream, seeded
 // from (seed, chunk index), so its results do not depend on how chunks are spread over threads.
@@ -7,6 +9,14 @@
 #include <cstdint>
 
 namespace svbtdf {
+
+// One SplitMix64 step: nearby inputs (1, 2, 3, ...) give unrelated outputs.
+constexpr uint64_t SplitMix64(uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
 
 class Pcg32 {
  public:
@@ -33,14 +43,6 @@ class Pcg32 {
   }
 
  private:
-  // Decorrelates nearby user seeds (1, 2, 3, ...) before they enter the state.
-  static uint64_t SplitMix64(uint64_t x) {
-    x += 0x9e3779b97f4a7c15ULL;
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-    return x ^ (x >> 31);
-  }
-
   uint64_t state_ = 0;
   uint64_t increment_;
 };

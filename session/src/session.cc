@@ -1,4 +1,4 @@
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -14,9 +14,10 @@
 #include <sstream>
 
 #include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/durable_log.h"
 #include "svbtdf/common/error.h"
 
-namespace svbtdf {
+namespace svbtdf::session {
 namespace fs = std::filesystem;
 namespace {
 
@@ -58,17 +59,6 @@ T Field(const nlohmann::json& object, const char* name, const std::string& sourc
   } catch (const nlohmann::json::exception&) {
     ThrowFormatError(source, std::string("field '") + name + "' has the wrong type");
   }
-}
-
-void AppendLineDurably(const fs::path& path, const std::string& line) {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0) ThrowIoError(path.string(), std::string("cannot open for appending: ") + std::strerror(errno));
-  const std::string data = line + "\n";
-  const ssize_t written = ::write(fd, data.data(), data.size());
-  const bool ok = written == static_cast<ssize_t>(data.size()) && ::fsync(fd) == 0;
-  const int saved = errno;
-  ::close(fd);
-  if (!ok) ThrowIoError(path.string(), std::string("journal append failed: ") + std::strerror(saved), "is the disk full?");
 }
 
 }  // namespace
@@ -164,33 +154,19 @@ Session Session::CreateOrResume(const fs::path& folder, const nlohmann::json& ri
 }
 
 void Session::ReadJournal() {
-  const fs::path path = folder_ / kJournal;
   entries_.clear();
   index_.clear();
-  if (!fs::exists(path)) return;
-  const std::string text = ReadTextFile(path);
-  std::istringstream lines(text);
-  std::string line;
-  int number = 0;
-  const bool ends_cleanly = text.empty() || text.back() == '\n';
-  journal_truncate_to_.reset();
-  // A complete last line without its newline (a write torn just before it) is kept; the next
-  // append starts a new line.
-  journal_needs_newline_ = !ends_cleanly;
-  while (std::getline(lines, line)) {
-    ++number;
-    const std::string where = path.string() + ":" + std::to_string(number);
-    if (line.empty()) continue;
+  // A last line cut short by a crash during its append is left out (and cut off before the
+  // next append): its image counts as not captured, and a resumed capture replaces it.
+  journal_ = DurableLog::Open(folder_ / kJournal, IsJsonObjectLine);
+  const std::vector<std::string>& lines = journal_->lines();
+  for (size_t n = 0; n < lines.size(); ++n) {
+    const std::string where = journal_->path().string() + ":" + std::to_string(n + 1);
+    if (lines[n].empty()) continue;
     nlohmann::json object;
     try {
-      object = nlohmann::json::parse(line);
+      object = nlohmann::json::parse(lines[n]);
     } catch (const nlohmann::json::exception&) {  // parse errors, but also number overflow
-      // Only the very last line may be cut short, by a crash during the append.
-      if (!ends_cleanly && lines.peek() == EOF) {
-        // The next append must not continue this fragment: it is cut off first.
-        journal_truncate_to_ = text.size() - line.size();
-        break;
-      }
       ThrowFormatError(where, "is not a valid journal line");
     }
     SessionEntry entry;
@@ -206,6 +182,15 @@ void Session::ReadJournal() {
     index_.emplace(entry.key, entries_.size());
     entries_.push_back(std::move(entry));
   }
+}
+
+std::vector<std::string> Session::PlannedKeys(CaptureKind kind) const {
+  std::vector<std::string> keys;
+  for (const std::string& key : planned_keys_) {
+    const std::optional<CaptureKey> parsed = CaptureKey::Parse(key);
+    if (parsed && parsed->kind == kind) keys.push_back(key);
+  }
+  return keys;
 }
 
 const SessionEntry& Session::Entry(const std::string& key) const {
@@ -230,8 +215,8 @@ void Session::AddImage(const std::string& key, const CameraImage& image, double 
   const nlohmann::json line = {{"key", entry.key},   {"file", entry.file},       {"bytes", entry.bytes},
                                {"crc32", entry.crc32}, {"exposure_s", exposure_s}, {"gain", gain},
                                {"time", entry.time}};
-  RepairJournalTail();
-  AppendLineDurably(folder_ / kJournal, line.dump());
+  if (!journal_) journal_ = DurableLog::Open(folder_ / kJournal, IsJsonObjectLine);
+  journal_->Append(line.dump());
   index_.emplace(key, entries_.size());
   entries_.push_back(std::move(entry));
 }
@@ -246,21 +231,6 @@ CameraImage Session::ReadImage(const std::string& key, bool check_crc) const {
     ThrowFormatError(file.string(), "does not match its journal entry (corrupt)", "re-capture it: resume the session");
   }
   return ReadCameraImage(file);
-}
-
-void Session::RepairJournalTail() {
-  const fs::path path = folder_ / kJournal;
-  if (journal_truncate_to_) {
-    std::error_code error;
-    fs::resize_file(path, *journal_truncate_to_, error);
-    if (error) ThrowIoError(path.string(), "cannot cut off its torn last line: " + error.message());
-    journal_truncate_to_.reset();
-    journal_needs_newline_ = false;  // the file now ends after a complete line (or is empty)
-  }
-  if (journal_needs_newline_) {
-    AppendLineDurably(path, "");
-    journal_needs_newline_ = false;
-  }
 }
 
 SessionVerification Session::Verify(bool check_crc) const {
@@ -281,4 +251,4 @@ SessionVerification Session::Verify(bool check_crc) const {
   return report;
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::session

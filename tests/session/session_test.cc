@@ -8,7 +8,7 @@
 
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
-#include "svbtdf/common/session.h"
+#include "svbtdf/session/session.h"
 
 namespace svbtdf {
 namespace {
@@ -38,13 +38,13 @@ class SessionTest : public ::testing::Test {
 };
 
 TEST_F(SessionTest, ImagesAreJournalledAndSurviveReopening) {
-  Session session = Session::Create(folder_, rig_, plan_);
+  session::Session session = session::Session::Create(folder_, rig_, plan_);
   session.AddImage("dark/e0", Frame(3), 0.1, 1.0);
   session.AddImage("board/v00", Frame(400), 0.01, 2.0);
   EXPECT_FALSE(session.Verify().complete());
   EXPECT_EQ(session.Verify().missing.size(), 2u);
 
-  Session reopened = Session::Open(folder_);
+  session::Session reopened = session::Session::Open(folder_);
   EXPECT_TRUE(reopened.Contains("board/v00"));
   EXPECT_EQ(reopened.Entry("board/v00").gain, 2.0);
   EXPECT_EQ(reopened.ReadImage("board/v00", /*check_crc=*/true).pixels, Frame(400).pixels);
@@ -56,35 +56,35 @@ TEST_F(SessionTest, ImagesAreJournalledAndSurviveReopening) {
 }
 
 TEST_F(SessionTest, NothingIsOverwritten) {
-  Session session = Session::Create(folder_, rig_, plan_);
+  session::Session session = session::Session::Create(folder_, rig_, plan_);
   session.AddImage("dark/e0", Frame(3), 0.1, 1.0);
   EXPECT_THROW(session.AddImage("dark/e0", Frame(4), 0.1, 1.0), Error);
-  EXPECT_THROW(Session::Create(folder_, rig_, plan_), Error);  // the folder is not empty
-  EXPECT_THROW(Session::CreateOrResume(folder_, rig_, {"dark/e0"}), Error);  // a different plan
+  EXPECT_THROW(session::Session::Create(folder_, rig_, plan_), Error);  // the folder is not empty
+  EXPECT_THROW(session::Session::CreateOrResume(folder_, rig_, {"dark/e0"}), Error);  // a different plan
   EXPECT_THROW(session.AddImage("dot/q9999/e0/r0", Frame(1), 1.0, 1.0), Error);  // not planned
-  EXPECT_EQ(Session::Open(folder_).ReadImage("dark/e0").pixels, Frame(3).pixels);
+  EXPECT_EQ(session::Session::Open(folder_).ReadImage("dark/e0").pixels, Frame(3).pixels);
 }
 
 TEST_F(SessionTest, VerifyFindsCorruptAndMissingFiles) {
-  Session session = Session::Create(folder_, rig_, plan_);
+  session::Session session = session::Session::Create(folder_, rig_, plan_);
   for (const std::string& key : plan_) session.AddImage(key, Frame(7), 1.0, 1.0);
   // Flip one byte of one image (same size): only the CRC can tell.
-  const fs::path file = folder_ / Session::FileForKey("board/v00");
+  const fs::path file = folder_ / session::Session::FileForKey("board/v00");
   std::string bytes = ReadTextFile(file);
   bytes[bytes.size() / 2] ^= 0x5a;
   std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
-  fs::remove(folder_ / Session::FileForKey("dark/e0"));
-  const SessionVerification report = Session::Open(folder_).Verify();
+  fs::remove(folder_ / session::Session::FileForKey("dark/e0"));
+  const session::SessionVerification report = session::Session::Open(folder_).Verify();
   EXPECT_FALSE(report.complete());
   EXPECT_EQ(report.corrupt, (std::vector<std::string>{"dark/e0", "board/v00"}));
-  EXPECT_THROW(Session::Open(folder_).ReadImage("board/v00", true), Error);
+  EXPECT_THROW(session::Session::Open(folder_).ReadImage("board/v00", true), Error);
 }
 
 TEST_F(SessionTest, ACrashMidAppendLeavesAReadableJournal) {
-  Session session = Session::Create(folder_, rig_, plan_);
+  session::Session session = session::Session::Create(folder_, rig_, plan_);
   session.AddImage("dark/e0", Frame(3), 0.1, 1.0);
   std::ofstream(folder_ / "journal.jsonl", std::ios::app) << R"({"key": "board/v00", "fi)";  // cut short
-  Session reopened = Session::Open(folder_);
+  session::Session reopened = session::Session::Open(folder_);
   EXPECT_EQ(reopened.entries().size(), 1u);
   EXPECT_FALSE(reopened.Contains("board/v00"));
 }
@@ -92,12 +92,12 @@ TEST_F(SessionTest, ACrashMidAppendLeavesAReadableJournal) {
 // Resuming after a torn append: the fragment must not swallow the next journal line.
 TEST_F(SessionTest, AppendingAfterACrashMidAppendKeepsTheJournalReadable) {
   {
-    Session session = Session::Create(folder_, rig_, plan_);
+    session::Session session = session::Session::Create(folder_, rig_, plan_);
     session.AddImage("dark/e0", Frame(3), 0.1, 1.0);
   }
   std::ofstream(folder_ / "journal.jsonl", std::ios::app) << R"({"key": "board/v00", "fi)";  // cut short
   {
-    Session resumed = Session::Open(folder_);
+    session::Session resumed = session::Session::Open(folder_);
     resumed.AddImage("board/v00", Frame(4), 0.1, 1.0);
   }
   // A complete last line that lost its newline is kept, and the next one starts a new line.
@@ -106,25 +106,25 @@ TEST_F(SessionTest, AppendingAfterACrashMidAppendKeepsTheJournalReadable) {
   text.pop_back();
   WriteTextAtomically(folder_ / "journal.jsonl", text);
   {
-    Session resumed = Session::Open(folder_);
+    session::Session resumed = session::Session::Open(folder_);
     EXPECT_EQ(resumed.entries().size(), 2u);
     resumed.AddImage("dot/q0000/e0/r0", Frame(5), 0.1, 1.0);
   }
-  const Session reopened = Session::Open(folder_);
+  const session::Session reopened = session::Session::Open(folder_);
   EXPECT_EQ(reopened.entries().size(), 3u);
   EXPECT_TRUE(reopened.Contains("board/v00"));
   EXPECT_TRUE(reopened.Contains("dot/q0000/e0/r0"));
-  const SessionVerification report = reopened.Verify();
+  const session::SessionVerification report = reopened.Verify();
   EXPECT_TRUE(report.corrupt.empty() && report.duplicated.empty()) << report.Summary();
   EXPECT_EQ(report.missing, std::vector<std::string>{"dot/q0001/e0/r0"});
 }
 
 TEST_F(SessionTest, BrokenJournalLinesAreErrorsNamingFileAndLine) {
-  Session session = Session::Create(folder_, rig_, plan_);
+  session::Session session = session::Session::Create(folder_, rig_, plan_);
   session.AddImage("dark/e0", Frame(3), 0.1, 1.0);
   std::ofstream(folder_ / "journal.jsonl", std::ios::app) << "garbage\n" << R"({"key":"x"})" << "\n";
   try {
-    Session::Open(folder_);
+    session::Session::Open(folder_);
     FAIL();
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("journal.jsonl:2"), std::string::npos) << e.what();
@@ -134,7 +134,7 @@ TEST_F(SessionTest, BrokenJournalLinesAreErrorsNamingFileAndLine) {
 TEST_F(SessionTest, RandomlyDamagedFilesNeverCrashTheReader) {
   // A small fuzz: truncate or scramble the manifest, plan and journal in many ways; Open must
   // either succeed or throw svbtdf::Error, never crash or throw anything else.
-  Session session = Session::Create(folder_, rig_, plan_);
+  session::Session session = session::Session::Create(folder_, rig_, plan_);
   for (const std::string& key : plan_) session.AddImage(key, Frame(5), 1.0, 1.0);
   std::mt19937_64 rng(1);
   for (const char* name : {"session.json", "plan.json", "journal.jsonl"}) {
@@ -148,7 +148,7 @@ TEST_F(SessionTest, RandomlyDamagedFilesNeverCrashTheReader) {
       if (mode == 2) damaged.insert(rng() % damaged.size(), std::string(1 + rng() % 5, "{}[]\",:0e9-x\n"[rng() % 13]));
       WriteTextAtomically(path, damaged);
       try {
-        Session::Open(folder_).Verify();
+        session::Session::Open(folder_).Verify();
       } catch (const Error&) {
       } catch (const std::exception& e) {
         FAIL() << name << " trial " << trial << ": " << e.what();

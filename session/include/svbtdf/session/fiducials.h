@@ -8,7 +8,7 @@
 
 #include <vector>
 
-namespace svbtdf {
+namespace svbtdf::session {
 
 // The maps q -> g(q) of dot indices (q = row * cols + col) under which the cols x rows grid goes
 // onto itself: the identity first, then the mirrors and turns (8 for a square grid, 4 otherwise).
@@ -22,4 +22,4 @@ int SymmetryDistance(const std::vector<bool>& lit, const std::vector<int>& symme
 // allows): a few misread dots cannot make one orientation look like another. Sorted dot indices.
 std::vector<int> FiducialDots(int cols, int rows);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::session
