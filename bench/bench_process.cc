@@ -17,7 +17,7 @@
 
 #include "svbtdf/common/error.h"
 #include "svbtdf/session/session.h"
-#include "svbtdf/fit/process_session.h"
+#include "svbtdf/process/process_session.h"
 #include "truth_calibration.h"
 
 namespace {
@@ -50,14 +50,14 @@ int main(int argc, char** argv) {
     const double baseline_peak = PeakResidentMegabytes();
 
     const fs::path out = simulation / ("bench-processed-" + std::to_string(::getpid()));
-    svbtdf::fit::ProcessOptions options;
+    svbtdf::process::ProcessOptions options;
     options.threads = argc > 2 ? std::atoi(argv[2]) : 0;
     if (argc > 4) {
       options.texels_x = std::atoi(argv[3]);
       options.texels_y = std::atoi(argv[4]);
     }
     start = std::chrono::steady_clock::now();
-    const svbtdf::fit::ProcessReport report = svbtdf::fit::ProcessSession(session, calibration, out, options);
+    const svbtdf::process::ProcessReport report = svbtdf::process::ProcessSession(session, calibration, out, options);
     const double measured = Seconds(start);
     std::printf("session: %zu images, %lld texels x %d dots\n", session.planned_keys().size(),
                 static_cast<long long>(report.texels), report.dots);

@@ -18,6 +18,7 @@
 #include "quality_output.h"
 #include "svbtdf/calib/calibrate_session.h"
 #include "svbtdf/calib/camera_calibration.h"
+#include "svbtdf/process/calibration_quality.h"
 #include "svbtdf/session/session.h"
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
@@ -133,7 +134,7 @@ void RunCalibrateSession(const CalibrateOptions& options) {
   const std::filesystem::path out = std::filesystem::path(options.session) / "calibration.json";
   calib::WriteSessionCalibration(out, c);
   std::printf("wrote %s\n", out.c_str());
-  const std::vector<fit::QualityWarning> warnings = fit::CheckCalibration(c, out.string());
+  const std::vector<fit::QualityWarning> warnings = process::CheckCalibration(c, out.string());
   PrintQualityWarnings(warnings);
   ExitIfStrict(warnings, options.strict);
 }

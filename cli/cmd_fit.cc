@@ -13,6 +13,8 @@
 #include "svbtdf/fit/fit_material.h"
 #include "svbtdf/fit/material.h"
 #include "svbtdf/fit/slice_store.h"
+#include "svbtdf/fit/slice_store_format.h"
+#include "svbtdf/process/calibration_quality.h"
 
 namespace svbtdf::cli {
 namespace {
@@ -81,7 +83,8 @@ std::vector<fit::QualityWarning> FitAndWriteMaterial(const fs::path& processed, 
   if (earlier) {
     warnings = *earlier;
   } else {
-    warnings = fit::CheckCalibration(store.calibration(), (processed / "calibration.json").string());
+    const fs::path calibration = processed / fit::store::kCalibration;
+    warnings = process::CheckCalibration(calib::ReadSessionCalibration(calibration), calibration.string());
     const std::vector<fit::QualityWarning> stored = fit::CheckSliceStore(processed);
     warnings.insert(warnings.end(), stored.begin(), stored.end());
     PrintQualityWarnings(warnings);

@@ -10,7 +10,7 @@
 #include "svbtdf/calib/session_calibration.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/session/session.h"
-#include "svbtdf/fit/process_session.h"
+#include "svbtdf/process/process_session.h"
 
 namespace svbtdf::cli {
 namespace {
@@ -18,11 +18,11 @@ namespace {
 struct ProcessCommandOptions {
   std::string session, out;
   std::string texels;  // "WxH"
-  fit::ProcessOptions process;
+  process::ProcessOptions process;
   bool strict = false;
 };
 
-void ParseTexels(const std::string& text, fit::ProcessOptions* options) {
+void ParseTexels(const std::string& text, process::ProcessOptions* options) {
   if (text.empty()) return;
   int w = 0, h = 0;
   char x = 0, extra = 0;
@@ -41,7 +41,7 @@ void RunProcess(ProcessCommandOptions options) {
     ThrowInvalidInput(options.session, "has no calibration.json", "run 'svbtdf calibrate " + options.session + "' first");
   }
   const calib::SessionCalibration calibration = calib::ReadSessionCalibration(calibration_path);
-  const fit::ProcessReport report = fit::ProcessSession(session, calibration, options.out, options.process);
+  const process::ProcessReport report = process::ProcessSession(session, calibration, options.out, options.process);
   std::printf("processed %d dots (%d resumed) from %lld images in %.1f s: %lld of %lld texels valid\n", report.dots,
               report.dots_resumed, static_cast<long long>(report.images_read), report.seconds,
               static_cast<long long>(report.valid_texels), static_cast<long long>(report.texels));

@@ -14,8 +14,9 @@
 #include "svbtdf/calib/calibrate_session.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/session/session.h"
-#include "svbtdf/fit/process_session.h"
+#include "svbtdf/process/process_session.h"
 #include "svbtdf/fit/slice_store.h"
+#include "svbtdf/process/calibration_quality.h"
 
 namespace svbtdf::cli {
 namespace {
@@ -24,7 +25,7 @@ namespace fs = std::filesystem;
 struct RunOptions {
   std::string session, out, work;
   std::string representatives = "0.01";
-  fit::ProcessOptions process;
+  process::ProcessOptions process;
   fit::FitMaterialOptions fit;
   bool strict = false;
 };
@@ -45,7 +46,7 @@ calib::SessionCalibration CalibrationOf(const session::Session& session) {
 }
 
 void ProcessUnlessDone(const session::Session& session, const calib::SessionCalibration& calibration, const fs::path& processed,
-                       const fit::ProcessOptions& options) {
+                       const process::ProcessOptions& options) {
   try {
     fit::SliceStore::Open(processed);
     std::printf("== 2/3 processing: using %s\n", processed.c_str());
@@ -54,7 +55,7 @@ void ProcessUnlessDone(const session::Session& session, const calib::SessionCali
     // Not there or unfinished: process (an unfinished store resumes).
   }
   std::printf("== 2/3 processing into %s\n", processed.c_str());
-  const fit::ProcessReport report = fit::ProcessSession(session, calibration, processed, options);
+  const process::ProcessReport report = process::ProcessSession(session, calibration, processed, options);
   std::printf("%d dots (%d resumed), %lld of %lld texels valid, %.1f s\n", report.dots, report.dots_resumed,
               static_cast<long long>(report.valid_texels), static_cast<long long>(report.texels), report.seconds);
 }
@@ -74,7 +75,7 @@ void Run(const RunOptions& options) {
   // Every stage's output is checked after it (docs/quality.md), also when an earlier run made it.
   const calib::SessionCalibration calibration = CalibrationOf(session);
   std::vector<fit::QualityWarning> warnings =
-      fit::CheckCalibration(calibration, (session.folder() / "calibration.json").string());
+      process::CheckCalibration(calibration, (session.folder() / "calibration.json").string());
   PrintQualityWarnings(warnings);
   ProcessUnlessDone(session, calibration, work / "processed", options.process);
   const std::vector<fit::QualityWarning> processed = fit::CheckSliceStore(work / "processed");

@@ -13,10 +13,8 @@
 
 namespace svbtdf::fit {
 namespace fs = std::filesystem;
-namespace {
 
-std::string Format(const char* format, ...) __attribute__((format(printf, 1, 2)));
-std::string Format(const char* format, ...) {
+std::string FormatFigures(const char* format, ...) {
   char buffer[1024];
   va_list args;
   va_start(args, format);
@@ -27,8 +25,10 @@ std::string Format(const char* format, ...) {
 
 double Percent(int64_t part, int64_t whole) { return whole > 0 ? 100.0 * part / whole : 0.0; }
 
+namespace {
+
 std::string TexelName(int64_t texel, int width) {
-  return Format("(%lld, %lld)", static_cast<long long>(texel % width), static_cast<long long>(texel / width));
+  return FormatFigures("(%lld, %lld)", static_cast<long long>(texel % width), static_cast<long long>(texel / width));
 }
 
 }  // namespace
@@ -40,79 +40,6 @@ std::string QualityWarning::Line() const {
   return line;
 }
 
-std::vector<QualityWarning> CheckCalibration(const calib::SessionCalibration& c, const std::string& file) {
-  std::vector<QualityWarning> warnings;
-  const auto warn = [&](std::string check, std::string what, std::string figures, std::string cause) {
-    warnings.push_back({"calibrate", file, std::move(check), std::move(what), std::move(figures), std::move(cause)});
-  };
-
-  // The dots against the fitted grid.
-  const calib::MonitorCalibration& m = c.monitor;
-  const int64_t dots = static_cast<int64_t>(m.dots.size());
-  int64_t missing = 0, far = 0;
-  int64_t worst = -1;
-  for (int64_t q = 0; q < dots; ++q) {
-    const double r = m.dots[q].residual_mm;
-    if (r < 0) {
-      ++missing;
-      continue;
-    }
-    if (r > kMaxDotResidualMm) ++far;
-    if (worst < 0 || r > m.dots[worst].residual_mm) worst = q;
-  }
-  const double max_mm = std::max(m.residual_max_mm, worst >= 0 ? m.dots[worst].residual_mm : 0.0);
-  if (max_mm > kMaxDotResidualMm || m.residual_rms_mm > kMaxDotResidualRmsMm) {
-    std::string figures = Format("residual RMS %.3f mm, max %.3f mm", m.residual_rms_mm, max_mm);
-    if (worst >= 0 && m.dots[worst].residual_mm == max_mm) figures += Format(" at dot %lld", static_cast<long long>(worst));
-    figures += Format("; %lld of %lld found dots above %.1f mm; limits: RMS %.1f mm, max %.1f mm", static_cast<long long>(far),
-                      static_cast<long long>(dots - missing), kMaxDotResidualMm, kMaxDotResidualRmsMm, kMaxDotResidualMm);
-    warn("dot-residual", "the dots found in the image are far from the fitted dot grid", figures,
-         "the dots may be mislabelled (monitor orientation, or rig.dots.positions_px in session.json not what was "
-         "displayed), or the monitor's pose or distance is wrong; light directions, and so the fit, are then wrong");
-  }
-  if (dots > 0 && missing > kMaxMissingDotFraction * dots) {
-    warn("dots-missing", "dots of the grid were not found in the dot image",
-         Format("%lld of %lld dots not found (%.1f%%; limit %.0f%%)", static_cast<long long>(missing),
-                static_cast<long long>(dots), Percent(missing, dots), 100 * kMaxMissingDotFraction),
-         "the exposure of all_dots is too low, or dots fall outside the camera's view or behind the holder; their "
-         "positions are extrapolated from the others");
-  }
-
-  // Zhang calibration of the camera.
-  const calib::CalibrationReport& camera = c.camera;
-  if (camera.rms_px > kMaxCameraRmsPx) {
-    warn("camera-rms", "the camera calibration's reprojection error is high",
-         Format("Zhang reprojection RMS %.3f px over %d views; limit %.1f px", camera.rms_px, camera.used_views(),
-                kMaxCameraRmsPx),
-         "blurred or badly lit board views, a --board specification (size, square) that does not match the printed "
-         "board, or a board that is not flat");
-  }
-  const int64_t views = static_cast<int64_t>(camera.views.size());
-  const int64_t dropped = views - camera.used_views();
-  if (views > 0 && dropped > kMaxDroppedViewFraction * views) {
-    std::string reasons;
-    int listed = 0;
-    for (const calib::ViewReport& view : camera.views) {
-      if (view.used || listed == 3) continue;
-      reasons += (listed++ ? ", " : "") + view.source + ": " + view.dropped_because;
-    }
-    if (dropped > listed) reasons += ", ...";
-    warn("views-dropped", "many board views were dropped from the camera calibration",
-         Format("%lld of %lld views dropped (limit %.0f%%): ", static_cast<long long>(dropped),
-                static_cast<long long>(views), 100 * kMaxDroppedViewFraction) +
-             reasons,
-         "board not found or far worse than the others: blurred, over- or under-exposed, or partly outside the image; "
-         "retake them");
-  }
-  if (c.sample_plane.rms_px > kMaxSamplePlaneRmsPx) {
-    warn("sample-plane-rms", "the holder board's reprojection error is high",
-         Format("sample plane reprojection RMS %.3f px; limit %.1f px", c.sample_plane.rms_px, kMaxSamplePlaneRmsPx),
-         "the board in sample_plane/v00 is blurred, not flat, or not the board session.json describes "
-         "(rig.sample_plane_board); the sample's pose, and every texel's directions, are then off");
-  }
-  return warnings;
-}
-
 std::vector<QualityWarning> CheckSliceStore(const fs::path& processed) {
   std::vector<QualityWarning> warnings;
   const fs::path mask_file = processed / "mask.exr";
@@ -122,7 +49,7 @@ std::vector<QualityWarning> CheckSliceStore(const fs::path& processed) {
   for (int64_t t = 0; t < texels; ++t) valid += mask.pixels[static_cast<size_t>(t) * mask.channels] > 0.5f;
   if (texels > 0 && valid < kMinValidTexelFraction * texels) {
     warnings.push_back({"process", mask_file.string(), "valid-texels", "few texels can be fitted",
-                        Format("%lld of %lld texels valid (%.1f%%; minimum %.0f%%)", static_cast<long long>(valid),
+                        FormatFigures("%lld of %lld texels valid (%.1f%%; minimum %.0f%%)", static_cast<long long>(valid),
                                static_cast<long long>(texels), Percent(valid, texels), 100 * kMinValidTexelFraction),
                         "the exposure is too low (no refractive signal above the noise) or too high (saturated in "
                         "every bracket), or the texel grid reaches past the sample or the camera's window"});
@@ -152,7 +79,7 @@ std::vector<QualityWarning> CheckSliceStore(const fs::path& processed) {
   }
   if (without >= 0 && counted > 0 && without > kMaxTexelsWithoutDotFraction * counted) {
     warnings.push_back({"process", named.string(), "texels-without-dot", "texels have no dot beneath them",
-                        Format("%lld of %lld texels (%.1f%%; limit %.0f%%) have no dot beneath them",
+                        FormatFigures("%lld of %lld texels (%.1f%%; limit %.0f%%) have no dot beneath them",
                                static_cast<long long>(without), static_cast<long long>(counted),
                                Percent(without, counted), 100 * kMaxTexelsWithoutDotFraction),
                         "the dots do not reach beneath the sample: widen the dot grid (rig.dots) past the sample's "
@@ -181,7 +108,7 @@ std::vector<QualityWarning> CheckMaterial(const Material& m, const fs::path& fol
     const double worst = *std::max_element(residuals.begin(), residuals.end());
     warnings.push_back({"fit", (folder / "residual.exr").string(), "fit-residual",
                         "the fitted model does not match the samples of many texels",
-                        Format("%lld of %lld texels (%.1f%%; limit %.0f%%) fit with a relative RMSE above %.2f; median "
+                        FormatFigures("%lld of %lld texels (%.1f%%; limit %.0f%%) fit with a relative RMSE above %.2f; median "
                                "%.3f, max %.3f",
                                static_cast<long long>(bad), static_cast<long long>(known), Percent(bad, known),
                                100 * kMaxBadResidualFraction, kMaxTexelRelativeRmse, median, worst),
@@ -214,7 +141,7 @@ std::vector<QualityWarning> CheckMaterial(const Material& m, const fs::path& fol
   }
   if (implausible > 0) {
     warnings.push_back({"fit", (folder / "k_s.exr").string(), "k_s-implausible", "k_s is implausibly large",
-                        Format("%lld of %lld texels (%.1f%%) have k_s above %.0e or not finite; max %.3g at texel %s",
+                        FormatFigures("%lld of %lld texels (%.1f%%) have k_s above %.0e or not finite; max %.3g at texel %s",
                                static_cast<long long>(implausible), static_cast<long long>(texels),
                                Percent(implausible, texels), kMaxPlausibleKs, worst_k_s,
                                TexelName(worst_texel, m.width).c_str()),
@@ -233,7 +160,7 @@ std::vector<QualityWarning> CheckMaterial(const Material& m, const fs::path& fol
     }
     if (at_zero + at_one >= kMaxAlphaAtBoundFraction * texels) {
       warnings.push_back({"fit", (folder / "alpha.exr").string(), "alpha-at-bounds", "alpha is at its bounds everywhere",
-                          Format("%.1f%% of texels at alpha = 0, %.1f%% at alpha = 1 (limit %.0f%% together)",
+                          FormatFigures("%.1f%% of texels at alpha = 0, %.1f%% at alpha = 1 (limit %.0f%% together)",
                                  Percent(at_zero, texels), Percent(at_one, texels), 100 * kMaxAlphaAtBoundFraction),
                           "the samples do not tell the two configurations apart (a dot grid too narrow to see the "
                           "lobe's shape) or the fit failed; alpha is then meaningless"});
@@ -246,7 +173,7 @@ std::vector<QualityWarning> CheckMaterial(const Material& m, const fs::path& fol
   const int64_t failed = statistics.value("failed_fits", int64_t{0});
   if (reps > 0 && failed > kMaxFailedFitFraction * reps) {
     warnings.push_back({"fit", (folder / "material.json").string(), "failed-fits", "many representatives could not be fitted",
-                        Format("%lld of %lld representatives failed (limit %.0f%%)", static_cast<long long>(failed),
+                        FormatFigures("%lld of %lld representatives failed (limit %.0f%%)", static_cast<long long>(failed),
                                static_cast<long long>(reps), 100 * kMaxFailedFitFraction),
                         "too few usable samples per texel: the exposure is too low or too high, or the dots do not "
                         "reach beneath the sample"});

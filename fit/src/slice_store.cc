@@ -1,175 +1,20 @@
 #include "svbtdf/fit/slice_store.h"
 
 #include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
-#include <Eigen/Core>
 #include <algorithm>
-#include <array>
-#include <cerrno>
 #include <cmath>
-#include <cstring>
-#include <fstream>
 #include <limits>
-#include <optional>
-#include <set>
-#include <sstream>
 
-#include "svbtdf/common/atomic_file.h"
-#include "svbtdf/common/durable_log.h"
 #include "svbtdf/common/error.h"
-#include "svbtdf/common/parallel.h"
-#include "svbtdf/common/progress.h"
-#include "svbtdf/fit/push_pull.h"
+#include "svbtdf/fit/slice_store_format.h"
 
 namespace svbtdf::fit {
 namespace fs = std::filesystem;
-namespace {
+using namespace store;
 
-constexpr char kManifest[] = "processed.json";
-constexpr char kCalibration[] = "calibration.json";
-constexpr char kSamples[] = "samples.f16";
-constexpr char kSlices[] = "slices.f16";
-constexpr char kProgress[] = "progress.jsonl";
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-
-using Half = Eigen::half;
-
-// A file descriptor that closes itself.
-class File {
- public:
-  File() = default;
-  File(const fs::path& path, int flags) : path_(path), fd_(::open(path.c_str(), flags | O_CLOEXEC, 0644)) {
-    if (fd_ < 0) ThrowIoError(path.string(), std::string("cannot open: ") + std::strerror(errno));
-  }
-  ~File() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  File(const File&) = delete;
-  File& operator=(const File&) = delete;
-
-  void ReadAt(void* data, size_t bytes, uint64_t offset) const {
-    auto* p = static_cast<char*>(data);
-    while (bytes > 0) {
-      const ssize_t n = ::pread(fd_, p, bytes, static_cast<off_t>(offset));
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) ThrowIoError(path_.string(), n == 0 ? "is shorter than its manifest says" : std::strerror(errno));
-      p += n, bytes -= n, offset += n;
-    }
-  }
-  void WriteAt(const void* data, size_t bytes, uint64_t offset) const {
-    const auto* p = static_cast<const char*>(data);
-    while (bytes > 0) {
-      const ssize_t n = ::pwrite(fd_, p, bytes, static_cast<off_t>(offset));
-      if (n < 0 && errno == EINTR) continue;
-      if (n < 0) ThrowIoError(path_.string(), std::string("cannot write: ") + std::strerror(errno), "is the disk full?");
-      p += n, bytes -= n, offset += n;
-    }
-  }
-  void Resize(uint64_t bytes) const {
-    if (::ftruncate(fd_, static_cast<off_t>(bytes)) != 0) {
-      ThrowIoError(path_.string(), std::string("cannot allocate: ") + std::strerror(errno), "is the disk full?");
-    }
-  }
-  void Sync() const {
-    if (::fdatasync(fd_) != 0) ThrowIoError(path_.string(), std::string("cannot sync: ") + std::strerror(errno));
-  }
-  uint64_t Size() const {
-    struct stat st {};
-    if (::fstat(fd_, &st) != 0) ThrowIoError(path_.string(), std::strerror(errno));
-    return static_cast<uint64_t>(st.st_size);
-  }
-
- private:
-  fs::path path_;
-  int fd_ = -1;
-};
-
-int64_t NumTiles(const SliceStoreInfo& info) {
-  const int64_t texels = static_cast<int64_t>(info.texels_x) * info.texels_y;
-  return (texels + info.tile_texels - 1) / info.tile_texels;
-}
-
-// Bytes of one tile of samples.f16: [dot][texel in tile][RGB].
-uint64_t TileBytes(const SliceStoreInfo& info) {
-  return static_cast<uint64_t>(info.num_dots) * info.tile_texels * 3 * sizeof(Half);
-}
-
-uint64_t SliceBytes(const Hemicube& grid) { return static_cast<uint64_t>(grid.num_cells()) * sizeof(Half); }
-
-nlohmann::json InfoToJson(const SliceStoreInfo& info) {
-  return {{"texels_x", info.texels_x},     {"texels_y", info.texels_y},
-          {"num_dots", info.num_dots},     {"light_resolution", info.light_resolution},
-          {"tile_texels", info.tile_texels}, {"eta", info.eta}};
-}
-
-SliceStoreInfo InfoFromJson(const nlohmann::json& j) {
-  SliceStoreInfo info;
-  info.texels_x = j.at("texels_x").get<int>();
-  info.texels_y = j.at("texels_y").get<int>();
-  info.num_dots = j.at("num_dots").get<int>();
-  info.light_resolution = j.at("light_resolution").get<int>();
-  info.tile_texels = j.at("tile_texels").get<int>();
-  info.eta = j.value("eta", 0.0);
-  info.provenance = j.value("provenance", nlohmann::json::object());
-  return info;
-}
-
-void CheckInfo(const SliceStoreInfo& info, const std::string& source) {
-  if (info.texels_x <= 0 || info.texels_y <= 0 || info.num_dots <= 0 || info.tile_texels <= 0) {
-    ThrowInvalidInput(source, "needs a positive texel grid, dot count and tile size");
-  }
-  const int r = info.light_resolution;
-  if (r < 2 || (r & (r - 1)) != 0) {
-    ThrowInvalidInput(source, "light hemicube resolution " + std::to_string(r) + " is not a power of two >= 2");
-  }
-}
-
-void WriteManifest(const fs::path& folder, const SliceStoreInfo& info, bool complete, const nlohmann::json& statistics) {
-  nlohmann::json manifest = InfoToJson(info);
-  manifest["format"] = "svbtdf-processed";
-  manifest["version"] = kSliceStoreFormatVersion;
-  manifest["complete"] = complete;
-  manifest["provenance"] = info.provenance;
-  manifest["statistics"] = statistics;
-  manifest["files"] = {{"samples", kSamples}, {"slices", kSlices}, {"calibration", kCalibration},
-                       {"rho_d", "rho_d.exr"}, {"mask", "mask.exr"}, {"reach", "reach.exr"}};
-  WriteTextAtomically(folder / kManifest, manifest.dump(2) + "\n");
-}
-
-nlohmann::json ReadManifest(const fs::path& folder) {
-  const fs::path path = folder / kManifest;
-  try {
-    nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(path));
-    if (manifest.at("format") != "svbtdf-processed") ThrowFormatError(path.string(), "is not a processed session");
-    if (manifest.at("version") != kSliceStoreFormatVersion) {
-      ThrowFormatError(path.string(), "has version " + manifest.at("version").dump() + "; this svbtdf reads version " +
-                                          std::to_string(kSliceStoreFormatVersion), "re-run 'svbtdf process'");
-    }
-    return manifest;
-  } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(path.string(), std::string("is malformed: ") + e.what());
-  }
-}
-
-// Typical solid angle of the monitor area one dot stands for, seen from x: the dot grid's cell
-// area (median nearest-neighbour spacing squared) foreshortened and over distance squared.
-double DotCellArea(const std::vector<Vec3>& dots) {
-  if (dots.size() < 2) return 1e-4;
-  std::vector<double> nearest;
-  for (size_t a = 0; a < dots.size(); ++a) {
-    double best = std::numeric_limits<double>::infinity();
-    for (size_t b = 0; b < dots.size(); ++b) {
-      if (a != b) best = std::min(best, (dots[a] - dots[b]).squaredNorm());
-    }
-    nearest.push_back(best);
-  }
-  std::nth_element(nearest.begin(), nearest.begin() + nearest.size() / 2, nearest.end());
-  return nearest[nearest.size() / 2];
-}
-
-}  // namespace
+// ---------------------------------------------------------------------------------------------
+// Geometry
 
 // ---------------------------------------------------------------------------------------------
 // Geometry
@@ -183,202 +28,20 @@ Vec3 TexelGeometry::View(int64_t texel) const { return (camera_centre - TexelCen
 
 Vec3 TexelGeometry::Light(int64_t texel, int dot) const { return (dots[dot] - TexelCentre(texel)).normalized(); }
 
-TexelGeometry MakeTexelGeometry(const calib::SessionCalibration& calibration, int texels_x, int texels_y) {
-  TexelGeometry g;
-  g.texels_x = texels_x;
-  g.texels_y = texels_y;
-  g.width_m = calibration.sample_plane.width_m;
-  g.height_m = calibration.sample_plane.height_m;
-  g.camera_centre = calibration.sample_plane.CameraCentre();
-  for (const calib::DotPosition& dot : calibration.monitor.dots) g.dots.push_back(dot.position);
-  if (calibration.monitor.normal.norm() > 0) g.monitor_normal = calibration.monitor.normal.normalized();
-  return g;
-}
-
-namespace {
-
-// 2-D cross product of (b - a) and (c - a).
-double Cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
-  return (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
-}
-
-// Convex hull, counter-clockwise (Andrew's monotone chain); collinear points dropped.
-std::vector<Eigen::Vector2d> ConvexHull(std::vector<Eigen::Vector2d> points) {
-  std::sort(points.begin(), points.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
-  });
-  if (points.size() < 3) return points;
-  std::vector<Eigen::Vector2d> hull(2 * points.size());
-  size_t k = 0;
-  for (size_t i = 0; i < points.size(); ++i) {
-    while (k >= 2 && Cross(hull[k - 2], hull[k - 1], points[i]) <= 0) --k;
-    hull[k++] = points[i];
-  }
-  for (size_t i = points.size() - 1, lower = k + 1; i-- > 0;) {
-    while (k >= lower && Cross(hull[k - 2], hull[k - 1], points[i]) <= 0) --k;
-    hull[k++] = points[i];
-  }
-  hull.resize(k - 1);
-  return hull;
-}
-
-double SegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-  const Eigen::Vector2d ab = b - a;
-  const double length2 = ab.squaredNorm();
-  const double t = length2 > 0 ? std::clamp((p - a).dot(ab) / length2, 0.0, 1.0) : 0.0;
-  return (p - (a + t * ab)).norm();
-}
-
-// Distance from p to a convex polygon (counter-clockwise; 0 inside), or to a point or segment.
-double HullDistance(const Eigen::Vector2d& p, const std::vector<Eigen::Vector2d>& hull) {
-  if (hull.empty()) return std::numeric_limits<double>::infinity();
-  if (hull.size() == 1) return (p - hull[0]).norm();
-  bool inside = hull.size() >= 3;
-  double distance = std::numeric_limits<double>::infinity();
-  for (size_t k = 0; k < hull.size(); ++k) {
-    const Eigen::Vector2d& a = hull[k];
-    const Eigen::Vector2d& b = hull[(k + 1) % hull.size()];
-    if (Cross(a, b, p) < 0) inside = false;
-    distance = std::min(distance, SegmentDistance(p, a, b));
-  }
-  return inside ? 0.0 : distance;
-}
-
-}  // namespace
-
-std::vector<uint8_t> TexelsWithDotBeneath(const TexelGeometry& geometry) {
-  std::vector<uint8_t> reach(geometry.num_texels(), 0);
-  if (geometry.dots.empty()) return reach;
-  // The monitor plane: through the dots' centroid, with its normal; an in-plane basis.
-  const Vec3 n = geometry.monitor_normal.normalized();
-  Vec3 centroid = Vec3::Zero();
-  for (const Vec3& p : geometry.dots) centroid += p;
-  centroid /= static_cast<double>(geometry.dots.size());
-  const Vec3 e1 = (std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(n).normalized();
-  const Vec3 e2 = n.cross(e1);
-  std::vector<Eigen::Vector2d> dots;
-  for (const Vec3& p : geometry.dots) dots.emplace_back((p - centroid).dot(e1), (p - centroid).dot(e2));
-  const double spacing = std::sqrt(DotCellArea(geometry.dots));
-  const std::vector<Eigen::Vector2d> hull = ConvexHull(dots);
-  for (int64_t t = 0; t < geometry.num_texels(); ++t) {
-    const Vec3 x = geometry.TexelCentre(t);
-    const Vec3 o = geometry.View(t);
-    // x - s o on the plane: (x - s o - centroid) . n = 0.
-    const double along = o.dot(n);
-    if (!(std::abs(along) > 1e-12)) continue;
-    const double s = (x - centroid).dot(n) / along;
-    if (!(s > 0)) continue;  // the continued ray never reaches the monitor
-    const Vec3 hit = x - s * o - centroid;
-    const Eigen::Vector2d m(hit.dot(e1), hit.dot(e2));
-    if (HullDistance(m, hull) > 0.5 * spacing) continue;
-    double nearest = std::numeric_limits<double>::infinity();
-    for (const Eigen::Vector2d& d : dots) nearest = std::min(nearest, (m - d).squaredNorm());
-    reach[t] = std::sqrt(nearest) <= spacing / std::sqrt(2.0) ? 1 : 0;
-  }
-  return reach;
-}
-
-std::vector<std::array<int, 2>> OppositeNeighbours(const std::vector<Vec3>& dots) {
-  std::vector<std::array<int, 2>> pairs(dots.size(), {-1, -1});
-  for (size_t q = 0; q < dots.size(); ++q) {
-    double nearest = std::numeric_limits<double>::infinity();
-    for (size_t a = 0; a < dots.size(); ++a) {
-      if (a != q) nearest = std::min(nearest, (dots[a] - dots[q]).norm());
+double TexelGeometry::DotCellArea() const {
+  if (dots.size() < 2) return 1e-4;
+  std::vector<double> nearest;
+  for (size_t a = 0; a < dots.size(); ++a) {
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t b = 0; b < dots.size(); ++b) {
+      if (a != b) best = std::min(best, (dots[a] - dots[b]).squaredNorm());
     }
-    // Among the nearest dots (there are four on a square grid), the first whose opposite exists.
-    for (size_t a = 0; a < dots.size() && pairs[q][0] < 0; ++a) {
-      if (a == q || (dots[a] - dots[q]).norm() > 1.05 * nearest) continue;
-      const Vec3 mirror = 2.0 * dots[q] - dots[a];
-      for (size_t b = 0; b < dots.size(); ++b) {
-        if (b != q && b != a && (dots[b] - mirror).norm() < 0.25 * nearest) {
-          pairs[q] = {static_cast<int>(a), static_cast<int>(b)};
-          break;
-        }
-      }
-    }
+    nearest.push_back(best);
   }
-  return pairs;
+  std::nth_element(nearest.begin(), nearest.begin() + nearest.size() / 2, nearest.end());
+  return nearest[nearest.size() / 2];
 }
 
-DiffuseEstimate EstimateDiffuse(const std::vector<Rgb>& r, const std::vector<double>& noise_scale,
-                                const std::vector<std::array<int, 2>>& neighbours, double clip) {
-  if (r.size() != noise_scale.size() || r.size() != neighbours.size()) {
-    ThrowInvalidInput("EstimateDiffuse", std::to_string(r.size()) + " samples but " +
-                                             std::to_string(noise_scale.size()) + " noise scales and " +
-                                             std::to_string(neighbours.size()) + " neighbour pairs");
-  }
-  DiffuseEstimate estimate;
-  const size_t n = r.size();
-  if (n == 0) return estimate;
-  std::vector<double> y(n), scale(n);
-  for (size_t q = 0; q < n; ++q) {
-    y[q] = Luminance(r[q]);
-    scale[q] = std::max(noise_scale[q], 1e-300);
-  }
-  // The shot noise's constant c (Var(y_q) = c s_q E[y_q]) from the second differences across
-  // neighbouring dots, y_q - (y_a + y_b) / 2, over the samples of the floor set: the lobe is smooth
-  // from dot to dot (its slope cancels), the noise is not.
-  // Only triples wholly in the set when there are enough of them (at least 5), so that the edge
-  // of the floor, where the tails begin, does not count.
-  std::vector<double> work, inner;
-  const auto noise_constant = [&](const std::vector<uint8_t>& set) {
-    work.clear();
-    inner.clear();
-    for (size_t q = 0; q < n; ++q) {
-      const int a = neighbours[q][0], b = neighbours[q][1];
-      if (!set[q] || a < 0 || b < 0 || a >= static_cast<int>(n) || b >= static_cast<int>(n)) continue;
-      const double variance =
-          scale[q] * std::abs(y[q]) + 0.25 * (scale[a] * std::abs(y[a]) + scale[b] * std::abs(y[b]));
-      if (!(variance > 0)) continue;
-      const double d = std::abs(y[q] - 0.5 * (y[a] + y[b])) / std::sqrt(variance);
-      work.push_back(d);
-      if (set[a] && set[b]) inner.push_back(d);
-    }
-    if (inner.size() >= 5) work.swap(inner);
-    if (work.empty()) return 0.0;
-    std::nth_element(work.begin(), work.begin() + work.size() / 2, work.end());
-    return std::pow(work[work.size() / 2] / 0.6745, 2);  // the median of |N(0, 1)| is 0.6745
-  };
-  const auto mean_of = [&](const std::vector<uint8_t>& set) {
-    double sum = 0, weights = 0;
-    for (size_t q = 0; q < n; ++q) {
-      if (set[q]) sum += y[q] / scale[q], weights += 1.0 / scale[q];  // inverse variance on the floor
-    }
-    return sum / weights;
-  };
-  // Start from the lowest tenth of the samples (at least 5): the floor is the bottom of the data.
-  std::vector<size_t> order(n);
-  for (size_t q = 0; q < n; ++q) order[q] = q;
-  const size_t start = std::min(n, std::max<size_t>(5, n / 10));
-  std::partial_sort(order.begin(), order.begin() + start, order.end(), [&](size_t a, size_t b) { return y[a] < y[b]; });
-  std::vector<uint8_t> set(n, 0);
-  for (size_t k = 0; k < start; ++k) set[order[k]] = 1;
-  double floor = mean_of(set), c = noise_constant(set);
-  for (int iteration = 0; iteration < 50; ++iteration) {
-    // On the floor, sd(y_q) = sqrt(c floor s_q).
-    const double spread = std::sqrt(c * std::max(floor, 0.0));
-    std::vector<uint8_t> next(n, 0);
-    size_t members = 0;
-    for (size_t q = 0; q < n; ++q) {
-      if (std::abs(y[q] - floor) <= clip * spread * std::sqrt(scale[q])) next[q] = 1, ++members;
-    }
-    if (members == 0 || next == set) break;
-    set = std::move(next);
-    floor = mean_of(set);
-    c = noise_constant(set);
-  }
-  Rgb sum = {0, 0, 0};
-  double weights = 0;
-  for (size_t q = 0; q < n; ++q) {
-    if (!set[q]) continue;
-    for (int k = 0; k < 3; ++k) sum[k] += r[q][k] / scale[q];
-    weights += 1.0 / scale[q];
-    ++estimate.floor_samples;
-  }
-  for (int k = 0; k < 3; ++k) estimate.rho_d[k] = sum[k] / weights;
-  estimate.spread = std::sqrt(c * std::max(floor, 0.0));
-  return estimate;
-}
 
 // ---------------------------------------------------------------------------------------------
 // Reader
@@ -397,7 +60,7 @@ SliceStore SliceStore::Open(const fs::path& folder) {
   SliceStore store;
   store.folder_ = folder;
   try {
-    store.info_ = InfoFromJson(manifest);
+    store.info_ = InfoFromManifest(manifest);
   } catch (const nlohmann::json::exception& e) {
     ThrowFormatError((folder / kManifest).string(), std::string("is malformed: ") + e.what());
   }
@@ -405,14 +68,13 @@ SliceStore SliceStore::Open(const fs::path& folder) {
   if (!manifest.value("complete", false)) {
     ThrowInvalidInput(folder.string(), "holds an unfinished processing", "re-run 'svbtdf process' to finish it");
   }
-  store.calibration_ = calib::ReadSessionCalibration(folder / kCalibration);
-  if (static_cast<int>(store.calibration_.monitor.dots.size()) != store.info_.num_dots) {
-    ThrowFormatError((folder / kCalibration).string(), "lists a different number of dots than processed.json");
+  store.geometry_ = GeometryFromManifest(manifest);
+  if (static_cast<int>(store.geometry_.dots.size()) != store.info_.num_dots) {
+    ThrowFormatError((folder / kManifest).string(), "lists a different number of dots in its geometry than num_dots");
   }
-  store.geometry_ = MakeTexelGeometry(store.calibration_, store.info_.texels_x, store.info_.texels_y);
   store.light_grid_ = Hemicube(store.info_.light_resolution);
   store.files_ = std::make_shared<Files>(folder);
-  store.files_->dot_cell_area = DotCellArea(store.geometry_.dots);
+  store.files_->dot_cell_area = store.geometry_.DotCellArea();
   if (store.files_->samples.Size() != NumTiles(store.info_) * TileBytes(store.info_)) {
     ThrowFormatError((folder / kSamples).string(), "has the wrong size for its manifest");
   }
@@ -426,15 +88,9 @@ SliceStore SliceStore::Open(const fs::path& folder) {
     }
     return map;
   };
-  store.rho_d_ = read_map("rho_d.exr", 3);
-  store.mask_ = read_map("mask.exr", 1);
-  if (fs::exists(folder / "reach.exr")) {
-    store.reach_ = read_map("reach.exr", 1);
-  } else {  // written before reach.exr existed: the same map from the geometry
-    const std::vector<uint8_t> reach = TexelsWithDotBeneath(store.geometry_);
-    store.reach_ = FloatImage(store.info_.texels_x, store.info_.texels_y, 1);
-    for (size_t t = 0; t < reach.size(); ++t) store.reach_.pixels[t] = reach[t] ? 1.0f : 0.0f;
-  }
+  store.rho_d_ = read_map(kRhoD, 3);
+  store.mask_ = read_map(kMask, 1);
+  store.reach_ = read_map(kReach, 1);
   return store;
 }
 
@@ -511,335 +167,6 @@ TexelSlice SliceStore::SliceFromSamples(int64_t texel, const float* rgb, size_t 
     slice.solid_angle.push_back(files_->dot_cell_area * std::abs(i.z()) / to_dot.squaredNorm());
   }
   return slice;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Writer
-
-struct SliceStoreWriter::State {
-  fs::path folder;
-  SliceStoreInfo info;
-  calib::SessionCalibration calibration;
-  TexelGeometry geometry;
-  std::unique_ptr<File> samples;
-  std::set<int> dots_done;
-  std::optional<DurableLog> progress;  // progress.jsonl: one line per dot written
-};
-
-namespace {
-
-bool FolderIsEmpty(const fs::path& folder) { return fs::is_directory(folder) && fs::is_empty(folder); }
-
-// The dots whose samples are on disk. A line torn by a crash is left out and cut off before the
-// next append; a damaged line (glued to a torn one by a version that did not cut it off) names
-// no dot. Either way that dot is processed again, which rewrites its samples in place.
-std::set<int> ReadProgress(const DurableLog& log) {
-  std::set<int> done;
-  for (const std::string& line : log.lines()) {
-    try {
-      done.insert(nlohmann::json::parse(line).at("dot").get<int>());
-    } catch (const nlohmann::json::exception&) {
-    }
-  }
-  return done;
-}
-
-}  // namespace
-
-SliceStoreWriter::SliceStoreWriter(const fs::path& folder, const SliceStoreInfo& info,
-                                   const calib::SessionCalibration& calibration)
-    : state_(std::make_unique<State>()) {
-  CheckInfo(info, folder.string());
-  if (static_cast<int>(calibration.monitor.dots.size()) != info.num_dots) {
-    ThrowInvalidInput(folder.string(), "the calibration lists " + std::to_string(calibration.monitor.dots.size()) +
-                                           " dots but the store is for " + std::to_string(info.num_dots));
-  }
-  State& s = *state_;
-  s.folder = folder;
-  s.info = info;
-  s.calibration = calibration;
-  s.geometry = MakeTexelGeometry(calibration, info.texels_x, info.texels_y);
-  const uint64_t bytes = NumTiles(info) * TileBytes(info);
-  if (fs::exists(folder / kManifest)) {
-    const nlohmann::json manifest = ReadManifest(folder);
-    if (manifest.value("complete", false)) {
-      ThrowInvalidInput(folder.string(), "already holds a finished processing", "choose a new output folder");
-    }
-    const nlohmann::json calibration_on_disk = nlohmann::json::parse(ReadTextFile(folder / kCalibration));
-    if (manifest.at("texels_x") != info.texels_x || manifest.at("texels_y") != info.texels_y ||
-        manifest.at("num_dots") != info.num_dots || manifest.at("light_resolution") != info.light_resolution ||
-        manifest.at("tile_texels") != info.tile_texels || calibration_on_disk != calib::ToJson(calibration)) {
-      ThrowInvalidInput(folder.string(), "holds an unfinished processing with other settings or another calibration",
-                        "finish it with the same options, or choose a new output folder");
-    }
-    s.samples = std::make_unique<File>(folder / kSamples, O_RDWR);
-    if (s.samples->Size() != bytes) ThrowFormatError((folder / kSamples).string(), "has the wrong size to resume");
-    s.progress = DurableLog::Open(folder / kProgress);
-    s.dots_done = ReadProgress(*s.progress);
-    return;
-  }
-  if (fs::exists(folder) && !FolderIsEmpty(folder)) {
-    ThrowInvalidInput(folder.string(), "is not empty and holds no unfinished processing", "choose a new output folder");
-  }
-  std::error_code error;
-  fs::create_directories(folder, error);
-  if (error) ThrowIoError(folder.string(), "cannot create: " + error.message(), "is the folder writable?");
-  calib::WriteSessionCalibration(folder / kCalibration, calibration);
-  s.samples = std::make_unique<File>(folder / kSamples, O_RDWR | O_CREAT | O_TRUNC);
-  s.samples->Resize(bytes);  // sparse until written
-  WriteManifest(folder, info, /*complete=*/false, nlohmann::json::object());
-}
-
-SliceStoreWriter::~SliceStoreWriter() = default;
-SliceStoreWriter::SliceStoreWriter(SliceStoreWriter&&) noexcept = default;
-
-bool SliceStoreWriter::HasDot(int dot) const { return state_->dots_done.count(dot) > 0; }
-
-void SliceStoreWriter::WriteDot(int dot, const std::vector<float>& rgb) {
-  State& s = *state_;
-  const int64_t texels = s.geometry.num_texels();
-  if (dot < 0 || dot >= s.info.num_dots) ThrowInvalidInput("dot", std::to_string(dot) + " is outside the store");
-  if (static_cast<int64_t>(rgb.size()) != 3 * texels) {
-    ThrowInvalidInput("dot " + std::to_string(dot), "has " + std::to_string(rgb.size()) + " values for " +
-                                                        std::to_string(texels) + " RGB texels");
-  }
-  const int64_t tile_values = static_cast<int64_t>(s.info.tile_texels) * 3;
-  std::vector<Half> run(tile_values);
-  for (int64_t tile = 0; tile < NumTiles(s.info); ++tile) {
-    const int64_t begin = tile * tile_values, end = std::min<int64_t>(3 * texels, begin + tile_values);
-    std::fill(run.begin(), run.end(), Half(kNaN));
-    for (int64_t k = begin; k < end; ++k) run[k - begin] = Half(rgb[k]);
-    const uint64_t offset = tile * TileBytes(s.info) + static_cast<uint64_t>(dot) * tile_values * sizeof(Half);
-    s.samples->WriteAt(run.data(), run.size() * sizeof(Half), offset);
-  }
-  s.samples->Sync();
-  if (!s.progress) s.progress = DurableLog::Open(s.folder / kProgress);
-  s.progress->Append(nlohmann::json{{"dot", dot}}.dump());
-  s.dots_done.insert(dot);
-}
-
-namespace {
-
-struct TexelSummary {
-  Rgb rho_d = {0, 0, 0};
-  bool valid = false;
-  int samples = 0;
-};
-
-// One texel's valid samples, with their light directions and noise scales.
-struct TexelSamples {
-  std::vector<Vec3> light;
-  std::vector<Rgb> rgb;
-  std::vector<double> noise_scale;  // s_q = |p_q - x|^2 / (|i_q.z| P(theta_q)): R per unit camera rate
-  std::vector<int> dot;              // which dot each sample is
-};
-
-TexelSamples GatherSamples(const TexelGeometry& geometry, const calib::MonitorCalibration& monitor, int64_t texel,
-                           const float* tile, int tile_texels, int64_t k, int num_dots) {
-  const Vec3 x = geometry.TexelCentre(texel);
-  TexelSamples out;
-  for (int q = 0; q < num_dots; ++q) {
-    const float* r = tile + (static_cast<int64_t>(q) * tile_texels + k) * 3;
-    if (!std::isfinite(r[0]) || !std::isfinite(r[1]) || !std::isfinite(r[2])) continue;
-    const Vec3 to_dot = geometry.dots[q] - x;
-    const Vec3 i = to_dot.normalized();
-    const double emission = std::max(1e-6, monitor.Emission(std::max(0.0, -i.dot(geometry.monitor_normal))));
-    out.light.push_back(i);
-    out.rgb.push_back({r[0], r[1], r[2]});
-    out.noise_scale.push_back(to_dot.squaredNorm() / (std::max(1e-9, std::abs(i.z())) * emission));
-    out.dot.push_back(q);
-  }
-  return out;
-}
-
-// Diffuse separation: the floor of the samples (EstimateDiffuse) whose dot is not too dim in the
-// image for a uniform R (1 / s_q at least `diffuse_threshold` of the texel's largest): a choice
-// made on the geometry, not on the measured values, so that it does not bias the floor.
-Rgb SeparateDiffuse(const TexelSamples& samples, const std::vector<std::array<int, 2>>& neighbours,
-                    const SliceStoreWriter::FinishOptions& options) {
-  if (samples.rgb.empty()) return {0, 0, 0};
-  double brightest = 0;
-  for (double s : samples.noise_scale) brightest = std::max(brightest, 1.0 / s);
-  std::vector<int> index(neighbours.size(), -1);  // dot -> position among the kept samples
-  std::vector<Rgb> kept;
-  std::vector<double> scale;
-  std::vector<int> kept_dots;
-  for (size_t s = 0; s < samples.rgb.size(); ++s) {
-    if (1.0 / samples.noise_scale[s] < options.diffuse_threshold * brightest) continue;
-    index[samples.dot[s]] = static_cast<int>(kept.size());
-    kept.push_back(samples.rgb[s]);
-    scale.push_back(samples.noise_scale[s]);
-    kept_dots.push_back(samples.dot[s]);
-  }
-  if (kept.empty()) return {0, 0, 0};
-  std::vector<std::array<int, 2>> neighbour(kept.size(), {-1, -1});
-  for (size_t k = 0; k < kept.size(); ++k) {
-    const auto [a, b] = neighbours[kept_dots[k]];
-    if (a >= 0 && b >= 0 && index[a] >= 0 && index[b] >= 0) neighbour[k] = {index[a], index[b]};
-  }
-  Rgb rho_d = EstimateDiffuse(kept, scale, neighbour).rho_d;
-  for (double& d : rho_d) d = std::max(0.0, d);
-  return rho_d;
-}
-
-// The resampled refractive slice of one texel given its diffuse term.
-TexelSummary Resample(const TexelSamples& samples, const Rgb& rho_d, const PushPullResampler& resampler,
-                      const SliceStoreWriter::FinishOptions& options, std::vector<float>* cells) {
-  TexelSummary summary;
-  summary.samples = static_cast<int>(samples.light.size());
-  summary.rho_d = rho_d;
-  cells->assign(resampler.grid().num_cells(), 0.0f);
-  if (summary.samples == 0) return summary;
-  std::vector<float> values(samples.rgb.size()), weights(samples.rgb.size(), 1.0f);
-  double peak = 0;
-  for (size_t s = 0; s < samples.rgb.size(); ++s) {
-    values[s] = static_cast<float>(std::max(0.0, Luminance(samples.rgb[s]) - Luminance(rho_d)));
-    peak = std::max(peak, static_cast<double>(values[s]));
-  }
-  std::vector<float> confidence;
-  resampler.Resample(samples.light, values, weights, cells, &confidence);
-  summary.valid = summary.samples >= options.min_valid_dots && peak > 0;
-  return summary;
-}
-
-// For every texel without a dot beneath it, the nearest texel on the grid that has one (breadth
-// first over the 4-neighbourhood, ties to the first reached); -1 when no texel has a dot beneath.
-std::vector<int64_t> NearestReachedTexel(const std::vector<uint8_t>& reach, int texels_x, int texels_y) {
-  const int64_t texels = static_cast<int64_t>(texels_x) * texels_y;
-  std::vector<int64_t> source(texels, -1), queue;
-  for (int64_t t = 0; t < texels; ++t) {
-    if (reach[t]) source[t] = t, queue.push_back(t);
-  }
-  for (size_t head = 0; head < queue.size(); ++head) {
-    const int64_t t = queue[head];
-    const int col = static_cast<int>(t % texels_x), row = static_cast<int>(t / texels_x);
-    const int64_t neighbours[4] = {col > 0 ? t - 1 : -1, col + 1 < texels_x ? t + 1 : -1,
-                                   row > 0 ? t - texels_x : -1, row + 1 < texels_y ? t + texels_x : -1};
-    for (int64_t u : neighbours) {
-      if (u >= 0 && source[u] < 0) source[u] = source[t], queue.push_back(u);
-    }
-  }
-  return source;
-}
-
-}  // namespace
-
-void SliceStoreWriter::Finish(const FinishOptions& options) {
-  State& s = *state_;
-  for (int q = 0; q < s.info.num_dots; ++q) {
-    if (!HasDot(q)) ThrowInvalidInput(s.folder.string(), "is missing dot " + std::to_string(q), "process every dot first");
-  }
-  const Hemicube light_grid(s.info.light_resolution);
-  const PushPullResampler resampler(light_grid);
-  const int64_t texels = s.geometry.num_texels();
-  const calib::MonitorCalibration& monitor = s.calibration.monitor;
-  const File slices(s.folder / kSlices, O_RDWR | O_CREAT | O_TRUNC);
-  FloatImage rho_d(s.info.texels_x, s.info.texels_y, 3), mask(s.info.texels_x, s.info.texels_y, 1),
-      reach_map(s.info.texels_x, s.info.texels_y, 1);
-  const std::vector<uint8_t> reach = TexelsWithDotBeneath(s.geometry);
-  const std::vector<std::array<int, 2>> neighbours = OppositeNeighbours(s.geometry.dots);
-  int64_t valid_texels = 0, without_dot_beneath = 0;
-  for (uint8_t r : reach) without_dot_beneath += r ? 0 : 1;
-  std::unique_ptr<ProgressBar> progress;
-  if (options.progress) progress = std::make_unique<ProgressBar>("separate and resample", texels, "texels");
-  std::vector<Half> tile_raw(TileBytes(s.info) / sizeof(Half));
-  std::vector<float> tile(tile_raw.size());
-  const auto read_tile = [&](int64_t t) {
-    s.samples->ReadAt(tile_raw.data(), TileBytes(s.info), t * TileBytes(s.info));
-    for (size_t k = 0; k < tile.size(); ++k) tile[k] = static_cast<float>(tile_raw[k]);
-  };
-  const auto store_summary = [&](int64_t texel, const TexelSummary& summary) {
-    const int col = static_cast<int>(texel % s.info.texels_x), row = static_cast<int>(texel / s.info.texels_x);
-    for (int c = 0; c < 3; ++c) rho_d.at(col, row, c) = static_cast<float>(summary.rho_d[c]);
-    mask.at(col, row) = summary.valid ? 1.0f : 0.0f;
-    reach_map.at(col, row) = reach[texel] ? 1.0f : 0.0f;
-  };
-  // Writes the slices of the tile's texels whose reach is `reached`, in contiguous runs.
-  const auto write_slices = [&](int64_t begin, int64_t end, const std::vector<Half>& slice_out, bool reached) {
-    const size_t cells = light_grid.num_cells();
-    for (int64_t k = 0; k < end - begin;) {
-      if ((reach[begin + k] != 0) != reached) {
-        ++k;
-        continue;
-      }
-      int64_t run = k;
-      while (run < end - begin && (reach[begin + run] != 0) == reached) ++run;
-      slices.WriteAt(&slice_out[k * cells], (run - k) * SliceBytes(light_grid), (begin + k) * SliceBytes(light_grid));
-      k = run;
-    }
-  };
-  // Pass 1: every texel with a dot beneath it (the others' slices wait for their diffuse term).
-  std::vector<uint8_t> tile_has_unreached(NumTiles(s.info), 0);
-  for (int64_t t = 0; t < NumTiles(s.info); ++t) {
-    read_tile(t);
-    const int64_t begin = t * s.info.tile_texels, end = std::min(texels, begin + s.info.tile_texels);
-    std::vector<Half> slice_out((end - begin) * light_grid.num_cells());
-    std::vector<TexelSummary> summaries(end - begin);
-    ParallelFor(end - begin, options.threads, 16, [&](int64_t a, int64_t b) {
-      std::vector<float> cells;
-      for (int64_t k = a; k < b; ++k) {
-        if (!reach[begin + k]) continue;
-        const TexelSamples samples =
-            GatherSamples(s.geometry, monitor, begin + k, tile.data(), s.info.tile_texels, k, s.info.num_dots);
-        summaries[k] = Resample(samples, SeparateDiffuse(samples, neighbours, options), resampler, options, &cells);
-        for (size_t c = 0; c < cells.size(); ++c) slice_out[k * cells.size() + c] = Half(cells[c]);
-      }
-    });
-    write_slices(begin, end, slice_out, /*reached=*/true);
-    for (int64_t k = 0; k < end - begin; ++k) {
-      if (!reach[begin + k]) {
-        tile_has_unreached[t] = 1;
-        continue;
-      }
-      store_summary(begin + k, summaries[k]);
-      valid_texels += summaries[k].valid;
-    }
-    if (progress) progress->Advance(end - begin - std::count(reach.begin() + begin, reach.begin() + end, 0));
-  }
-  // Pass 2: a texel without a dot beneath it sees only the lobe's tails, whose floor is not its
-  // diffuse term: it takes the diffuse term of the nearest texel that has a dot beneath it (0 when
-  // none has).
-  if (without_dot_beneath > 0) {
-    const std::vector<int64_t> source = NearestReachedTexel(reach, s.info.texels_x, s.info.texels_y);
-    for (int64_t t = 0; t < NumTiles(s.info); ++t) {
-      if (!tile_has_unreached[t]) continue;
-      read_tile(t);
-      const int64_t begin = t * s.info.tile_texels, end = std::min(texels, begin + s.info.tile_texels);
-      std::vector<Half> slice_out((end - begin) * light_grid.num_cells());
-      std::vector<TexelSummary> summaries(end - begin);
-      ParallelFor(end - begin, options.threads, 16, [&](int64_t a, int64_t b) {
-        std::vector<float> cells;
-        for (int64_t k = a; k < b; ++k) {
-          if (reach[begin + k]) continue;
-          const int64_t from = source[begin + k];
-          Rgb diffuse = {0, 0, 0};
-          if (from >= 0) {
-            const int col = static_cast<int>(from % s.info.texels_x), row = static_cast<int>(from / s.info.texels_x);
-            diffuse = {rho_d.at(col, row, 0), rho_d.at(col, row, 1), rho_d.at(col, row, 2)};
-          }
-          const TexelSamples samples =
-              GatherSamples(s.geometry, monitor, begin + k, tile.data(), s.info.tile_texels, k, s.info.num_dots);
-          summaries[k] = Resample(samples, diffuse, resampler, options, &cells);
-          for (size_t c = 0; c < cells.size(); ++c) slice_out[k * cells.size() + c] = Half(cells[c]);
-        }
-      });
-      write_slices(begin, end, slice_out, /*reached=*/false);
-      for (int64_t k = 0; k < end - begin; ++k) {
-        if (reach[begin + k]) continue;
-        store_summary(begin + k, summaries[k]);
-        valid_texels += summaries[k].valid;
-      }
-      if (progress) progress->Advance(std::count(reach.begin() + begin, reach.begin() + end, 0));
-    }
-  }
-  if (progress) progress->Finish();
-  slices.Sync();
-  WriteFloatImage(s.folder / "rho_d.exr", rho_d, /*half_precision=*/false, /*overwrite=*/true);
-  WriteFloatImage(s.folder / "mask.exr", mask, false, true);
-  WriteFloatImage(s.folder / "reach.exr", reach_map, false, true);
-  const nlohmann::json statistics = {
-      {"texels", texels}, {"valid_texels", valid_texels}, {"texels_without_dot_beneath", without_dot_beneath}};
-  WriteManifest(s.folder, s.info, /*complete=*/true, statistics);
 }
 
 }  // namespace svbtdf::fit

@@ -17,7 +17,7 @@
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/common/progress.h"
 #include "svbtdf/session/session.h"
-#include "svbtdf/fit/process_session.h"
+#include "svbtdf/process/process_session.h"
 #include "svbtdf/fit/slice_store.h"
 #include "svbtdf/simulate/session_writer.h"
 #include "svbtdf/simulate/truth_io.h"
@@ -166,9 +166,9 @@ TEST_F(CalibrateSessionTest, CalibrationFileRoundTripsAndDamageIsAClearError) {
 TEST_F(CalibrateSessionTest, ProcessingWithTheCalibrationMeasuresTheTrueBtdf) {
   const session::Session session = session::Session::Open(root_ / "sim" / "session");
   const SessionCalibration c = CalibrateSession(session, Quiet());
-  fit::ProcessOptions options;
+  process::ProcessOptions options;
   options.progress = false;
-  fit::ProcessSession(session, c, root_ / "processed", options);
+  process::ProcessSession(session, c, root_ / "processed", options);
   const fit::SliceStore store = fit::SliceStore::Open(root_ / "processed");
   const MaterialTruth material = ReadMaterialTruth(root_ / "sim" / "truth");
   // Measured R against the truth at the true directions of each sample (5% of the peak and up).

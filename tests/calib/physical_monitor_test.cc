@@ -19,7 +19,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/progress.h"
 #include "svbtdf/session/session.h"
-#include "svbtdf/fit/process_session.h"
+#include "svbtdf/process/process_session.h"
 #include "svbtdf/fit/slice_store.h"
 #include "svbtdf/simulate/session_writer.h"
 #include "svbtdf/simulate/truth_io.h"
@@ -109,9 +109,9 @@ TEST_P(PhysicalMonitorTest, DotsLandWhereAScreenLyingSoShowsThem) {
 
   // With the right dots, processing measures the true BTDF (a mislabelled grid puts every sample
   // at another dot's direction: errors of tens of percent).
-  fit::ProcessOptions options;
+  process::ProcessOptions options;
   options.progress = false;
-  fit::ProcessSession(session, c, out / "processed", options);
+  process::ProcessSession(session, c, out / "processed", options);
   const fit::SliceStore store = fit::SliceStore::Open(out / "processed");
   const MaterialTruth material = ReadMaterialTruth(out / "truth");
   std::vector<double> errors;

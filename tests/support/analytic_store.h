@@ -12,6 +12,7 @@
 
 #include "svbtdf/calib/session_calibration.h"
 #include "svbtdf/fit/slice_store.h"
+#include "svbtdf/process/slice_store_writer.h"
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/ggx.h"
 
@@ -86,8 +87,8 @@ inline void WriteAnalyticStore(const std::filesystem::path& folder, const Analyt
   info.num_dots = static_cast<int>(calibration.monitor.dots.size());
   info.eta = store_eta;
   info.tile_texels = tile_texels;
-  const fit::TexelGeometry geometry = fit::MakeTexelGeometry(calibration, truth.width, truth.height);
-  fit::SliceStoreWriter writer(folder, info, calibration);
+  const fit::TexelGeometry geometry = process::MakeTexelGeometry(calibration, truth.width, truth.height);
+  process::SliceStoreWriter writer(folder, info, calibration);
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> gauss(0.0, 1.0);
   std::vector<float> rgb(3 * geometry.num_texels());
@@ -100,7 +101,7 @@ inline void WriteAnalyticStore(const std::filesystem::path& folder, const Analyt
     }
     writer.WriteDot(q, rgb);
   }
-  fit::SliceStoreWriter::FinishOptions finish;
+  process::SliceStoreWriter::FinishOptions finish;
   finish.progress = false;
   writer.Finish(finish);
 }

@@ -10,13 +10,13 @@
 //
 // The checks only read the outputs: a stage's warnings are the same whenever they are computed.
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
-#include "svbtdf/calib/session_calibration.h"
 #include "svbtdf/fit/material.h"
 
 namespace svbtdf::fit {
@@ -37,6 +37,11 @@ struct QualityWarning {
   // "warning: calibrate: FILE: WHAT (FIGURES); likely cause: LIKELY_CAUSE"
   std::string Line() const;
 };
+
+// printf into a string: a warning's figures.
+std::string FormatFigures(const char* format, ...) __attribute__((format(printf, 1, 2)));
+// 100 part / whole, 0 for an empty whole.
+double Percent(int64_t part, int64_t whole);
 
 // --- Thresholds (docs/quality.md says why each is where it is) -----------------------------------
 
@@ -82,8 +87,6 @@ inline constexpr double kMaxFailedFitFraction = 0.25;
 
 // --- Checks ------------------------------------------------------------------------------------
 
-// `file` is how the warnings name the calibration (e.g. SESSION/calibration.json).
-std::vector<QualityWarning> CheckCalibration(const calib::SessionCalibration& calibration, const std::string& file);
 // Reads PROCESSED/mask.exr, and PROCESSED/reach.exr or processed.json's
 // statistics.texels_without_dot_beneath when present (the check is skipped when neither is).
 std::vector<QualityWarning> CheckSliceStore(const std::filesystem::path& processed);

@@ -18,10 +18,15 @@
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/common/statistics.h"
 #include "svbtdf/fit/slice_store.h"
+#include "svbtdf/process/diffuse_separation.h"
+#include "svbtdf/process/slice_store_writer.h"
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/ggx.h"
 
-namespace svbtdf::fit {
+namespace svbtdf::process {
+using fit::SliceStore;
+using fit::SliceStoreInfo;
+using fit::TexelGeometry;
 namespace {
 namespace fs = std::filesystem;
 
@@ -309,4 +314,4 @@ TEST(DotBeneath, StoreWritesReachAndCountsItAndTheDiffuseComesFromTheNearestTexe
 }
 
 }  // namespace
-}  // namespace svbtdf::fit
+}  // namespace svbtdf::process

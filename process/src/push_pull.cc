@@ -1,4 +1,4 @@
-#include "svbtdf/fit/push_pull.h"
+#include "svbtdf/process/push_pull.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include "svbtdf/common/error.h"
 
-namespace svbtdf::fit {
+namespace svbtdf::process {
 namespace {
 
 // Position of a direction (z >= 0) in the unfolded 2N x 2N cross, in cell units (continuous).
@@ -106,4 +106,4 @@ void PushPullResampler::Resample(const std::vector<Vec3>& light, const std::vect
   }
 }
 
-}  // namespace svbtdf::fit
+}  // namespace svbtdf::process

@@ -20,12 +20,17 @@
 #include "svbtdf/common/progress.h"
 #include "svbtdf/session/session.h"
 #include "svbtdf/common/statistics.h"
-#include "svbtdf/fit/process_session.h"
+#include "svbtdf/process/process_session.h"
 #include "svbtdf/fit/slice_store.h"
+#include "svbtdf/process/diffuse_separation.h"
+#include "svbtdf/process/slice_store_writer.h"
 #include "svbtdf/simulate/session_writer.h"
 #include "truth_calibration.h"
 
-namespace svbtdf::fit {
+namespace svbtdf::process {
+using fit::SliceStore;
+using fit::SliceStoreInfo;
+using fit::TexelGeometry;
 namespace {
 namespace fs = std::filesystem;
 
@@ -139,4 +144,4 @@ TEST(RhoDPresets, DemoWithinTwoPercent) {
 }
 
 }  // namespace
-}  // namespace svbtdf::fit
+}  // namespace svbtdf::process

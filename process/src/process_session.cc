@@ -1,4 +1,4 @@
-#include "svbtdf/fit/process_session.h"
+#include "svbtdf/process/process_session.h"
 
 #include <algorithm>
 #include <atomic>
@@ -18,10 +18,14 @@
 #include "svbtdf/common/parallel.h"
 #include "svbtdf/common/progress.h"
 #include "svbtdf/fit/slice_store.h"
+#include "svbtdf/process/slice_store_writer.h"
 #include "svbtdf/session/capture_key.h"
 
-namespace svbtdf::fit {
+namespace svbtdf::process {
 namespace fs = std::filesystem;
+using fit::SliceStore;
+using fit::SliceStoreInfo;
+using fit::TexelGeometry;
 namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
@@ -393,4 +397,4 @@ ProcessReport ProcessSession(const session::Session& session, const calib::Sessi
   return report;
 }
 
-}  // namespace svbtdf::fit
+}  // namespace svbtdf::process

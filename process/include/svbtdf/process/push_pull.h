@@ -13,7 +13,7 @@
 #include "svbtdf/model/hemicube.h"
 #include "svbtdf/model/vec.h"
 
-namespace svbtdf::fit {
+namespace svbtdf::process {
 
 class PushPullResampler {
  public:
@@ -35,4 +35,4 @@ class PushPullResampler {
   std::vector<int> pixel_of_cell_;  // row * size_ + col of each cell in the unfolded image
 };
 
-}  // namespace svbtdf::fit
+}  // namespace svbtdf::process

@@ -13,7 +13,7 @@
 #include "svbtdf/calib/session_calibration.h"
 #include "svbtdf/session/session.h"
 
-namespace svbtdf::fit {
+namespace svbtdf::process {
 
 struct ProcessOptions {
   int texels_x = 0, texels_y = 0;  // 0: session.json rig.sample.texels_x/_y, else ~2 pixels per texel
@@ -37,4 +37,4 @@ struct ProcessReport {
 ProcessReport ProcessSession(const session::Session& session, const calib::SessionCalibration& calibration,
                              const std::filesystem::path& out, const ProcessOptions& options);
 
-}  // namespace svbtdf::fit
+}  // namespace svbtdf::process

@@ -21,13 +21,18 @@
 #include "svbtdf/common/progress.h"
 #include "svbtdf/session/session.h"
 #include "svbtdf/common/statistics.h"
-#include "svbtdf/fit/process_session.h"
+#include "svbtdf/process/process_session.h"
 #include "svbtdf/fit/slice_store.h"
+#include "svbtdf/process/diffuse_separation.h"
+#include "svbtdf/process/slice_store_writer.h"
 #include "svbtdf/simulate/session_writer.h"
 #include "svbtdf/simulate/truth_io.h"
 #include "truth_calibration.h"
 
-namespace svbtdf::fit {
+namespace svbtdf::process {
+using fit::SliceStore;
+using fit::SliceStoreInfo;
+using fit::TexelGeometry;
 namespace {
 namespace fs = std::filesystem;
 
@@ -220,4 +225,4 @@ TEST(ProcessSession, ErrorsNameTheFile) {
 }
 
 }  // namespace
-}  // namespace svbtdf::fit
+}  // namespace svbtdf::process

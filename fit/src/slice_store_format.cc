@@ -1,0 +1,167 @@
+#include "svbtdf/fit/slice_store_format.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/error.h"
+
+namespace svbtdf::fit::store {
+namespace fs = std::filesystem;
+namespace {
+
+nlohmann::json InfoToJson(const SliceStoreInfo& info) {
+  return {{"texels_x", info.texels_x},     {"texels_y", info.texels_y},
+          {"num_dots", info.num_dots},     {"light_resolution", info.light_resolution},
+          {"tile_texels", info.tile_texels}, {"eta", info.eta}};
+}
+
+nlohmann::json VectorToJson(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+Vec3 VectorFromJson(const nlohmann::json& j) {
+  if (!j.is_array() || j.size() != 3) throw nlohmann::json::type_error::create(302, "a vector is 3 numbers", &j);
+  return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
+}
+
+nlohmann::json GeometryToJson(const TexelGeometry& g) {
+  nlohmann::json dots = nlohmann::json::array();
+  for (const Vec3& p : g.dots) dots.push_back(VectorToJson(p));
+  return {{"width_m", g.width_m},
+          {"height_m", g.height_m},
+          {"camera_centre", VectorToJson(g.camera_centre)},
+          {"monitor_normal", VectorToJson(g.monitor_normal)},
+          {"dots", dots}};
+}
+
+}  // namespace
+
+File::File(const fs::path& path, int flags) : path_(path), fd_(::open(path.c_str(), flags | O_CLOEXEC, 0644)) {
+  if (fd_ < 0) ThrowIoError(path.string(), std::string("cannot open: ") + std::strerror(errno));
+}
+
+File::~File() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void File::ReadAt(void* data, size_t bytes, uint64_t offset) const {
+  auto* p = static_cast<char*>(data);
+  while (bytes > 0) {
+    const ssize_t n = ::pread(fd_, p, bytes, static_cast<off_t>(offset));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) ThrowIoError(path_.string(), n == 0 ? "is shorter than its manifest says" : std::strerror(errno));
+    p += n, bytes -= n, offset += n;
+  }
+}
+
+void File::WriteAt(const void* data, size_t bytes, uint64_t offset) const {
+  const auto* p = static_cast<const char*>(data);
+  while (bytes > 0) {
+    const ssize_t n = ::pwrite(fd_, p, bytes, static_cast<off_t>(offset));
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) ThrowIoError(path_.string(), std::string("cannot write: ") + std::strerror(errno), "is the disk full?");
+    p += n, bytes -= n, offset += n;
+  }
+}
+
+void File::Resize(uint64_t bytes) const {
+  if (::ftruncate(fd_, static_cast<off_t>(bytes)) != 0) {
+    ThrowIoError(path_.string(), std::string("cannot allocate: ") + std::strerror(errno), "is the disk full?");
+  }
+}
+
+void File::Sync() const {
+  if (::fdatasync(fd_) != 0) ThrowIoError(path_.string(), std::string("cannot sync: ") + std::strerror(errno));
+}
+
+uint64_t File::Size() const {
+  struct stat st {};
+  if (::fstat(fd_, &st) != 0) ThrowIoError(path_.string(), std::strerror(errno));
+  return static_cast<uint64_t>(st.st_size);
+}
+
+int64_t NumTiles(const SliceStoreInfo& info) {
+  const int64_t texels = static_cast<int64_t>(info.texels_x) * info.texels_y;
+  return (texels + info.tile_texels - 1) / info.tile_texels;
+}
+
+uint64_t TileBytes(const SliceStoreInfo& info) {
+  return static_cast<uint64_t>(info.num_dots) * info.tile_texels * 3 * sizeof(Half);
+}
+
+uint64_t SliceBytes(const Hemicube& grid) { return static_cast<uint64_t>(grid.num_cells()) * sizeof(Half); }
+
+SliceStoreInfo InfoFromManifest(const nlohmann::json& j) {
+  SliceStoreInfo info;
+  info.texels_x = j.at("texels_x").get<int>();
+  info.texels_y = j.at("texels_y").get<int>();
+  info.num_dots = j.at("num_dots").get<int>();
+  info.light_resolution = j.at("light_resolution").get<int>();
+  info.tile_texels = j.at("tile_texels").get<int>();
+  info.eta = j.value("eta", 0.0);
+  info.provenance = j.value("provenance", nlohmann::json::object());
+  return info;
+}
+
+void CheckInfo(const SliceStoreInfo& info, const std::string& source) {
+  if (info.texels_x <= 0 || info.texels_y <= 0 || info.num_dots <= 0 || info.tile_texels <= 0) {
+    ThrowInvalidInput(source, "needs a positive texel grid, dot count and tile size");
+  }
+  const int r = info.light_resolution;
+  if (r < 2 || (r & (r - 1)) != 0) {
+    ThrowInvalidInput(source, "light hemicube resolution " + std::to_string(r) + " is not a power of two >= 2");
+  }
+}
+
+void WriteManifest(const fs::path& folder, const SliceStoreInfo& info, const TexelGeometry& geometry, bool complete,
+                   const nlohmann::json& statistics) {
+  nlohmann::json manifest = InfoToJson(info);
+  manifest["format"] = "svbtdf-processed";
+  manifest["version"] = kSliceStoreFormatVersion;
+  manifest["complete"] = complete;
+  manifest["provenance"] = info.provenance;
+  manifest["geometry"] = GeometryToJson(geometry);
+  manifest["statistics"] = statistics;
+  manifest["files"] = {{"samples", kSamples}, {"slices", kSlices}, {"calibration", kCalibration},
+                       {"rho_d", kRhoD}, {"mask", kMask}, {"reach", kReach}};
+  WriteTextAtomically(folder / kManifest, manifest.dump(2) + "\n");
+}
+
+nlohmann::json ReadManifest(const fs::path& folder) {
+  const fs::path path = folder / kManifest;
+  try {
+    nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(path));
+    if (manifest.at("format") != "svbtdf-processed") ThrowFormatError(path.string(), "is not a processed session");
+    if (manifest.at("version") != kSliceStoreFormatVersion) {
+      ThrowFormatError(path.string(), "has version " + manifest.at("version").dump() + "; this svbtdf reads version " +
+                                          std::to_string(kSliceStoreFormatVersion), "re-run 'svbtdf process'");
+    }
+    return manifest;
+  } catch (const nlohmann::json::exception& e) {
+    ThrowFormatError(path.string(), std::string("is malformed: ") + e.what());
+  }
+}
+
+
+TexelGeometry GeometryFromManifest(const nlohmann::json& manifest) {
+  const fs::path where = kManifest;
+  try {
+    TexelGeometry g;
+    const nlohmann::json& j = manifest.at("geometry");
+    g.texels_x = manifest.at("texels_x").get<int>();
+    g.texels_y = manifest.at("texels_y").get<int>();
+    g.width_m = j.at("width_m").get<double>();
+    g.height_m = j.at("height_m").get<double>();
+    g.camera_centre = VectorFromJson(j.at("camera_centre"));
+    g.monitor_normal = VectorFromJson(j.at("monitor_normal"));
+    for (const nlohmann::json& p : j.at("dots")) g.dots.push_back(VectorFromJson(p));
+    return g;
+  } catch (const nlohmann::json::exception& e) {
+    ThrowFormatError(where.string(), std::string("has a malformed geometry: ") + e.what());
+  }
+}
+
+}  // namespace svbtdf::fit::store

@@ -1,0 +1,115 @@
+#include "svbtdf/process/diffuse_separation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "svbtdf/common/error.h"
+
+namespace svbtdf::process {
+
+std::vector<std::array<int, 2>> OppositeNeighbours(const std::vector<Vec3>& dots) {
+  std::vector<std::array<int, 2>> pairs(dots.size(), {-1, -1});
+  for (size_t q = 0; q < dots.size(); ++q) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (size_t a = 0; a < dots.size(); ++a) {
+      if (a != q) nearest = std::min(nearest, (dots[a] - dots[q]).norm());
+    }
+    // Among the nearest dots (there are four on a square grid), the first whose opposite exists.
+    for (size_t a = 0; a < dots.size() && pairs[q][0] < 0; ++a) {
+      if (a == q || (dots[a] - dots[q]).norm() > 1.05 * nearest) continue;
+      const Vec3 mirror = 2.0 * dots[q] - dots[a];
+      for (size_t b = 0; b < dots.size(); ++b) {
+        if (b != q && b != a && (dots[b] - mirror).norm() < 0.25 * nearest) {
+          pairs[q] = {static_cast<int>(a), static_cast<int>(b)};
+          break;
+        }
+      }
+    }
+  }
+  return pairs;
+}
+
+DiffuseEstimate EstimateDiffuse(const std::vector<Rgb>& r, const std::vector<double>& noise_scale,
+                                const std::vector<std::array<int, 2>>& neighbours, double clip) {
+  if (r.size() != noise_scale.size() || r.size() != neighbours.size()) {
+    ThrowInvalidInput("EstimateDiffuse", std::to_string(r.size()) + " samples but " +
+                                             std::to_string(noise_scale.size()) + " noise scales and " +
+                                             std::to_string(neighbours.size()) + " neighbour pairs");
+  }
+  DiffuseEstimate estimate;
+  const size_t n = r.size();
+  if (n == 0) return estimate;
+  std::vector<double> y(n), scale(n);
+  for (size_t q = 0; q < n; ++q) {
+    y[q] = Luminance(r[q]);
+    scale[q] = std::max(noise_scale[q], 1e-300);
+  }
+  // The shot noise's constant c (Var(y_q) = c s_q E[y_q]) from the second differences across
+  // neighbouring dots, y_q - (y_a + y_b) / 2, over the samples of the floor set: the lobe is smooth
+  // from dot to dot (its slope cancels), the noise is not.
+  // Only triples wholly in the set when there are enough of them (at least 5), so that the edge
+  // of the floor, where the tails begin, does not count.
+  std::vector<double> work, inner;
+  const auto noise_constant = [&](const std::vector<uint8_t>& set) {
+    work.clear();
+    inner.clear();
+    for (size_t q = 0; q < n; ++q) {
+      const int a = neighbours[q][0], b = neighbours[q][1];
+      if (!set[q] || a < 0 || b < 0 || a >= static_cast<int>(n) || b >= static_cast<int>(n)) continue;
+      const double variance =
+          scale[q] * std::abs(y[q]) + 0.25 * (scale[a] * std::abs(y[a]) + scale[b] * std::abs(y[b]));
+      if (!(variance > 0)) continue;
+      const double d = std::abs(y[q] - 0.5 * (y[a] + y[b])) / std::sqrt(variance);
+      work.push_back(d);
+      if (set[a] && set[b]) inner.push_back(d);
+    }
+    if (inner.size() >= 5) work.swap(inner);
+    if (work.empty()) return 0.0;
+    std::nth_element(work.begin(), work.begin() + work.size() / 2, work.end());
+    return std::pow(work[work.size() / 2] / 0.6745, 2);  // the median of |N(0, 1)| is 0.6745
+  };
+  const auto mean_of = [&](const std::vector<uint8_t>& set) {
+    double sum = 0, weights = 0;
+    for (size_t q = 0; q < n; ++q) {
+      if (set[q]) sum += y[q] / scale[q], weights += 1.0 / scale[q];  // inverse variance on the floor
+    }
+    return sum / weights;
+  };
+  // Start from the lowest tenth of the samples (at least 5): the floor is the bottom of the data.
+  std::vector<size_t> order(n);
+  for (size_t q = 0; q < n; ++q) order[q] = q;
+  const size_t start = std::min(n, std::max<size_t>(5, n / 10));
+  std::partial_sort(order.begin(), order.begin() + start, order.end(), [&](size_t a, size_t b) { return y[a] < y[b]; });
+  std::vector<uint8_t> set(n, 0);
+  for (size_t k = 0; k < start; ++k) set[order[k]] = 1;
+  double floor = mean_of(set), c = noise_constant(set);
+  for (int iteration = 0; iteration < 50; ++iteration) {
+    // On the floor, sd(y_q) = sqrt(c floor s_q).
+    const double spread = std::sqrt(c * std::max(floor, 0.0));
+    std::vector<uint8_t> next(n, 0);
+    size_t members = 0;
+    for (size_t q = 0; q < n; ++q) {
+      if (std::abs(y[q] - floor) <= clip * spread * std::sqrt(scale[q])) next[q] = 1, ++members;
+    }
+    if (members == 0 || next == set) break;
+    set = std::move(next);
+    floor = mean_of(set);
+    c = noise_constant(set);
+  }
+  Rgb sum = {0, 0, 0};
+  double weights = 0;
+  for (size_t q = 0; q < n; ++q) {
+    if (!set[q]) continue;
+    for (int k = 0; k < 3; ++k) sum[k] += r[q][k] / scale[q];
+    weights += 1.0 / scale[q];
+    ++estimate.floor_samples;
+  }
+  for (int k = 0; k < 3; ++k) estimate.rho_d[k] = sum[k] / weights;
+  estimate.spread = std::sqrt(c * std::max(floor, 0.0));
+  return estimate;
+}
+
+
+}  // namespace svbtdf::process
