@@ -1,6 +1,7 @@
 // svbtdf validate-model: the dual-microfacet model against the Monte Carlo slab, reproducing the
 // paper's Figs. 3 and 5 (docs/validation.md). Prints a table of relative L2 errors; --json writes
-// them, --plots writes plane-of-incidence cross-sections and an HTML page showing them.
+// them, --plots writes plane-of-incidence cross-sections and an HTML page showing them (the
+// table, the JSON and the page are built by report/validation_page.h).
 
 #include <spdlog/spdlog.h>
 
@@ -9,18 +10,16 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <map>
 #include <memory>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "commands.h"
-#include "line_plot.h"
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/progress.h"
 #include "svbtdf/model/ndf_factory.h"
+#include "svbtdf/report/validation_page.h"
 #include "svbtdf/simulate/model_validation.h"
 
 namespace svbtdf::cli {
@@ -40,27 +39,6 @@ struct ValidateModelOptions {
   std::vector<double> incidences = {30.0, 45.0, 60.0};
   std::string json;
   std::string plots;
-};
-
-// One model's curve in a plot and its column in the tables.
-struct ModelColumn {
-  const char* key;
-  const char* label;
-  Rgb8 color;
-  const std::vector<double> ValidationCase::*values;
-  double ModelErrors::*error;
-};
-
-const ModelColumn kColumns[] = {
-    {"rho_T", "rho_T (rough entry)", {31, 119, 180}, &ValidationCase::rho_T, &ModelErrors::rho_T},
-    {"rho_B", "rho_B (rough exit)", {214, 39, 40}, &ValidationCase::rho_B, &ModelErrors::rho_B},
-    {"blend", "blend, best alpha", {44, 160, 44}, &ValidationCase::blend, &ModelErrors::blend},
-    {"single_same_ndf", "single interface, same NDF", {255, 127, 14}, &ValidationCase::single_same_ndf,
-     &ModelErrors::single_same_ndf},
-    {"single_fitted", "single interface, fitted roughness", {148, 103, 189},
-     &ValidationCase::single_fitted, &ModelErrors::single_fitted},
-    {"blend_fitted", "blend, fitted alpha and roughness", {23, 190, 207}, &ValidationCase::blend_fitted,
-     &ModelErrors::blend_fitted},
 };
 
 // Checks and creates the output locations before the (minute-long) run, so that a bad path fails
@@ -97,164 +75,15 @@ void CheckOptions(const ValidateModelOptions& options) {
   if (options.max_bounces < 2) ThrowInvalidInput("--max-bounces", "must be >= 2 to cross the slab");
 }
 
-nlohmann::json ErrorsToJson(const ModelErrors& errors) {
-  nlohmann::json out;
-  for (const ModelColumn& column : kColumns) out[column.key] = errors.*column.error;
-  return out;
-}
-
-nlohmann::json CaseToJson(const ValidationCase& c) {
-  const EnergyFractions& f = c.mc.fractions;
-  return {
-      {"config", ToString(c.rough_sides)},
-      {"incidence_deg", c.incidence_deg},
-      {"best_alpha", c.best_alpha},
-      {"error", ErrorsToJson(c.errors)},
-      {"scale_free_error", ErrorsToJson(c.scale_free_errors)},
-      {"fitted_roughness", c.fitted_roughness},
-      {"blend_fitted", {{"alpha", c.blend_fitted_alpha}, {"roughness", c.blend_fitted_roughness}}},
-      {"view_direction", {c.o.x(), c.o.y(), c.o.z()}},
-      {"monte_carlo",
-       {{"paths", c.mc.paths},
-        {"seconds", c.mc.seconds},
-        {"noise_relative_l2", c.mc_noise},
-        {"dominant_relative_error_90", c.mc.DominantRelativeError(0.9)},
-        {"fractions",
-         {{"transmitted", f.transmitted},
-          {"reflected", f.reflected},
-          {"absorbed", f.absorbed},
-          {"masked", f.masked},
-          {"capped", f.capped}}}}},
-  };
-}
-
-// The slice along the plane of incidence (y = 0): the cells on both sides of the plane, averaged,
-// in order of the signed angle s of the light direction i = (sin s, 0, -cos s) from -z.
-struct CrossSection {
-  std::vector<double> angles_deg;
-  std::vector<std::pair<int, int>> cells;
-};
-
-CrossSection PlaneOfIncidence(const Hemicube& grid) {
-  CrossSection section;
-  constexpr double kStepDeg = 0.05;
-  constexpr double kOffset = 1e-9;  // selects the cells just above and below y = 0
-  double angle_sum = 0.0;
-  int count = 0;
-  for (double s = -89.9; s <= 89.9; s += kStepDeg) {
-    const double r = s * kPi / 180.0;
-    const std::pair<int, int> cells = {grid.CellOf(Vec3(std::sin(r), kOffset, std::cos(r)).normalized()),
-                                       grid.CellOf(Vec3(std::sin(r), -kOffset, std::cos(r)).normalized())};
-    if (section.cells.empty() || cells != section.cells.back()) {
-      if (count > 0) section.angles_deg.push_back(angle_sum / count);
-      section.cells.push_back(cells);
-      angle_sum = 0.0;
-      count = 0;
-    }
-    angle_sum += s;
-    ++count;
-  }
-  section.angles_deg.push_back(angle_sum / count);
-  return section;
-}
-
-std::vector<double> Along(const CrossSection& section, const std::vector<double>& values) {
-  std::vector<double> out;
-  for (const auto& [a, b] : section.cells) out.push_back(0.5 * (values[a] + values[b]));
-  return out;
-}
-
-std::string PlotName(const ValidationCase& c) {
-  return std::string(ToString(c.rough_sides)) + "_" + std::to_string(std::lround(c.incidence_deg)) + ".png";
-}
-
-void WritePlot(const ValidationCase& c, const CrossSection& section, const fs::path& path) {
-  LinePlot plot;
-  for (const ModelColumn& column : kColumns) {
-    PlotSeries series;
-    series.name = column.label;
-    series.color = column.color;
-    series.x = section.angles_deg;
-    series.y = Along(section, c.*column.values);
-    plot.series.push_back(std::move(series));
-  }
-  PlotSeries mc;
-  mc.name = "Monte Carlo (2 standard errors)";
-  mc.line_width = 0.0;
-  mc.x = section.angles_deg;
-  mc.y = Along(section, c.mc.rho);
-  for (const auto& [a, b] : section.cells) {
-    mc.error.push_back(2.0 * 0.5 * std::hypot(c.mc.standard_error[a], c.mc.standard_error[b]));
-  }
-  // Show the part of the plane where the reference lobe is: where MC exceeds 0.2% of its peak.
-  double peak = 0.0;
-  for (double y : mc.y) peak = std::max(peak, y);
-  double lo = 90.0, hi = -90.0;
-  for (size_t k = 0; k < mc.y.size(); ++k) {
-    if (mc.y[k] < 2e-3 * peak) continue;
-    lo = std::min(lo, mc.x[k]);
-    hi = std::max(hi, mc.x[k]);
-  }
-  plot.x_min = std::max(-90.0, std::floor((lo - 5.0) / 5.0) * 5.0);
-  plot.x_max = std::min(90.0, std::ceil((hi + 5.0) / 5.0) * 5.0);
-  plot.series.push_back(std::move(mc));
-  plot.FitYRangeFromZero();
-  plot.WritePng(path);
-}
-
-std::string Fixed(double value, int decimals = 3) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
-  return buffer;
-}
-
-void WriteHtml(const std::vector<ValidationCase>& cases, const ValidateModelOptions& options,
-               const fs::path& path) {
-  std::ostringstream html;
-  html << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>svbtdf validate-model</title>\n"
-       << "<style>body{font-family:sans-serif;max-width:1400px;margin:auto}"
-       << "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}"
-       << ".swatch{display:inline-block;width:24px;height:4px;vertical-align:middle;margin-right:6px}"
-       << "figure{display:inline-block;margin:6px}</style></head><body>\n"
-       << "<h1>Dual-microfacet model vs Monte Carlo slab</h1>\n<p>NDF " << options.ndf << ", roughness "
-       << options.roughness << ", eta " << options.eta << ", " << options.samples << " paths per case, seed "
-       << options.seed << ", hemicube resolution " << options.resolution
-       << ". Errors: relative L2 against Monte Carlo over the light hemicube, cells weighted by solid "
-       << "angle (docs/validation.md).</p>\n<table><tr><th>config</th><th>incidence</th><th>best alpha</th>";
-  for (const ModelColumn& column : kColumns) html << "<th>" << column.label << "</th>";
-  html << "<th>MC noise</th></tr>\n";
-  for (const ValidationCase& c : cases) {
-    html << "<tr><td>" << ToString(c.rough_sides) << "</td><td>" << c.incidence_deg << "&deg;</td><td>"
-         << Fixed(c.best_alpha) << "</td>";
-    for (const ModelColumn& column : kColumns) html << "<td>" << Fixed(c.errors.*column.error) << "</td>";
-    html << "<td>" << Fixed(c.mc_noise, 4) << "</td></tr>\n";
-  }
-  html << "</table>\n<p>Cross-sections in the plane of incidence: x is the signed angle (degrees) of "
-       << "the light direction from -z (straight through is at minus the incidence angle), y is rho "
-       << "averaged over the two hemicube cells beside the plane.</p>\n<p>";
-  for (const ModelColumn& column : kColumns) {
-    html << "<span class=\"swatch\" style=\"background:" << HexColor(column.color) << "\"></span>"
-         << column.label << " &nbsp; ";
-  }
-  html << "<span class=\"swatch\" style=\"background:#000\"></span>Monte Carlo &plusmn; 2 standard errors</p>\n";
-  for (const ValidationCase& c : cases) {
-    html << "<figure><img src=\"" << PlotName(c) << "\" width=\"480\"><figcaption>" << ToString(c.rough_sides)
-         << " rough, " << c.incidence_deg << "&deg;, best alpha " << Fixed(c.best_alpha, 2)
-         << "</figcaption></figure>\n";
-  }
-  html << "</body></html>\n";
-  WriteTextAtomically(path, html.str(), /*overwrite=*/false);
-}
-
-void PrintTable(const std::vector<ValidationCase>& cases) {
-  std::printf("%-6s %5s %6s", "config", "angle", "alpha");
-  for (const ModelColumn& column : kColumns) std::printf(" %15s", column.key);
-  std::printf(" %8s %9s\n", "MC noise", "paths");
-  for (const ValidationCase& c : cases) {
-    std::printf("%-6s %5.0f %6.3f", ToString(c.rough_sides), c.incidence_deg, c.best_alpha);
-    for (const ModelColumn& column : kColumns) std::printf(" %15.4f", c.errors.*column.error);
-    std::printf(" %8.4f %9lld\n", c.mc_noise, static_cast<long long>(c.mc.paths));
-  }
+// The settings recorded in the JSON and on the page.
+report::ValidationSettings Settings(const ValidateModelOptions& options) {
+  return {.ndf = options.ndf,
+          .roughness = options.roughness,
+          .eta = options.eta,
+          .samples = options.samples,
+          .seed = options.seed,
+          .resolution = options.resolution,
+          .max_bounces = options.max_bounces};
 }
 
 void RunValidateModel(const ValidateModelOptions& options) {
@@ -283,24 +112,16 @@ void RunValidateModel(const ValidateModelOptions& options) {
   const std::vector<ValidationCase> cases =
       ValidateModel(validation, grid, [&](const ValidationCase&) { progress.Advance(); });
   progress.Finish();
-  PrintTable(cases);
+  std::fputs(report::ValidationTable(cases).c_str(), stdout);
 
   if (!options.json.empty()) {
-    nlohmann::json out;
-    out["options"] = {{"ndf", options.ndf},         {"roughness", options.roughness},
-                      {"eta", options.eta},         {"samples", options.samples},
-                      {"seed", options.seed},       {"resolution", options.resolution},
-                      {"max_bounces", options.max_bounces}};
-    out["cases"] = nlohmann::json::array();
-    for (const ValidationCase& c : cases) out["cases"].push_back(CaseToJson(c));
-    WriteTextAtomically(options.json, out.dump(2) + "\n", /*overwrite=*/false);
+    WriteTextAtomically(options.json, report::ValidationJson(cases, Settings(options)).dump(2) + "\n",
+                        /*overwrite=*/false);
     spdlog::info("wrote {}", options.json);
   }
   if (!options.plots.empty()) {
     fs::create_directories(options.plots);
-    const CrossSection section = PlaneOfIncidence(grid);
-    for (const ValidationCase& c : cases) WritePlot(c, section, fs::path(options.plots) / PlotName(c));
-    WriteHtml(cases, options, fs::path(options.plots) / "index.html");
+    report::WriteValidationPage(cases, Settings(options), grid, options.plots);
     spdlog::info("wrote {} plots and {}", cases.size(), (fs::path(options.plots) / "index.html").string());
   }
 }

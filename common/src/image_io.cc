@@ -91,6 +91,15 @@ void WriteCameraImage(const fs::path& path, const CameraImage& image, bool overw
   WriteFileAtomically(path, [&](const fs::path& temp) { WritePixels(path, temp, spec, image.pixels.data()); }, overwrite);
 }
 
+void WriteRgb8Png(const fs::path& path, const std::vector<uint8_t>& pixels, int width, int height, bool overwrite) {
+  if (pixels.size() != static_cast<size_t>(width) * height * 3) {
+    ThrowInvalidInput(path.string(), "pixel count does not match the image size");
+  }
+  OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+  spec.channelnames = ChannelNames(3);
+  WriteFileAtomically(path, [&](const fs::path& temp) { WritePixels(path, temp, spec, pixels.data()); }, overwrite);
+}
+
 FloatImage ReadFloatImage(const fs::path& path) {
   auto input = OpenForReading(path);
   const OIIO::ImageSpec& spec = input->spec();

@@ -38,6 +38,11 @@ CameraImage ReadCameraImage(const std::filesystem::path& path);
 // file is an error and is left untouched.
 void WriteCameraImage(const std::filesystem::path& path, const CameraImage& image, bool overwrite = false);
 
+// Writes an 8-bit RGB PNG (pictures for people: report figures and plots, not data); `pixels` are
+// row-major, width * height * 3 bytes. With overwrite == false an existing file is an error.
+void WriteRgb8Png(const std::filesystem::path& path, const std::vector<uint8_t>& pixels, int width, int height,
+                  bool overwrite = false);
+
 // Reads any image OpenImageIO can decode as float (EXR, but also PNG/TIFF scaled to [0, 1]).
 FloatImage ReadFloatImage(const std::filesystem::path& path);
 

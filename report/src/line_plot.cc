@@ -1,16 +1,14 @@
-#include "line_plot.h"
-
-#include <png.h>
+#include "svbtdf/report/line_plot.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdint>
 
-#include "svbtdf/common/atomic_file.h"
-#include "svbtdf/common/error.h"
+#include "svbtdf/common/image_io.h"
 
-namespace svbtdf::cli {
+namespace svbtdf::report {
 namespace {
 
 constexpr int kMarginLeft = 64;
@@ -109,21 +107,6 @@ std::string FormatTick(double value, double step) {
   return buffer;
 }
 
-// Writes 8-bit RGB rows with libpng's simplified API; errors name `reported_path`.
-void WriteRgb8Png(const std::filesystem::path& file, const std::vector<unsigned char>& pixels, int width,
-                  int height, const std::filesystem::path& reported_path) {
-  png_image image{};
-  image.version = PNG_IMAGE_VERSION;
-  image.width = static_cast<png_uint_32>(width);
-  image.height = static_cast<png_uint_32>(height);
-  image.format = PNG_FORMAT_RGB;
-  if (!png_image_write_to_file(&image, file.c_str(), /*convert_to_8bit=*/0, pixels.data(),
-                               /*row_stride=*/0, nullptr)) {
-    ThrowIoError(reported_path.string(), std::string("cannot write the PNG: ") + image.message,
-                 "check that the folder is writable and the disk not full");
-  }
-}
-
 }  // namespace
 
 void LinePlot::FitYRangeFromZero() {
@@ -175,14 +158,7 @@ std::vector<unsigned char> LinePlot::Render() const {
   return canvas.Take();
 }
 
-void LinePlot::WritePng(const std::filesystem::path& path) const { WriteRgb8PngAtomically(path, Render(), width, height); }
-
-void WriteRgb8PngAtomically(const std::filesystem::path& path, const std::vector<unsigned char>& pixels, int width,
-                            int height) {
-  WriteFileAtomically(
-      path, [&](const std::filesystem::path& temp) { WriteRgb8Png(temp, pixels, width, height, path); },
-      /*overwrite=*/false);
-}
+void LinePlot::WritePng(const std::filesystem::path& path) const { WriteRgb8Png(path, Render(), width, height); }
 
 std::string HexColor(const Rgb8& color) {
   char buffer[8];
@@ -190,4 +166,4 @@ std::string HexColor(const Rgb8& color) {
   return buffer;
 }
 
-}  // namespace svbtdf::cli
+}  // namespace svbtdf::report

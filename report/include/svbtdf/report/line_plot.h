@@ -1,17 +1,16 @@
 #pragma once
-// A minimal line-plot renderer for the figures the command line writes (validate-model's
+// A minimal line-plot renderer for the figures of the pages (the validation page's
 // cross-sections): axes with numbered ticks, anti-aliased polylines, points with error bars, written
-// as an 8-bit RGB PNG. Titles and legends belong in the HTML page that shows the images; the
+// as an 8-bit RGB PNG through image_io. Titles and legends belong in the HTML page that shows the images; the
 // raster only carries digits, so no font files are needed.
 
-#include <array>
 #include <filesystem>
 #include <string>
 #include <vector>
 
-namespace svbtdf::cli {
+#include "svbtdf/report/picture.h"
 
-using Rgb8 = std::array<unsigned char, 3>;
+namespace svbtdf::report {
 
 struct PlotSeries {
   std::string name;  // for the HTML legend
@@ -37,8 +36,4 @@ struct LinePlot {
 
 std::string HexColor(const Rgb8& color);  // "#rrggbb", for the HTML legend
 
-// Writes 8-bit RGB pixels (row-major) as a PNG atomically; refuses to overwrite an existing file.
-void WriteRgb8PngAtomically(const std::filesystem::path& path, const std::vector<unsigned char>& pixels, int width,
-                            int height);
-
-}  // namespace svbtdf::cli
+}  // namespace svbtdf::report

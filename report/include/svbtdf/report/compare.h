@@ -1,0 +1,52 @@
+#pragma once
+// Scoring a fitted material against the simulator's ground truth (issue 5's metrics, the
+// numbers of `svbtdf compare`): alpha and NDF against an analytic truth's parameters, rho_d, and
+// the BTDF itself at the rig's dots (held-out and all) against either kind of truth.
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "svbtdf/fit/material.h"
+#include "svbtdf/report/truth.h"
+
+namespace svbtdf::report {
+
+struct CompareOptions {
+  // Where the material was read from, as the user spelled it: named in the metrics and errors.
+  std::string material_folder;
+  // A random subset of at most this many texels keeps large materials quick; the seed makes
+  // the subset repeatable.
+  int max_texels = 1000;
+  uint64_t seed = 1;
+};
+
+// A metric with no data (no alpha or NDF in a Monte Carlo truth, no truth energy) is NaN.
+struct CompareMetrics {
+  std::string material_folder, truth_folder, truth_kind;
+  std::string btdf;  // fit::MaterialModelName of the material
+  bool truth_has_parameters = false;  // the truth has a true alpha and NDF per texel
+  size_t texels_compared = 0;
+  double alpha_within_0_05 = 0;  // fraction of the compared texels with |alpha error| <= 0.05
+  double alpha_error_median = 0;
+  double ndf_rel_l2_median = 0;
+  double rho_d_rel_error_median = 0;  // over texels whose true rho_d luminance exceeds 1e-3
+  double heldout_rel_rmse = 0;        // of the BTDF luminance over (texel, held-out dot) pairs
+  double all_dots_rel_rmse = 0;       // the same over every dot
+  size_t heldout_dots = 0;
+  bool holdout_recorded = false;  // false: the fit withheld no dots, so every dot counts as held out
+};
+
+// Throws svbtdf::Error naming options.material_folder when the material and the truth differ in
+// size, or when the material records a held-out dot the rig does not have.
+CompareMetrics Compare(const fit::Material& material, const Truth& truth, const CompareOptions& options);
+
+// The metrics as `svbtdf compare --json` writes them (docs/validation.md); NaN becomes null.
+nlohmann::json ToJson(const CompareMetrics& metrics);
+
+// The one check that a material and a truth describe the same texels; throws naming the material.
+void RequireSameSize(const fit::Material& material, const std::string& material_folder, const Truth& truth);
+
+}  // namespace svbtdf::report

@@ -1,0 +1,39 @@
+#include "svbtdf/report/truth.h"
+
+#include "svbtdf/simulate/truth_material.h"
+
+namespace svbtdf::report {
+
+Truth ReadTruth(const std::filesystem::path& folder) {
+  Truth truth;
+  truth.folder_ = folder;
+  truth.kind_ = ReadTruthKind(folder);
+  if (truth.kind_ == "montecarlo") {
+    auto montecarlo = std::make_unique<MonteCarloTruth>(ReadMonteCarloTruth(folder));
+    truth.montecarlo_ = montecarlo.get();
+    truth.btdf_ = std::move(montecarlo);
+  } else {
+    truth.analytic_.emplace(ReadMaterialTruth(folder));
+    truth.btdf_ = std::make_unique<TruthMaterial>(truth.analytic_->ToTruthMaterial());
+  }
+  truth.rig_ = ReadRigTruth(folder / "rig.json");
+  return truth;
+}
+
+Rgb Truth::RhoD(int x, int y) const {
+  return analytic_ ? analytic_->Params(x, y).rho_d : montecarlo_->rho_d(montecarlo_->Index(x, y));
+}
+
+FloatImage Truth::RhoDMap() const {
+  if (analytic_) return analytic_->rho_d;
+  FloatImage map(width(), height(), 3);
+  for (int y = 0; y < height(); ++y) {
+    for (int x = 0; x < width(); ++x) {
+      const Rgb rho_d = RhoD(x, y);
+      for (int c = 0; c < 3; ++c) map.at(x, y, c) = static_cast<float>(rho_d[c]);
+    }
+  }
+  return map;
+}
+
+}  // namespace svbtdf::report
