@@ -6,10 +6,10 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
+#include "material_from_truth.h"
 #include "run_command.h"
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/fit/material.h"
-#include "svbtdf/model/tabulated_ndf.h"
 #include "svbtdf/simulate/session_writer.h"
 
 namespace svbtdf {
@@ -26,36 +26,6 @@ class CompareCommand : public ::testing::Test {
     ASSERT_EQ(result.exit_code, 0) << result.output;
   }
   static void TearDownTestSuite() { fs::remove_all(root_); }
-
-  // Every texel its own representative, with the truth's NDF tabulated at resolution 32.
-  static fit::Material MaterialFromTruth(const MaterialTruth& truth) {
-    fit::Material m;
-    m.width = truth.width();
-    m.height = truth.height();
-    m.eta = truth.eta;
-    m.ndf_resolution = 32;
-    const Hemicube grid(m.ndf_resolution);
-    m.alpha = truth.alpha;
-    m.shadowing_roughness = truth.shadowing_roughness;
-    m.k_s = truth.k_s;
-    m.rho_d = truth.rho_d;
-    m.residual = FloatImage(m.width, m.height, 1, 0.0f);
-    m.cluster = FloatImage(m.width, m.height, 1);
-    m.weight_index = FloatImage(m.width, m.height, 1);
-    m.weight_value = FloatImage(m.width, m.height, 1, 1.0f);
-    for (int y = 0; y < m.height; ++y) {
-      for (int x = 0; x < m.width; ++x) {
-        TabulatedNdf ndf(grid, *truth.TexelNdf(x, y));
-        ndf.Normalize();
-        const int index = static_cast<int>(m.representative_texels.size());
-        m.representative_texels.push_back(static_cast<int64_t>(y) * m.width + x);
-        m.representative_ln_d.push_back(ndf.ln_d());
-        m.cluster.at(x, y) = static_cast<float>(index);
-        m.weight_index.at(x, y) = static_cast<float>(index);
-      }
-    }
-    return m;
-  }
 
   static nlohmann::json Compare(const fit::Material& material, const std::string& name) {
     fit::WriteMaterial(root_ / name, material);

@@ -1,6 +1,7 @@
 // `svbtdf compare` end to end against a Monte Carlo truth: a uniform fitted material is compared
 // with a `--truth montecarlo` simulation of the tiny preset. The Monte Carlo truth has no alpha or
-// NDF, so those metrics are null, while the BTDF errors are reported against its rho(x, i, o).
+// NDF, so those metrics are null, while the BTDF errors are reported against its rho(x, i, o); and
+// `svbtdf report` shows what that truth has.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -70,6 +71,14 @@ TEST(CompareTruthKinds, ReportsBtdfErrorsAgainstAMonteCarloTruth) {
   // 1.0 measured): wrong, but finite and not wildly so.
   EXPECT_GT(mc["heldout_rel_rmse"].get<double>(), 0.1);
   EXPECT_LT(mc["heldout_rel_rmse"].get<double>(), 3.0);
+  // `svbtdf report --truth` reads the same truth: its rho_d and slab materials beside the material.
+  const auto report = RunSvbtdf("-q report " + (root / "material").string() + " --out " + (root / "report").string() +
+                                " --truth " + (root / "mc" / "truth").string() + " --compare " + (root / "mc.json").string());
+  EXPECT_EQ(report.exit_code, 0) << report.output;
+  for (const char* file : {"index.html", "rho_d_truth.png", "slab_material_truth.png"}) {
+    EXPECT_TRUE(fs::exists(root / "report" / file)) << file;
+  }
+  EXPECT_FALSE(fs::exists(root / "report" / "alpha_truth.png"));
   // A truth folder that is neither kind is named.
   WriteTextAtomically(root / "mc" / "truth" / "material.json", "{}", /*overwrite=*/true);
   const auto bad = RunSvbtdf("compare " + (root / "material").string() + " " + (root / "mc" / "truth").string());

@@ -1,0 +1,135 @@
+// report::Compare in process: a material scores perfectly against its own truth, a known
+// perturbation shows in its own metric, both truth kinds are read, and bad input is named.
+// CTest runs each test in its own process and each simulation takes 15-25 s, so the checks that
+// share a truth are sections of one test.
+#include "svbtdf/report/compare.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "material_from_truth.h"
+#include "simulated_truths.h"
+#include "small_material.h"
+#include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/error.h"
+
+namespace svbtdf::report {
+namespace {
+namespace fs = std::filesystem;
+
+CompareOptions Named(const std::string& material_folder) {
+  CompareOptions options;
+  options.material_folder = material_folder;
+  return options;
+}
+
+TEST(Compare, AgainstAnAnalyticTruth) {
+  const Truth truth = ReadTruth(SimulatedTruths::TruthFolder("model"));
+  ASSERT_NE(truth.parameters(), nullptr);
+  const fit::Material exact = MaterialFromTruth(*truth.parameters());
+  const CompareMetrics perfect = Compare(exact, truth, Named("exact"));
+  {
+    SCOPED_TRACE("a material built from its truth scores perfectly");
+    EXPECT_EQ(perfect.truth_kind, "analytic");
+    EXPECT_TRUE(perfect.truth_has_parameters);
+    EXPECT_EQ(perfect.texels_compared, 1000u);  // the default subset of the 32 x 32 texels
+    EXPECT_EQ(perfect.alpha_within_0_05, 1.0);
+    EXPECT_LT(perfect.alpha_error_median, 1e-6);
+    EXPECT_LT(perfect.rho_d_rel_error_median, 1e-6);
+    // Only the tabulation of the analytic NDF on a 32x32 hemicube separates the two.
+    EXPECT_LT(perfect.ndf_rel_l2_median, 0.05);
+    EXPECT_LT(perfect.heldout_rel_rmse, 0.05);
+    // No holdout in a hand-made material: every dot counts as held out.
+    EXPECT_FALSE(perfect.holdout_recorded);
+    EXPECT_EQ(perfect.heldout_dots, truth.rig().dots.size());
+    EXPECT_DOUBLE_EQ(perfect.heldout_rel_rmse, perfect.all_dots_rel_rmse);
+  }
+  {
+    SCOPED_TRACE("alpha shifted by a tenth shows in the alpha metrics only");
+    fit::Material shifted = exact;
+    for (float& a : shifted.alpha.pixels) a = a > 0.5f ? a - 0.1f : a + 0.1f;
+    const CompareMetrics metrics = Compare(shifted, truth, Named("shifted"));
+    EXPECT_EQ(metrics.alpha_within_0_05, 0.0);
+    EXPECT_NEAR(metrics.alpha_error_median, 0.1, 1e-4);
+    EXPECT_LT(metrics.ndf_rel_l2_median, 0.05);       // the NDFs are untouched
+    EXPECT_LT(metrics.rho_d_rel_error_median, 1e-6);  // and so is rho_d
+    EXPECT_GT(metrics.heldout_rel_rmse, perfect.heldout_rel_rmse + 0.01);
+  }
+  {
+    SCOPED_TRACE("the texel subset is bounded and seeded");
+    CompareOptions options = Named("m");
+    options.max_texels = 40;
+    const CompareMetrics first = Compare(exact, truth, options);
+    EXPECT_EQ(first.texels_compared, 40u);
+    EXPECT_EQ(ToJson(Compare(exact, truth, options)).dump(), ToJson(first).dump());
+  }
+  {
+    SCOPED_TRACE("a size mismatch names the material folder");
+    try {
+      Compare(SmallMaterial(), truth, Named("/where/the/material/is"));
+      ADD_FAILURE() << "a 3x2 material was compared with a 32x32 truth";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::kInvalidInput);
+      EXPECT_EQ(e.subject(), "/where/the/material/is");
+      EXPECT_NE(e.problem().find("3x2"), std::string::npos) << e.what();
+    }
+  }
+  {
+    SCOPED_TRACE("a held-out dot the rig lacks names the material folder");
+    fit::Material held = exact;
+    held.provenance["holdout"]["dots"] = {static_cast<int>(truth.rig().dots.size())};
+    try {
+      Compare(held, truth, Named("held"));
+      ADD_FAILURE() << "a held-out dot outside the rig was accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.subject(), "held");
+      EXPECT_NE(e.problem().find("held-out dot"), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(Compare, AMonteCarloTruthHasNoAlphaOrNdfMetrics) {
+  const Truth montecarlo = ReadTruth(SimulatedTruths::TruthFolder("montecarlo"));
+  EXPECT_EQ(montecarlo.kind(), "montecarlo");
+  EXPECT_EQ(montecarlo.parameters(), nullptr);
+  ASSERT_NE(montecarlo.montecarlo(), nullptr);
+  const fit::Material uniform = SmallMaterial(montecarlo.width(), montecarlo.height());
+  const CompareMetrics metrics = Compare(uniform, montecarlo, Named("m"));
+  EXPECT_FALSE(metrics.truth_has_parameters);
+  EXPECT_TRUE(std::isnan(metrics.alpha_within_0_05));
+  EXPECT_TRUE(std::isnan(metrics.alpha_error_median));
+  EXPECT_TRUE(std::isnan(metrics.ndf_rel_l2_median));
+  // The truth's rho_d is 0.005 to 0.015 against the material's 0.02.
+  EXPECT_GT(metrics.rho_d_rel_error_median, 0.2);
+  EXPECT_LT(metrics.rho_d_rel_error_median, 3.0);
+  EXPECT_TRUE(std::isfinite(metrics.heldout_rel_rmse));
+  // In the JSON a missing metric is null, the others numbers.
+  const nlohmann::json json = ToJson(metrics);
+  EXPECT_EQ(json["truth_kind"], "montecarlo");
+  EXPECT_EQ(json["truth"], montecarlo.folder().string());
+  EXPECT_EQ(json["material"], "m");
+  for (const char* key : {"alpha_within_0_05", "alpha_error_median", "ndf_rel_l2_median"}) {
+    EXPECT_TRUE(json[key].is_null()) << key;
+  }
+  EXPECT_TRUE(json["heldout_rel_rmse"].is_number());
+  EXPECT_EQ(json.size(), 13u);
+}
+
+TEST(ReadTruth, AFolderOfNeitherKindNamesItsManifest) {
+  const fs::path folder = fs::temp_directory_path() / ("svbtdf-bad-truth-" + std::to_string(::getpid()));
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  WriteTextAtomically(folder / "material.json", "{}");
+  try {
+    ReadTruth(folder);
+    FAIL() << "a truth of no kind was read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("material.json"), std::string::npos) << e.what();
+  }
+  fs::remove_all(folder);
+}
+
+}  // namespace
+}  // namespace svbtdf::report
