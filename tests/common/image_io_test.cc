@@ -1,6 +1,5 @@
 // Round trips and error reporting of the image files users hand in and get back.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -10,6 +9,7 @@
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/image_io.h"
+#include "temp_folder.h"
 
 namespace svbtdf {
 namespace {
@@ -17,13 +17,8 @@ namespace fs = std::filesystem;
 
 class ImageIo : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("svbtdf-image-io-" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
+  svbtdf::testing::TempFolder folder_;
+  const fs::path dir_ = folder_.path();
 };
 
 void ExpectErrorNaming(const std::function<void()>& f, const fs::path& file) {

@@ -1,6 +1,5 @@
 // The capture session format: durability, verification and robustness against broken files.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -9,6 +8,7 @@
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/session/session.h"
+#include "temp_folder.h"
 
 namespace svbtdf {
 namespace {
@@ -16,14 +16,6 @@ namespace fs = std::filesystem;
 
 class SessionTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    root_ = fs::temp_directory_path() / ("svbtdf-session-" + std::to_string(::getpid()));
-    fs::remove_all(root_);
-    fs::create_directories(root_);
-    folder_ = root_ / "session";
-  }
-  void TearDown() override { fs::remove_all(root_); }
-
   static CameraImage Frame(uint16_t value) {
     CameraImage image;
     image.width = 8;
@@ -32,7 +24,8 @@ class SessionTest : public ::testing::Test {
     return image;
   }
 
-  fs::path root_, folder_;
+  svbtdf::testing::TempFolder root_;
+  const fs::path folder_ = root_ / "session";  // not there yet: Session::Create makes it
   const std::vector<std::string> plan_ = {"dark/e0", "board/v00", "dot/q0000/e0/r0", "dot/q0001/e0/r0"};
   const nlohmann::json rig_ = {{"camera", {{"model", "test"}}}};
 };
