@@ -74,7 +74,9 @@ void AddSlabMaterials(Page& page, const MonteCarloTruth& truth) {
   page.Figure("slab_material_truth.png", ScalarMap(index, 0, 0, std::max(1, last)),
               "true slab material (0 .. " + std::to_string(last) + ")");
   std::string list = "Slab materials of the Monte Carlo truth:";
-  for (int m = 0; m <= last; ++m) list += " " + std::to_string(m) + " = " + EscapeHtml(truth.materials()[m].label) + ";";
+  for (int m = 0; m <= last; ++m) {
+    list.append(" ").append(std::to_string(m)).append(" = ").append(EscapeHtml(truth.materials()[m].label)).append(";");
+  }
   list.back() = '.';
   page.Paragraph(list);
 }
