@@ -375,68 +375,53 @@ void SliceStoreWriter::Finish(const FinishOptions& options) {
       k = run;
     }
   };
-  // Pass 1: every texel with a dot beneath it (the others' slices wait for their diffuse term).
-  std::vector<uint8_t> tile_has_unreached(NumTiles(s.info), 0);
-  for (int64_t t = 0; t < NumTiles(s.info); ++t) {
+  // Resamples the texels of tile t that have a dot beneath them (`reached`) or that have none,
+  // with the diffuse term diffuse_of(texel, samples); writes their slices and records their
+  // summaries. Returns whether the tile also holds texels of the other kind.
+  const auto resample_tile = [&](int64_t t, bool reached, const auto& diffuse_of) {
     read_tile(t);
     const int64_t begin = t * s.info.tile_texels, end = std::min(texels, begin + s.info.tile_texels);
+    const auto selected = [&](int64_t k) { return (reach[begin + k] != 0) == reached; };
     std::vector<Half> slice_out((end - begin) * light_grid.num_cells());
     std::vector<TexelSummary> summaries(end - begin);
     ParallelFor(end - begin, options.threads, 16, [&](int64_t a, int64_t b) {
       std::vector<float> cells;
       for (int64_t k = a; k < b; ++k) {
-        if (!reach[begin + k]) continue;
+        if (!selected(k)) continue;
         const TexelSamples samples =
             GatherSamples(s.geometry, monitor, begin + k, tile.data(), s.info.tile_texels, k, s.info.num_dots);
-        summaries[k] = Resample(samples, SeparateDiffuse(samples, neighbours, options), resampler, options, &cells);
+        summaries[k] = Resample(samples, diffuse_of(begin + k, samples), resampler, options, &cells);
         for (size_t c = 0; c < cells.size(); ++c) slice_out[k * cells.size() + c] = Half(cells[c]);
       }
     });
-    write_slices(begin, end, slice_out, /*reached=*/true);
+    write_slices(begin, end, slice_out, reached);
+    int64_t done = 0;
     for (int64_t k = 0; k < end - begin; ++k) {
-      if (!reach[begin + k]) {
-        tile_has_unreached[t] = 1;
-        continue;
-      }
+      if (!selected(k)) continue;
       store_summary(begin + k, summaries[k]);
       valid_texels += summaries[k].valid;
+      ++done;
     }
-    if (progress) progress->Advance(end - begin - std::count(reach.begin() + begin, reach.begin() + end, 0));
-  }
+    if (progress) progress->Advance(done);
+    return done < end - begin;
+  };
+  // Pass 1: every texel with a dot beneath it (the others' slices wait for their diffuse term).
+  std::vector<uint8_t> tile_has_unreached(NumTiles(s.info), 0);
+  const auto own_floor = [&](int64_t, const TexelSamples& samples) { return SeparateDiffuse(samples, neighbours, options); };
+  for (int64_t t = 0; t < NumTiles(s.info); ++t) tile_has_unreached[t] = resample_tile(t, /*reached=*/true, own_floor);
   // Pass 2: a texel without a dot beneath it sees only the lobe's tails, whose floor is not its
   // diffuse term: it takes the diffuse term of the nearest texel that has a dot beneath it (0 when
   // none has).
   if (without_dot_beneath > 0) {
     const std::vector<int64_t> source = NearestReachedTexel(reach, s.info.texels_x, s.info.texels_y);
+    const auto nearest_reached = [&](int64_t texel, const TexelSamples&) {
+      const int64_t from = source[texel];
+      if (from < 0) return Rgb{0, 0, 0};
+      const int col = static_cast<int>(from % s.info.texels_x), row = static_cast<int>(from / s.info.texels_x);
+      return Rgb{rho_d.at(col, row, 0), rho_d.at(col, row, 1), rho_d.at(col, row, 2)};
+    };
     for (int64_t t = 0; t < NumTiles(s.info); ++t) {
-      if (!tile_has_unreached[t]) continue;
-      read_tile(t);
-      const int64_t begin = t * s.info.tile_texels, end = std::min(texels, begin + s.info.tile_texels);
-      std::vector<Half> slice_out((end - begin) * light_grid.num_cells());
-      std::vector<TexelSummary> summaries(end - begin);
-      ParallelFor(end - begin, options.threads, 16, [&](int64_t a, int64_t b) {
-        std::vector<float> cells;
-        for (int64_t k = a; k < b; ++k) {
-          if (reach[begin + k]) continue;
-          const int64_t from = source[begin + k];
-          Rgb diffuse = {0, 0, 0};
-          if (from >= 0) {
-            const int col = static_cast<int>(from % s.info.texels_x), row = static_cast<int>(from / s.info.texels_x);
-            diffuse = {rho_d.at(col, row, 0), rho_d.at(col, row, 1), rho_d.at(col, row, 2)};
-          }
-          const TexelSamples samples =
-              GatherSamples(s.geometry, monitor, begin + k, tile.data(), s.info.tile_texels, k, s.info.num_dots);
-          summaries[k] = Resample(samples, diffuse, resampler, options, &cells);
-          for (size_t c = 0; c < cells.size(); ++c) slice_out[k * cells.size() + c] = Half(cells[c]);
-        }
-      });
-      write_slices(begin, end, slice_out, /*reached=*/false);
-      for (int64_t k = 0; k < end - begin; ++k) {
-        if (reach[begin + k]) continue;
-        store_summary(begin + k, summaries[k]);
-        valid_texels += summaries[k].valid;
-      }
-      if (progress) progress->Advance(std::count(reach.begin() + begin, reach.begin() + end, 0));
+      if (tile_has_unreached[t]) resample_tile(t, /*reached=*/false, nearest_reached);
     }
   }
   if (progress) progress->Finish();
