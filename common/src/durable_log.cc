@@ -51,6 +51,7 @@ DurableLog DurableLog::Open(fs::path path, const WholeLine& whole) {
         log.needs_newline_ = true;
       } else {
         log.truncate_to_ = start;
+        log.had_torn_tail_ = true;
       }
       break;
     }
@@ -66,7 +67,6 @@ void DurableLog::RepairTail() {
     fs::resize_file(path_, *truncate_to_, error);
     if (error) ThrowIoError(path_.string(), "cannot cut off its torn last line: " + error.message());
     truncate_to_.reset();
-    tail_was_torn_ = true;
   }
   if (needs_newline_) {
     AppendBytesDurably(path_, "\n");

@@ -31,7 +31,7 @@ class DurableLog {
   // The lines Open read (appended lines are not kept: a session journal can be long).
   const std::vector<std::string>& lines() const { return lines_; }
   // True when Open found a torn tail (left out of lines()).
-  bool had_torn_tail() const { return truncate_to_.has_value() || tail_was_torn_; }
+  bool had_torn_tail() const { return had_torn_tail_; }
 
   // Appends `line` (which must not contain a newline) and fsyncs the file. Throws
   // Error(kIo) naming the file when the disk refuses. Not thread-safe: callers serialise.
@@ -43,9 +43,9 @@ class DurableLog {
 
   std::filesystem::path path_;
   std::vector<std::string> lines_;
-  std::optional<uintmax_t> truncate_to_;  // the torn tail starts here
+  std::optional<uintmax_t> truncate_to_;  // the torn tail starts here, until it is cut off
   bool needs_newline_ = false;            // the last line is whole but lost its newline
-  bool tail_was_torn_ = false;
+  bool had_torn_tail_ = false;
 };
 
 // A WholeLine for logs of JSON objects: the line parses as an object. (No proper prefix of an
