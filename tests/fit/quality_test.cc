@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <string>
 
+#include "quality_warnings.h"
 #include "small_material.h"
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
@@ -17,24 +18,10 @@
 namespace svbtdf::fit {
 namespace {
 namespace fs = std::filesystem;
+using testing::Checks;
+using testing::Find;
+using testing::Has;
 
-std::vector<std::string> Checks(const std::vector<QualityWarning>& warnings) {
-  std::vector<std::string> checks;
-  for (const QualityWarning& w : warnings) checks.push_back(w.check);
-  return checks;
-}
-
-bool Has(const std::vector<QualityWarning>& warnings, const std::string& check) {
-  const auto checks = Checks(warnings);
-  return std::find(checks.begin(), checks.end(), check) != checks.end();
-}
-
-const QualityWarning& Find(const std::vector<QualityWarning>& warnings, const std::string& check) {
-  for (const QualityWarning& w : warnings) {
-    if (w.check == check) return w;
-  }
-  throw std::runtime_error("no " + check);
-}
 
 class StoreCheck : public ::testing::Test {
  protected:

@@ -6,11 +6,15 @@
 #include <string>
 #include <vector>
 
+#include "quality_warnings.h"
 #include "svbtdf/process/calibration_quality.h"
 
 namespace svbtdf::process {
 namespace {
 using fit::QualityWarning;
+using testing::Checks;
+using testing::Find;
+using testing::Has;
 
 // A calibration as a good `svbtdf calibrate` writes it: 36 dots found within blob noise, all
 // board views used at 0.1 px.
@@ -35,23 +39,6 @@ calib::SessionCalibration GoodCalibration() {
   return c;
 }
 
-std::vector<std::string> Checks(const std::vector<QualityWarning>& warnings) {
-  std::vector<std::string> checks;
-  for (const QualityWarning& w : warnings) checks.push_back(w.check);
-  return checks;
-}
-
-bool Has(const std::vector<QualityWarning>& warnings, const std::string& check) {
-  const auto checks = Checks(warnings);
-  return std::find(checks.begin(), checks.end(), check) != checks.end();
-}
-
-const QualityWarning& Find(const std::vector<QualityWarning>& warnings, const std::string& check) {
-  for (const QualityWarning& w : warnings) {
-    if (w.check == check) return w;
-  }
-  throw std::runtime_error("no " + check);
-}
 
 TEST(QualityCheck, AGoodCalibrationDrawsNoWarning) {
   EXPECT_TRUE(CheckCalibration(GoodCalibration(), "calibration.json").empty());
