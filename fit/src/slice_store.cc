@@ -68,7 +68,7 @@ SliceStore SliceStore::Open(const fs::path& folder) {
   if (!manifest.value("complete", false)) {
     ThrowInvalidInput(folder.string(), "holds an unfinished processing", "re-run 'svbtdf process' to finish it");
   }
-  store.geometry_ = GeometryFromManifest(manifest);
+  store.geometry_ = GeometryFromManifest(manifest, (folder / kManifest).string());
   if (static_cast<int>(store.geometry_.dots.size()) != store.info_.num_dots) {
     ThrowFormatError((folder / kManifest).string(), "lists a different number of dots in its geometry than num_dots");
   }

@@ -146,8 +146,7 @@ nlohmann::json ReadManifest(const fs::path& folder) {
 }
 
 
-TexelGeometry GeometryFromManifest(const nlohmann::json& manifest) {
-  const fs::path where = kManifest;
+TexelGeometry GeometryFromManifest(const nlohmann::json& manifest, const std::string& source) {
   try {
     TexelGeometry g;
     const nlohmann::json& j = manifest.at("geometry");
@@ -160,7 +159,7 @@ TexelGeometry GeometryFromManifest(const nlohmann::json& manifest) {
     for (const nlohmann::json& p : j.at("dots")) g.dots.push_back(VectorFromJson(p));
     return g;
   } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(where.string(), std::string("has a malformed geometry: ") + e.what());
+    ThrowFormatError(source, std::string("has a malformed geometry: ") + e.what());
   }
 }
 

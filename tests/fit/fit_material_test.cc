@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "analytic_store.h"
+#include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/common/statistics.h"
@@ -227,6 +228,41 @@ TEST(SliceStoreTiles, SlicesFromATileEqualSlicesReadAlone) {
   }
   std::vector<float> short_tile(10);
   EXPECT_THROW(store.MakeTexelSlice(3, short_tile), Error);
+  fs::remove_all(dir);
+}
+
+// Version 2 stores carry their geometry in processed.json: a store whose geometry is damaged, or
+// a version 1 store (which has none), is refused with the manifest's path.
+TEST(SliceStoreFormat, DamagedGeometryAndOldVersionsAreRefusedNamingTheManifest) {
+  const fs::path dir = fs::temp_directory_path() / ("svbtdf-store-format-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  testing::WriteAnalyticStore(dir, AnalyticMaterial{4, 4}, 6, 0.0, 1.5);
+  const fs::path manifest_path = dir / "processed.json";
+  const nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(manifest_path));
+  ASSERT_EQ(SliceStore::Open(dir).geometry().dots.size(), manifest.at("geometry").at("dots").size());
+  const auto open_with = [&](const nlohmann::json& changed) {
+    WriteTextAtomically(manifest_path, changed.dump(2) + "\n");
+    try {
+      SliceStore::Open(dir);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("opened");
+  };
+  nlohmann::json damaged = manifest;
+  damaged["geometry"]["camera_centre"] = {0.0, 1.0};
+  const std::string bad_geometry = open_with(damaged);
+  EXPECT_NE(bad_geometry.find(manifest_path.string()), std::string::npos) << bad_geometry;
+  EXPECT_NE(bad_geometry.find("geometry"), std::string::npos) << bad_geometry;
+  nlohmann::json fewer_dots = manifest;
+  fewer_dots["geometry"]["dots"].erase(0);
+  EXPECT_NE(open_with(fewer_dots).find(manifest_path.string()), std::string::npos);
+  nlohmann::json version_1 = manifest;
+  version_1["version"] = 1;
+  version_1.erase("geometry");
+  const std::string old = open_with(version_1);
+  EXPECT_NE(old.find(manifest_path.string()), std::string::npos) << old;
+  EXPECT_NE(old.find("re-run 'svbtdf process'"), std::string::npos) << old;
   fs::remove_all(dir);
 }
 

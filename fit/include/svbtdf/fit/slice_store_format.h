@@ -68,6 +68,7 @@ void WriteManifest(const std::filesystem::path& folder, const SliceStoreInfo& in
 // The manifest, its format and version checked (svbtdf::Error naming the file otherwise).
 nlohmann::json ReadManifest(const std::filesystem::path& folder);
 SliceStoreInfo InfoFromManifest(const nlohmann::json& manifest);
-TexelGeometry GeometryFromManifest(const nlohmann::json& manifest);
+// `source` names the manifest in errors.
+TexelGeometry GeometryFromManifest(const nlohmann::json& manifest, const std::string& source);
 
 }  // namespace svbtdf::fit::store
