@@ -4,7 +4,6 @@
 // names the file at fault. The end-to-end `simulate --truth montecarlo` run is here too.
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -23,6 +22,7 @@
 #include "svbtdf/simulate/presets.h"
 #include "svbtdf/simulate/session_writer.h"
 #include "svbtdf/simulate/truth_io.h"
+#include "temp_folder.h"
 
 namespace svbtdf {
 namespace {
@@ -170,12 +170,6 @@ TEST(MonteCarloTruth, DeterministicForTheSeedWhateverTheThreads) {
 
 class MonteCarloTruthFiles : public ::testing::Test {
  protected:
-  void SetUp() override {
-    folder_ = fs::temp_directory_path() / ("svbtdf-mctruth-" + std::to_string(::getpid()));
-    fs::remove_all(folder_);
-    fs::create_directories(folder_);
-  }
-  void TearDown() override { fs::remove_all(folder_); }
   // The error message of reading the truth, which must be an svbtdf::Error.
   std::string ReadError() {
     try {
@@ -191,7 +185,8 @@ class MonteCarloTruthFiles : public ::testing::Test {
     edit(manifest);
     WriteTextAtomically(folder_ / "material.json", manifest.dump(), /*overwrite=*/true);
   }
-  fs::path folder_;
+  svbtdf::testing::TempFolder temp_;
+  const fs::path folder_ = temp_.path();
 };
 
 TEST_F(MonteCarloTruthFiles, RoundTripIsExact) {
@@ -268,8 +263,8 @@ TEST_F(MonteCarloTruthFiles, MalformedFilesAreRejectedNamingTheFile) {
 // as the Monte Carlo truth of the preset, with every material in view; rerun from its truth, the
 // same images.
 TEST(SimulateMonteCarlo, TinyPresetWritesAReadableTruth) {
-  const fs::path out = fs::temp_directory_path() / ("svbtdf-simulate-mc-" + std::to_string(::getpid()));
-  fs::remove_all(out);
+  const svbtdf::testing::TempFolder temp;
+  const fs::path out = temp / "out";
   SimulationOptions options;
   options.preset = "tiny";
   options.truth = "montecarlo";
@@ -293,8 +288,7 @@ TEST(SimulateMonteCarlo, TinyPresetWritesAReadableTruth) {
   EXPECT_THROW(SimulateSession(out, options), Error);
   // Without its session, the folder is an unfinished simulation: the truth is read back, not
   // traced again, and renders exactly the same images (what resuming an interrupted run relies on).
-  const fs::path first_folder = out.string() + "-first";
-  fs::remove_all(first_folder);
+  const fs::path first_folder = temp / "out-first";
   fs::rename(result.session, first_folder);
   const session::Session first = session::Session::Open(first_folder);
   const std::string manifest = ReadTextFile(result.truth / "material.json");
@@ -307,8 +301,6 @@ TEST(SimulateMonteCarlo, TinyPresetWritesAReadableTruth) {
   fs::remove_all(result.session);
   options.seed = 3;
   EXPECT_THROW(SimulateSession(out, options), Error);
-  fs::remove_all(out);
-  fs::remove_all(first_folder);
 }
 
 }  // namespace
