@@ -1,57 +1,19 @@
-// Frame decoding shared by the drivers, the pattern rasteriser, and the SDL display under SDL's
-// headless "dummy" video driver (rendered pixels read back where the renderer supports it).
+// The pattern rasteriser (acquire/src/pattern_raster.cc): gamma encoding of flat fields, dots
+// with sub-pixel flux and centroid, the all-dots grid and the chessboard's geometry.
 
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdlib>
+#include <cstdint>
+#include <vector>
 
-#include "svbtdf/acquire/frame_decode.h"
 #include "svbtdf/acquire/pattern_raster.h"
-#include "svbtdf/acquire/sdl_display.h"
 #include "svbtdf/common/error.h"
-#include "svbtdf/common/interrupt.h"
 
 namespace svbtdf::acquire {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-TEST(FrameDecodeTest, UnpacksMipiRaw10And12) {
-  // RAW10: samples 0x3FF, 0x000, 0x155, 0x2AA -> MSBs FF 00 55 AA, LSB byte 11 00 01 10 b.
-  const uint8_t raw10[] = {0xFF, 0x00, 0x55, 0xAA, 0b10010011};
-  const Frame ten = DecodeImage({SampleLayout::kMipiPacked10, 10, "RGGB", "p"}, raw10, 5, 4, 1, 5, "t");
-  EXPECT_EQ(ten.pixels, (std::vector<uint16_t>{0x3FF, 0x000, 0x155, 0x2AA}));
-  EXPECT_EQ(ten.bits_per_sample, 10);
-  // RAW12: samples 0xABC, 0x123 -> AB 12 then LSB nibbles C (low) and 3 (high) = 0x3C.
-  const uint8_t raw12[] = {0xAB, 0x12, 0x3C};
-  const Frame twelve = DecodeImage({SampleLayout::kMipiPacked12, 12, "", "p"}, raw12, 3, 2, 1, 3, "t");
-  EXPECT_EQ(twelve.pixels, (std::vector<uint16_t>{0xABC, 0x123}));
-}
-
-TEST(FrameDecodeTest, RespectsStrideAndMasksUnusedBits) {
-  // Two rows of two 10-bit samples in 16-bit containers, rows padded to 6 bytes; the padding
-  // and the top bits (set to garbage) must not leak into the samples.
-  const uint8_t data[] = {0x01, 0xFC, 0x02, 0x00, 0xEE, 0xEE, 0xFF, 0x03, 0x04, 0x00, 0xEE, 0xEE};
-  const Frame frame = DecodeImage({SampleLayout::kRaw16, 10, "BGGR", "SBGGR10"}, data, sizeof data, 2, 2, 6, "t");
-  EXPECT_EQ(frame.pixels, (std::vector<uint16_t>{0x001, 0x002, 0x3FF, 0x004}));
-  try {
-    DecodeImage({SampleLayout::kRaw16, 10, "", ""}, data, 9, 2, 2, 6, "cam");
-    FAIL() << "a short frame must be rejected";
-  } catch (const Error& error) {
-    EXPECT_EQ(error.kind(), ErrorKind::kHardware);
-  }
-}
-
-TEST(FrameDecodeTest, YuyvLimitedRangeGreysAndBgrOrder) {
-  const uint8_t yuyv[] = {16, 128, 235, 128};
-  const Frame grey = DecodeImage({SampleLayout::kYuyv, 8, "", "YUYV"}, yuyv, 4, 2, 1, 4, "t");
-  EXPECT_EQ(grey.pixels, (std::vector<uint16_t>{0, 0, 0, 255, 255, 255}));
-  EXPECT_FALSE(grey.linear);
-  const uint8_t bgr[] = {1, 2, 3};
-  EXPECT_EQ(DecodeImage({SampleLayout::kBgr24, 8, "", "BGR3"}, bgr, 3, 1, 1, 3, "t").pixels,
-            (std::vector<uint16_t>{3, 2, 1}));
-}
 
 TEST(PatternRasterTest, GammaEncodingOfFlatFields) {
   Pattern white;
@@ -142,62 +104,6 @@ TEST(PatternRasterTest, AllDotsAndChessboardGeometry) {
       << "white margin around the board";
   board.board_square_px = 30;
   EXPECT_THROW(RasterizePattern(board, w, h, 2.2), Error);
-}
-
-class SdlDummyTest : public ::testing::Test {
- protected:
-  void SetUp() override { setenv("SDL_VIDEODRIVER", "dummy", /*overwrite=*/0); }
-};
-
-TEST_F(SdlDummyTest, ListsTheDummyDisplay) {
-  std::vector<DisplayInfo> displays;
-  try {
-    displays = ListSdlDisplays();
-  } catch (const Error& error) {
-    GTEST_SKIP() << "SDL video unavailable: " << error.what();
-  }
-  ASSERT_FALSE(displays.empty());
-  EXPECT_EQ(displays[0].id, "sdl:0");
-  EXPECT_GT(displays[0].width_px, 0);
-}
-
-TEST_F(SdlDummyTest, ShowsExactlyTheRasterisedPattern) {
-  std::unique_ptr<SdlDisplay> display;
-  try {
-    display = std::make_unique<SdlDisplay>(0, SdlDisplayOptions{});
-  } catch (const Error& error) {
-    GTEST_SKIP() << "SDL display unavailable: " << error.what();
-  }
-  const DisplayInfo info = display->Info();
-  Pattern dot;
-  dot.kind = Pattern::Kind::kDot;
-  dot.x_px = info.width_px / 2.0 + 0.3;
-  dot.y_px = info.height_px / 3.0 + 0.7;
-  dot.dot_radius_px = 4.0;
-  dot.intensity = 0.6;
-  Pattern board;
-  board.kind = Pattern::Kind::kChessboard;
-  board.board_square_px = 40;
-  for (const Pattern& pattern : {dot, board}) {
-    display->Show(pattern);
-    std::vector<uint8_t> shown;
-    if (!display->ReadBackLastFrame(&shown)) {
-      GTEST_SKIP() << "renderer '" << display->RendererName() << "' cannot read pixels back";
-    }
-    EXPECT_EQ(shown, RasterizePattern(pattern, info.width_px, info.height_px, info.gamma))
-        << "renderer " << display->RendererName();
-  }
-  EXPECT_THROW(display->Show([] { Pattern p; p.kind = Pattern::Kind::kDot; p.dot_radius_px = -1; return p; }()), Error);
-}
-
-TEST_F(SdlDummyTest, RejectsAMissingDisplayIndex) {
-  try {
-    SdlDisplay display(99, {});
-    FAIL() << "display 99 should not exist";
-  } catch (const Error& error) {
-    if (error.kind() == ErrorKind::kHardware) GTEST_SKIP() << "SDL video unavailable: " << error.what();
-    EXPECT_EQ(error.kind(), ErrorKind::kInvalidInput);
-  }
 }
 
 }  // namespace
