@@ -9,7 +9,6 @@
 
 #include <filesystem>
 #include <map>
-#include <unistd.h>
 
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/interrupt.h"
@@ -17,6 +16,7 @@
 #include "svbtdf/simulate/capture_simulator.h"
 #include "svbtdf/simulate/truth_io.h"
 #include "svbtdf/simulate/truth_material.h"
+#include "temp_folder.h"
 
 namespace svbtdf {
 namespace {
@@ -153,10 +153,8 @@ TEST(Capture, BoardImagesAreFoundAtTheTrueCorners) {
 
 TEST(Capture, RigTruthRoundTrip) {
   TinyCapture tiny;
-  const auto dir = std::filesystem::temp_directory_path() / ("svbtdf_rig_truth_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+  const svbtdf::testing::TempFolder dir;
   const auto path = dir / "rig.json";
-  std::filesystem::remove(path);
   WriteRigTruth(path, tiny.rig, tiny.plan);
   EXPECT_THROW(WriteRigTruth(path, tiny.rig, tiny.plan), Error);  // never overwritten
   const RigTruth truth = ReadRigTruth(path);
@@ -169,7 +167,6 @@ TEST(Capture, RigTruthRoundTrip) {
   EXPECT_EQ(truth.dots[7].position, tiny.rig.dots()[7].position);
   EXPECT_EQ(truth.capture.dot_exposures_s, tiny.plan.dot_exposures_s);
   EXPECT_EQ(truth.capture.zhang_boards.size(), tiny.plan.zhang_boards.size());
-  std::filesystem::remove_all(dir);
   EXPECT_THROW(ReadRigTruth(dir / "missing.json"), Error);
 }
 
