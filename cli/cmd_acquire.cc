@@ -36,6 +36,7 @@ void RunAcquire(const AcquireArgs& args) {
   acquire::AcquireOptions options;
   options.retries = args.retries;
   options.retry_backoff_s = args.retry_backoff_s;
+  if (rig.world) options.before_capture = acquire::AnnounceCaptures(rig.world);
   const acquire::AcquireResult result = acquire::Acquire(plan, *rig.camera, *rig.display, *rig.op, args.out, options);
   std::printf("acquired %lld images in %.1f s (%lld were already there, %lld retried captures); %lld of %lld planned\n",
               static_cast<long long>(result.captured), result.seconds, static_cast<long long>(result.already),

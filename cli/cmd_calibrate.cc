@@ -3,9 +3,6 @@
 
 #include <glob.h>
 
-#include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
@@ -16,13 +13,12 @@
 
 #include "commands.h"
 #include "quality_output.h"
+#include "svbtdf/calib/board_photos.h"
 #include "svbtdf/calib/calibrate_session.h"
 #include "svbtdf/calib/camera_calibration.h"
 #include "svbtdf/process/calibration_quality.h"
 #include "svbtdf/session/session.h"
-#include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
-#include "svbtdf/common/progress.h"
 
 namespace svbtdf::cli {
 namespace {
@@ -72,43 +68,14 @@ void PrintSummary(const calib::CalibrationReport& report) {
 
 void RunCalibrateImages(const CalibrateOptions& options) {
   const calib::BoardSpec board = calib::BoardSpec::Parse(options.board);
-  const std::vector<std::string> files = ExpandGlob(options.images_glob);
-  std::vector<calib::BoardDetection> detections;
-  cv::Size image_size;
-  ProgressBar progress("detecting board", static_cast<int64_t>(files.size()), "images");
-  for (const std::string& file : files) {
-    cv::Mat image = cv::imread(file, cv::IMREAD_GRAYSCALE | cv::IMREAD_ANYDEPTH);
-    if (image.empty()) ThrowFormatError(file, "cannot be read as an image", "is it a PNG, JPEG or TIFF file?");
-    if (image.depth() == CV_16U) {
-      // Camera-native 16-bit files often hold fewer bits (12-bit values in 16-bit containers):
-      // stretch to the image's own maximum so the detector sees the full contrast.
-      double max_value = 0.0;
-      cv::minMaxLoc(image, nullptr, &max_value);
-      image.convertTo(image, CV_8U, 255.0 / std::max(max_value, 1.0));
-    }
-    if (image_size.empty()) image_size = image.size();
-    if (image.size() != image_size) {
-      ThrowInvalidInput(file, "is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
-                                  " but the first image is " + std::to_string(image_size.width) + "x" +
-                                  std::to_string(image_size.height),
-                        "all views must come from one camera at one resolution");
-    }
-    detections.push_back(calib::DetectBoard(image, board, file));
-    progress.Advance();
-  }
-  progress.Finish();
   calib::CalibrationOptions calibration_options;
   calibration_options.fix_k3 = options.fix_k3;
   if (options.full_lens_model) calibration_options.max_principal_point_std_fraction = 0;
-  const calib::CalibrationReport report = calib::CalibrateCamera(detections, image_size, calibration_options);
+  const calib::CalibrationReport report =
+      calib::CalibrateFromPhotos(ExpandGlob(options.images_glob), board, calibration_options);
   PrintSummary(report);
   if (!options.json_path.empty()) {
-    nlohmann::json out;
-    out["format"] = "svbtdf-camera-calibration";
-    out["version"] = 1;
-    out["board"] = board.ToString();
-    out["camera"] = calib::ToJson(report);
-    WriteTextAtomically(options.json_path, out.dump(2) + "\n");
+    calib::WriteCameraCalibration(options.json_path, board, report);
     std::printf("wrote %s\n", options.json_path.c_str());
   }
 }

@@ -6,7 +6,7 @@
 
 #include "commands.h"
 #include "svbtdf/simulate/presets.h"
-#include "svbtdf/simulate/session_writer.h"
+#include "svbtdf/acquire/simulated_session.h"
 
 namespace svbtdf::cli {
 
@@ -33,7 +33,7 @@ void AddSimulateCommand(CLI::App& app) {
                      "show a mirror image of the screen (a mirrored display mode), which calibration must refuse");
   simulate->add_option("--threads", options->threads, "worker threads (0: all cores)")->capture_default_str();
   simulate->callback([options, out] {
-    const SimulationOutput result = SimulateSession(*out, *options);
+    const acquire::SimulationOutput result = acquire::SimulateSession(*out, *options);
     std::printf("simulated %lld images (%lld resumed) of preset '%s'\n  session: %s\n  truth:   %s\n",
                 static_cast<long long>(result.images), static_cast<long long>(result.resumed),
                 options->preset.c_str(), result.session.c_str(), result.truth.c_str());

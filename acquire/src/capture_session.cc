@@ -108,7 +108,7 @@ class CaptureRun {
   void Run(const std::vector<PlannedCapture>& captures) {
     std::unique_ptr<ProgressBar> progress;
     if (options_.progress) {
-      progress = std::make_unique<ProgressBar>("acquire", static_cast<int64_t>(captures.size()), "images");
+      progress = std::make_unique<ProgressBar>(options_.progress_label, static_cast<int64_t>(captures.size()), "images");
       progress->SkipAlreadyDone(result_.already);
     }
     for (const PlannedCapture& capture : captures) {
@@ -205,6 +205,7 @@ class CaptureRun {
 
   // After a failure everything is set again: the camera or display may have been reset.
   Frame CaptureOnce(const PlannedCapture& capture, bool reset) {
+    if (options_.before_capture) options_.before_capture(capture);
     if (reset || !shown_ || !SamePattern(*shown_, capture.pattern)) {
       shown_.reset();
       display_.Show(capture.pattern);
@@ -348,7 +349,11 @@ AcquireResult Acquire(const CapturePlan& plan, Camera& camera, Display& display,
   constexpr uint64_t kManifestAndJournal = 1 << 20;
   RequireFreeSpace(session_folder, EstimatedBytesPerImage(plan, camera_info) * missing + kManifestAndJournal, missing,
                    options);
-  if (!session) session = session::Session::Create(session_folder, AcquisitionRig(plan, camera_info, display_info), keys);
+  if (!session) {
+    nlohmann::json rig = AcquisitionRig(plan, camera_info, display_info);
+    rig.merge_patch(options.rig_additions);
+    session = session::Session::Create(session_folder, rig, keys);
+  }
 
   CaptureRun(plan, camera, display, op, *session, options, result).Run(captures);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

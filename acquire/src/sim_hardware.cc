@@ -9,6 +9,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/session/fiducials.h"
 #include "svbtdf/simulate/capture_render.h"
+#include "svbtdf/simulate/simulation.h"
 
 namespace svbtdf::acquire {
 namespace {
@@ -44,6 +45,12 @@ DisplayInfo SimDisplayInfo(const SimulatedSetup& setup) {
   info.pixel_pitch_mm = m.pixel_pitch * 1000.0;
   info.gamma = m.gamma;
   return info;
+}
+
+std::function<void(const PlannedCapture&)> AnnounceCaptures(std::shared_ptr<SimWorld> world) {
+  return [world = std::move(world)](const PlannedCapture& capture) {
+    world->announced = session::CaptureKey::Parse(capture.key);
+  };
 }
 
 bool SimOperator::Prepare(Scene scene, int view, const std::string& instruction) {
@@ -155,7 +162,11 @@ Frame SimCamera::Capture() {
   // The n-th capture of the same thing: dark frame n, or a repeat with its own noise. (All
   // free dots of a bracket share one count.)
   const std::string scene = what.free_dot ? "free_dot" : SceneOf(id.key);
-  const int n = taken_[{scene, id.key.bracket}]++;
+  int n = taken_[{scene, id.key.bracket}]++;
+  const std::optional<session::CaptureKey>& announced = world_->announced;
+  if (!what.free_dot && announced && SceneOf(*announced) == scene && announced->bracket == id.key.bracket) {
+    n = announced->repeat;
+  }
   uint64_t stream;
   if (dark) {
     id.key.repeat = n;

@@ -1,50 +1,67 @@
 #include "svbtdf/simulate/capture_render.h"
 
+#include <algorithm>
 #include <cmath>
-#include <nlohmann/json.hpp>
+#include <functional>
 
-#include "svbtdf/common/atomic_file.h"
-#include "svbtdf/session/fiducials.h"
 #include "svbtdf/common/error.h"
+#include "svbtdf/session/fiducials.h"
+#include "svbtdf/simulate/truth_material.h"
 
 namespace svbtdf {
-namespace fs = std::filesystem;
-namespace {
 
-bool Close(double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(std::abs(a), std::abs(b)); }
-
-double EtaOfTruthMaterial(const fs::path& manifest_path) {
-  try {
-    return nlohmann::json::parse(ReadTextFile(manifest_path)).at("eta").get<double>();
-  } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(manifest_path.string(), std::string("is malformed: ") + e.what());
-  }
+uint64_t NoiseStream(std::string_view what, int index, int bracket) {
+  const uint64_t name_hash = std::hash<std::string_view>{}(what);
+  return name_hash * 0x9e3779b97f4a7c15ULL ^ (uint64_t(index) << 16) ^ uint64_t(bracket);
 }
 
-// The rebuilt rig must be the recorded one: a preset changed since the simulation ran would
-// otherwise render different images under the same keys.
-void RequireSameRig(const SimulatedSetup& setup, const RigTruth& truth, const fs::path& rig_path) {
-  const CameraIntrinsics& k = setup.rig->config().intrinsics;
-  const auto mismatch = [&](const std::string& what) {
-    ThrowFormatError(rig_path.string(), "does not match preset '" + setup.preset.name + "' of this build (" + what + ")",
-                     "re-run `svbtdf simulate` with this build");
-  };
-  if (k.width != truth.camera.width || k.height != truth.camera.height || !Close(k.fx, truth.camera.fx)) mismatch("camera");
-  const std::vector<Dot>& dots = setup.rig->dots();
-  if (dots.size() != truth.dots.size()) mismatch("number of dots");
-  for (size_t q = 0; q < dots.size(); ++q) {
-    if (dots[q].monitor_x != truth.dots[q].monitor_x || dots[q].monitor_y != truth.dots[q].monitor_y) mismatch("dot positions");
+uint64_t CaptureId::Stream() const {
+  using session::CaptureKind;
+  switch (key.kind) {
+    case CaptureKind::kDark: return NoiseStream("dark", key.repeat, key.bracket);
+    case CaptureKind::kBoardView: return NoiseStream("board", key.view, 0);
+    case CaptureKind::kSamplePlaneView: return NoiseStream("holder_board", key.view, 0);
+    case CaptureKind::kMonitorPoseView: return NoiseStream("monitor_pose", key.view, 0);
+    case CaptureKind::kAllDots: return NoiseStream("all_dots", 0, key.bracket);
+    case CaptureKind::kFiducials: return NoiseStream("fiducials", 0, key.bracket);
+    case CaptureKind::kFlatWhite: return NoiseStream("flat", 0, key.bracket);
+    case CaptureKind::kDot: return NoiseStream("dots", key.dot, key.bracket);
   }
-  const std::vector<double>& a = setup.plan.dot_exposures_s;
-  const std::vector<double>& b = truth.capture.dot_exposures_s;
-  if (a.size() != b.size()) mismatch("exposure bracket");
-  for (size_t e = 0; e < a.size(); ++e) {
-    if (!Close(a[e], b[e])) mismatch("dot exposures");
-  }
-  if (setup.plan.zhang_boards.size() != truth.capture.zhang_boards.size()) mismatch("board views");
+  return 0;
 }
 
-}  // namespace
+std::string SceneOf(const session::CaptureKey& key) {
+  session::CaptureKey scene = key;
+  scene.bracket = scene.repeat = 0;
+  return scene.Format();
+}
+
+CaptureTruth PlanCapture(const SimulationPreset& preset, const RigRenderer& renderer,
+                         uint64_t seed) {
+  const Rig& rig = renderer.rig();
+  const RigConfig& config = rig.config();
+  const SensorConfig& sensor = config.sensor;
+  CaptureTruth plan;
+  plan.seed = seed;
+  plan.preset = preset.name;
+  // Dot images: the shortest exposure puts the brightest dot image at peak_fill of the well.
+  const double peak = renderer.ProbePeakRadiance();
+  const double base = preset.peak_fill * sensor.full_well / (peak * sensor.sensitivity);
+  for (double multiple : preset.bracket) plan.dot_exposures_s.push_back(base * multiple);
+  // The monitor seen directly is brightest where it is seen most obliquely (intensity per area
+  // constant at best: radiance <= exitance / cos): fill half the well there.
+  const MonitorConfig& m = config.monitor;
+  const double cos_edge = std::cos(std::min(rig.CameraTheta() + 0.15, 1.4));
+  const double monitor_peak = m.white_exitance * m.Luminance(1.0) / cos_edge;
+  plan.all_dots_exposure_s = 0.5 * sensor.full_well / (monitor_peak * sensor.sensitivity);
+  plan.flat_exposure_s = plan.all_dots_exposure_s;
+  const BoardConfig& b = config.board;
+  plan.board_exposure_s =
+      0.6 * sensor.full_well / (b.illumination * b.reflectance_white * sensor.sensitivity);
+  plan.zhang_boards = renderer.ZhangBoardPoses(b.views, seed);
+  plan.holder_board = renderer.HolderBoardPose();
+  return plan;
+}
 
 void RenderCaptureRadiance(const RigRenderer& renderer, const CaptureTruth& plan, const CaptureId& id,
                            FloatImage* radiance) {
@@ -87,38 +104,21 @@ Vec2 CaptureWindowOrigin(const Rig& rig, const CaptureId& id) {
   return -Vec2(window.offset_x, window.offset_y);
 }
 
-std::unique_ptr<SimulatedSetup> MakeSimulatedSetup(SimulationPreset preset, uint64_t seed, int threads) {
+std::unique_ptr<SimulatedSetup> MakeSimulatedSetup(SimulationPreset preset, uint64_t seed, int threads,
+                                                   const TruthMaker& make_truth) {
   auto setup = std::make_unique<SimulatedSetup>();
   setup->preset = std::move(preset);
   setup->seed = seed;
   const SimulationPreset& p = setup->preset;
   setup->rig = std::make_unique<Rig>(p.rig);
-  setup->material = std::make_unique<TruthMaterial>(
-      TruthMaterial::FromPattern(p.pattern, p.rig.sample.texels_x, p.rig.sample.texels_y, p.eta, seed));
+  if (make_truth) {
+    setup->material = make_truth(*setup->rig);
+  } else {
+    setup->material = std::make_unique<TruthMaterial>(
+        TruthMaterial::FromPattern(p.pattern, p.rig.sample.texels_x, p.rig.sample.texels_y, p.eta, seed));
+  }
   setup->renderer = std::make_unique<RigRenderer>(*setup->rig, setup->material.get(), threads);
   setup->plan = PlanCapture(p, *setup->renderer, seed);
-  return setup;
-}
-
-std::unique_ptr<SimulatedSetup> LoadSimulatedSetup(const fs::path& out, int threads) {
-  const fs::path rig_path = out / "truth" / "rig.json";
-  if (!fs::exists(rig_path)) {
-    ThrowInvalidInput(out.string(), "is not the output folder of `svbtdf simulate` (no truth/rig.json)",
-                      "run `svbtdf simulate --preset tiny --out " + out.string() + "` first");
-  }
-  const RigTruth truth = ReadRigTruth(rig_path);
-  if (truth.capture.truth_kind != "model") {
-    ThrowInvalidInput(rig_path.string(), "holds a '" + truth.capture.truth_kind + "' truth; only 'model' can be re-rendered");
-  }
-  SimulationPreset preset = MakePreset(truth.capture.preset);
-  preset.eta = EtaOfTruthMaterial(out / "truth" / "material.json");
-  // The screen as it was simulated (svbtdf simulate may have turned, tilted or mirrored it).
-  preset.rig.monitor.orientation_deg = truth.monitor.orientation_deg;
-  preset.rig.monitor.tilt_deg = truth.monitor.tilt_deg;
-  preset.rig.monitor.mirrored = truth.monitor.mirrored;
-  std::unique_ptr<SimulatedSetup> setup = MakeSimulatedSetup(std::move(preset), truth.capture.seed, threads);
-  setup->plan.truth_kind = truth.capture.truth_kind;
-  RequireSameRig(*setup, truth, rig_path);
   return setup;
 }
 

@@ -3,9 +3,9 @@
 // resumable session; a full disk, a changed plan and an interrupt are clean, named errors; an
 // unattended run can skip the captures that need an operator.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
+#include <memory>
 #include <sstream>
 
 #include "svbtdf/acquire/capture_session.h"
@@ -14,7 +14,8 @@
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/session/session.h"
 #include "svbtdf/simulate/capture_render.h"
-#include "svbtdf/simulate/session_writer.h"
+#include "svbtdf/acquire/simulated_session.h"
+#include "temp_folder.h"
 
 namespace svbtdf::acquire {
 namespace {
@@ -25,14 +26,13 @@ class AcquireOnSimulatedRig : public ::testing::Test {
   // The rig is built directly; `svbtdf simulate`'s session (3 s) only for the tests that compare
   // against it (ctest runs every test in a process of its own).
   static void SetUpTestSuite() {
-    root_ = fs::temp_directory_path() / ("svbtdf-acquire-" + std::to_string(::getpid()));
-    fs::remove_all(root_);
-    fs::create_directories(root_);
+    folder_ = std::make_unique<svbtdf::testing::TempFolder>("acquire");
+    root_ = folder_->path();
     setup_ = MakeSimulatedSetup(MakePreset("tiny"), 1, 0);
     plan_ = new CapturePlan(MakePlanPreset("tiny"));
   }
   static void TearDownTestSuite() {
-    fs::remove_all(root_);
+    folder_.reset();
     setup_.reset();
     delete plan_;
   }
@@ -56,7 +56,7 @@ class AcquireOnSimulatedRig : public ::testing::Test {
     if (!fs::exists(root_ / "sim" / "session" / "journal.jsonl")) {
       SimulationOptions options;
       options.progress = false;
-      SimulateSession(root_ / "sim", options);
+      acquire::SimulateSession(root_ / "sim", options);
       const std::shared_ptr<const SimulatedSetup> loaded = LoadSimulation(root_ / "sim");
       EXPECT_EQ(loaded->plan.dot_exposures_s, setup_->plan.dot_exposures_s);
     }
@@ -77,6 +77,7 @@ class AcquireOnSimulatedRig : public ::testing::Test {
   static int BoardViews() { return plan_->board_views; }
 
   static inline fs::path root_;
+  static inline std::unique_ptr<svbtdf::testing::TempFolder> folder_;
   static inline std::shared_ptr<const SimulatedSetup> setup_;
   static inline CapturePlan* plan_ = nullptr;
   std::shared_ptr<SimWorld> world_;

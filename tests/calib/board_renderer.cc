@@ -1,5 +1,7 @@
 #include "board_renderer.h"
 
+#include <random>
+
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -60,6 +62,17 @@ cv::Mat RenderChessboard(const BoardSpec& board, const CameraModel& camera, cons
   cv::Mat gray;
   image.convertTo(gray, CV_8U, 255.0);
   return gray;
+}
+
+std::vector<std::pair<cv::Vec3d, cv::Vec3d>> VariedBoardPoses(int count, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> tilt(-0.6, 0.6), shift(-40, 40);
+  std::vector<std::pair<cv::Vec3d, cv::Vec3d>> poses;
+  for (int k = 0; k < count; ++k) {
+    poses.push_back({cv::Vec3d(tilt(rng), tilt(rng), 0.3 * tilt(rng)),
+                     cv::Vec3d(-100 + shift(rng), -70 + shift(rng), 520 + 2 * shift(rng))});
+  }
+  return poses;
 }
 
 }  // namespace svbtdf::calib::testing

@@ -1,12 +1,12 @@
 // Calibrating simulated sessions against their ground truth (issue 4's acceptance), robustness
 // of the dot matching to missing and extra blobs, and errors that name the file.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <random>
 
 #include <nlohmann/json.hpp>
@@ -19,8 +19,9 @@
 #include "svbtdf/session/session.h"
 #include "svbtdf/process/process_session.h"
 #include "svbtdf/fit/slice_store.h"
-#include "svbtdf/simulate/session_writer.h"
+#include "svbtdf/acquire/simulated_session.h"
 #include "svbtdf/simulate/truth_io.h"
+#include "temp_folder.h"
 
 namespace svbtdf::calib {
 namespace {
@@ -30,15 +31,15 @@ class CalibrateSessionTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     ProgressBar::SetEnabled(false);
-    root_ = fs::temp_directory_path() / ("svbtdf_calibrate_session_" + std::to_string(::getpid()));
-    fs::remove_all(root_);
+    folder_ = std::make_unique<svbtdf::testing::TempFolder>("calibrate-session");
+    root_ = folder_->path();
     SimulationOptions options;
     options.preset = "tiny";
     options.progress = false;
-    SimulateSession(root_ / "sim", options);
+    acquire::SimulateSession(root_ / "sim", options);
     truth_ = ReadRigTruth(root_ / "sim" / "truth" / "rig.json");
   }
-  static void TearDownTestSuite() { fs::remove_all(root_); }
+  static void TearDownTestSuite() { folder_.reset(); }
 
   static CalibrateSessionOptions Quiet() {
     CalibrateSessionOptions options;
@@ -81,6 +82,7 @@ class CalibrateSessionTest : public ::testing::Test {
     return copy;
   }
 
+  static inline std::unique_ptr<svbtdf::testing::TempFolder> folder_;
   static inline fs::path root_;
   static inline RigTruth truth_;
 };

@@ -27,21 +27,10 @@ CameraModel TrueCamera() {
   return camera;
 }
 
-// Board poses that tilt the board by up to ~35 degrees and move it around the frame.
-std::vector<std::pair<cv::Vec3d, cv::Vec3d>> Poses(int count, uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> tilt(-0.6, 0.6), shift(-40, 40);
-  std::vector<std::pair<cv::Vec3d, cv::Vec3d>> poses;
-  for (int k = 0; k < count; ++k) {
-    poses.push_back({cv::Vec3d(tilt(rng), tilt(rng), 0.3 * tilt(rng)), cv::Vec3d(-100 + shift(rng), -70 + shift(rng), 520 + 2 * shift(rng))});
-  }
-  return poses;
-}
-
 std::vector<BoardDetection> DetectRenderedViews(const BoardSpec& board, const CameraModel& camera, int count) {
   std::vector<BoardDetection> detections;
   int k = 0;
-  for (const auto& [rvec, tvec] : Poses(count, 17)) {
+  for (const auto& [rvec, tvec] : testing::VariedBoardPoses(count, 17)) {
     const cv::Mat image = testing::RenderChessboard(board, camera, rvec, tvec, 0.01, k);
     detections.push_back(DetectBoard(image, board, "view" + std::to_string(k++)));
   }

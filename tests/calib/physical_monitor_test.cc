@@ -5,7 +5,6 @@
 // convention unnoticed (they once did: both assumed a mirror image of a screen). A mirrored
 // display and a lab note that contradicts the fiducials are refused.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -21,8 +20,9 @@
 #include "svbtdf/session/session.h"
 #include "svbtdf/process/process_session.h"
 #include "svbtdf/fit/slice_store.h"
-#include "svbtdf/simulate/session_writer.h"
+#include "svbtdf/acquire/simulated_session.h"
 #include "svbtdf/simulate/truth_io.h"
+#include "temp_folder.h"
 
 namespace svbtdf::calib {
 namespace {
@@ -44,9 +44,11 @@ const Orientation kOrientations[] = {
     {270, {0, -1, 0}, {-1, 0, 0}},
 };
 
+// The sessions are simulated once per program and shared by every test in it (a direct run of
+// calib_tests simulates o0 and o90 once); the folder goes when the program ends.
 fs::path Root() {
-  static const fs::path root = fs::temp_directory_path() / ("svbtdf_physical_monitor_" + std::to_string(::getpid()));
-  return root;
+  static const svbtdf::testing::TempFolder root("physical-monitor");
+  return root.path();
 }
 
 fs::path Simulate(const std::string& name, double orientation_deg, bool mirrored) {
@@ -58,7 +60,7 @@ fs::path Simulate(const std::string& name, double orientation_deg, bool mirrored
   options.monitor_orientation_deg = orientation_deg;
   options.monitor_tilt_deg = 0.0;
   options.mirror_monitor = mirrored;
-  SimulateSession(out, options);
+  acquire::SimulateSession(out, options);
   return out;
 }
 
@@ -71,7 +73,6 @@ CalibrateSessionOptions Quiet() {
 class PhysicalMonitorTest : public ::testing::TestWithParam<Orientation> {
  protected:
   static void SetUpTestSuite() { ProgressBar::SetEnabled(false); }
-  static void TearDownTestSuite() { fs::remove_all(Root()); }
 };
 
 TEST_P(PhysicalMonitorTest, DotsLandWhereAScreenLyingSoShowsThem) {

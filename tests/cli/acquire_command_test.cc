@@ -19,6 +19,7 @@
 #include "run_command.h"
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/session/session.h"
+#include "temp_folder.h"
 
 namespace svbtdf {
 namespace {
@@ -28,13 +29,9 @@ using testing::RunSvbtdf;
 class AcquireCommand : public ::testing::Test {
  protected:
   void SetUp() override {
-    root_ = fs::temp_directory_path() / ("svbtdf-acquire-cli-" + std::to_string(::getpid()));
-    fs::remove_all(root_);
-    fs::create_directories(root_);
     const auto simulate = RunSvbtdf("-q simulate --preset tiny --out " + Sim().string());
     ASSERT_EQ(simulate.exit_code, 0) << simulate.output;
   }
-  void TearDown() override { fs::remove_all(root_); }
   fs::path Sim() const { return root_ / "sim"; }
   std::string AcquireArgs(const fs::path& out) const {
     return "-q acquire --plan-preset tiny --camera sim:" + Sim().string() + " --display sim --out " + out.string();
@@ -61,7 +58,8 @@ class AcquireCommand : public ::testing::Test {
     }
     return child;
   }
-  fs::path root_;
+  testing::TempFolder folder_;
+  const fs::path root_ = folder_.path();
 };
 
 TEST_F(AcquireCommand, TinyAcquireIsACompleteSessionWithTheSimulatorsImages) {

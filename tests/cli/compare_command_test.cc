@@ -10,7 +10,7 @@
 #include "run_command.h"
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/fit/material.h"
-#include "svbtdf/simulate/session_writer.h"
+#include "svbtdf/simulate/truth_io.h"
 
 namespace svbtdf {
 namespace {

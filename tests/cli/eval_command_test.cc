@@ -1,7 +1,6 @@
 // `svbtdf eval MATERIAL --texel U V --wi .. --wo .. --json` against the library's evaluation of
 // the same texel (issue 5's command-line contract).
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -10,6 +9,7 @@
 #include "small_material.h"
 #include "svbtdf/fit/material.h"
 #include "svbtdf/model/ggx.h"
+#include "temp_folder.h"
 
 namespace svbtdf {
 namespace {
@@ -17,8 +17,8 @@ namespace fs = std::filesystem;
 using testing::RunSvbtdf;
 
 TEST(EvalCommand, PrintsTheMaterialsValueAtATexel) {
-  const fs::path dir = fs::temp_directory_path() / ("svbtdf-eval-" + std::to_string(::getpid()));
-  fs::remove_all(dir);
+  const testing::TempFolder folder;
+  const fs::path dir = folder / "material";  // not there yet: WriteMaterial creates it
   const fit::Material material = SmallMaterial();
   fit::WriteMaterial(dir, material);
   const auto result = RunSvbtdf("eval " + dir.string() + " --texel 2 1 --wi 0.2 0.1 -1 --wo -0.3 0 1 --json");
@@ -35,7 +35,6 @@ TEST(EvalCommand, PrintsTheMaterialsValueAtATexel) {
   const auto missing = RunSvbtdf("eval " + (dir / "nope").string() + " --texel 0 0 --wi 0 0 -1 --wo 0 0 1");
   EXPECT_NE(missing.exit_code, 0);
   EXPECT_NE(missing.output.find("material.json"), std::string::npos);
-  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -5,16 +5,17 @@
 // fits on another session, for the one-off measurements in docs/validation.md; the tests' bounds
 // are stated for the default, "--preset small".
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <nlohmann/json.hpp>
 
 #include "run_command.h"
 #include "svbtdf/common/atomic_file.h"
+#include "temp_folder.h"
 #include "truth_calibration.h"
 
 namespace svbtdf {
@@ -24,8 +25,8 @@ using testing::RunSvbtdf;
 class FitChain : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    root_ = fs::temp_directory_path() / ("svbtdf-fitchain-" + std::to_string(::getpid()));
-    fs::remove_all(root_);
+    folder_ = std::make_unique<testing::TempFolder>("fitchain");
+    root_ = folder_->path();
     const char* simulation = std::getenv("SVBTDF_FIT_CHAIN_SIMULATE");
     const auto simulated = RunSvbtdf("simulate " + std::string(simulation ? simulation : "--preset small") + " --out " +
                                      (root_ / "sim").string());
@@ -34,13 +35,10 @@ class FitChain : public ::testing::Test {
     const auto processed = RunSvbtdf("process " + (root_ / "sim" / "session").string() + " --out " + Processed());
     ASSERT_EQ(processed.exit_code, 0) << processed.output;
   }
-  // SVBTDF_KEEP_TEST_OUTPUT=1 keeps the session, store and materials for a look afterwards.
+  // SVBTDF_KEEP_TEST_FILES=1 keeps the session, store and materials for a look afterwards.
   static void TearDownTestSuite() {
-    if (std::getenv("SVBTDF_KEEP_TEST_OUTPUT")) {
-      std::printf("kept %s\n", root_.c_str());
-      return;
-    }
-    fs::remove_all(root_);
+    if (std::getenv("SVBTDF_KEEP_TEST_FILES")) std::printf("kept %s\n", root_.c_str());
+    folder_.reset();
   }
   static std::string Processed() { return (root_ / "processed").string(); }
 
@@ -56,6 +54,7 @@ class FitChain : public ::testing::Test {
     return metrics;
   }
 
+  static inline std::unique_ptr<testing::TempFolder> folder_;
   static inline fs::path root_;
 };
 

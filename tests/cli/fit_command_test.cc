@@ -1,16 +1,17 @@
 // `svbtdf fit` on a small processed store synthesised from a known material
 // (tests/support/analytic_store.h): arguments, refusals, and the ggx baseline through `svbtdf eval`.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 
 #include "analytic_store.h"
 #include "run_command.h"
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/fit/material.h"
+#include "temp_folder.h"
 
 namespace svbtdf {
 namespace {
@@ -20,16 +21,16 @@ using testing::RunSvbtdf;
 class FitCommand : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    root_ = fs::temp_directory_path() / ("svbtdf-fitcommand-" + std::to_string(::getpid()));
-    fs::remove_all(root_);
-    fs::create_directories(root_);
+    folder_ = std::make_unique<svbtdf::testing::TempFolder>("fit-command");
+    root_ = folder_->path();
     testing::WriteAnalyticStore(root_ / "processed", testing::AnalyticMaterial{6, 6}, 16, 0.01);
   }
-  static void TearDownTestSuite() { fs::remove_all(root_); }
+  static void TearDownTestSuite() { folder_.reset(); }
   static std::string Fit(const std::string& out, const std::string& options) {
     return "fit " + (root_ / "processed").string() + " --out " + (root_ / out).string() + " " + options;
   }
   static inline fs::path root_;
+  static inline std::unique_ptr<svbtdf::testing::TempFolder> folder_;
 };
 
 TEST_F(FitCommand, BadArgumentsExitWithTwoNamingTheArgument) {

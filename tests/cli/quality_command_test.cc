@@ -3,7 +3,6 @@
 // draws warnings naming the stage, the file and the figures, `run --strict` exits 4, and the
 // report shows the warnings at the top of its page; `fit` checks the store it is given.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -19,6 +18,7 @@
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/fit/quality.h"
+#include "temp_folder.h"
 
 namespace svbtdf {
 namespace {
@@ -35,14 +35,6 @@ std::string ReadPage(const fs::path& report) {
 // simulates it (about 7 s for `tiny`) and calibrates it.
 class QualityCommand : public ::testing::Test {
  protected:
-  void SetUp() override {
-    root_ = fs::temp_directory_path() / ("svbtdf-quality-cli-" + std::to_string(::getpid()));
-    fs::remove_all(root_);
-    fs::create_directories(root_);
-  }
-  void TearDown() override {
-    if (!std::getenv("SVBTDF_KEEP_TEST_OUTPUT")) fs::remove_all(root_);
-  }
   fs::path Session() const { return root_ / "sim" / "session"; }
   // Simulates the tiny session and runs `calibrate --strict` on it.
   testing::CommandResult SimulateAndCalibrate() const {
@@ -79,7 +71,8 @@ class QualityCommand : public ::testing::Test {
     return bad;
   }
 
-  fs::path root_;
+  testing::TempFolder folder_;  // SVBTDF_KEEP_TEST_FILES=1 keeps it
+  const fs::path root_ = folder_.path();
 };
 
 TEST_F(QualityCommand, AGoodTinySessionDrawsNoWarningAndRunStrictExitsZero) {

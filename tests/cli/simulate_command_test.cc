@@ -15,6 +15,7 @@
 #include "run_command.h"
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/session/session.h"
+#include "temp_folder.h"
 
 namespace svbtdf {
 namespace {
@@ -23,13 +24,8 @@ using testing::RunSvbtdf;
 
 class SimulateCommand : public ::testing::Test {
  protected:
-  void SetUp() override {
-    root_ = fs::temp_directory_path() / ("svbtdf-simulate-" + std::to_string(::getpid()));
-    fs::remove_all(root_);
-    fs::create_directories(root_);
-  }
-  void TearDown() override { fs::remove_all(root_); }
-  fs::path root_;
+  testing::TempFolder folder_;
+  const fs::path root_ = folder_.path();
 };
 
 // `map` is one of the truth's maps: alpha.exr for the analytic truth, slices.exr for Monte Carlo.

@@ -2,7 +2,6 @@
 // clustered, the representatives fitted, the material assembled, written, read back and
 // evaluated on held-out light directions (issue 5's acceptance, on a small synthetic material).
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 
@@ -13,6 +12,7 @@
 #include "svbtdf/model/beckmann.h"
 #include "svbtdf/model/ggx.h"
 #include "synthetic_slices.h"
+#include "temp_folder.h"
 
 namespace svbtdf::fit {
 namespace {
@@ -85,12 +85,8 @@ double HeldOutRelativeRmse(const Material& material, const SyntheticMaterial& sy
 
 class MaterialTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("svbtdf-material-" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
+  svbtdf::testing::TempFolder folder_;
+  const fs::path dir_ = folder_ / "material";  // not there yet: WriteMaterial creates it
 };
 
 TEST_F(MaterialTest, RepresentativesPredictHeldOutLightsAlmostAsWellAsFittingEveryTexel) {

@@ -1,7 +1,6 @@
 // The quality checks of docs/quality.md on hand-made outputs: each fires on a deliberately wrong
 // one, with its figures, and none fires on a good one; quality.json round-trips.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -14,6 +13,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/fit/quality.h"
+#include "temp_folder.h"
 
 namespace svbtdf::fit {
 namespace {
@@ -26,18 +26,15 @@ using testing::Has;
 class StoreCheck : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("svbtdf-quality-" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
     WriteTextAtomically(dir_ / "processed.json", R"({"format": "svbtdf-processed", "statistics": {"texels": 100, "valid_texels": 100}})");
   }
-  void TearDown() override { fs::remove_all(dir_); }
   void WriteMap(const char* name, int zeros) {
     FloatImage map(10, 10, 1, 1.0f);
     for (int t = 0; t < zeros; ++t) map.pixels[t] = 0.0f;
     WriteFloatImage(dir_ / name, map);
   }
-  fs::path dir_;
+  svbtdf::testing::TempFolder folder_;
+  const fs::path dir_ = folder_.path();
 };
 
 TEST_F(StoreCheck, AllTexelsValidAndNoReachMapDrawsNoWarning) {
@@ -107,9 +104,8 @@ TEST(QualityCheck, LargeResidualsHugeKsAndAlphaAtItsBoundsAreWarnings) {
 }
 
 TEST(QualityFile, RoundTripsAndRefusesOtherVersions) {
-  const fs::path dir = fs::temp_directory_path() / ("svbtdf-quality-file-" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const svbtdf::testing::TempFolder folder;
+  const fs::path& dir = folder.path();
   std::vector<QualityWarning> read;
   EXPECT_FALSE(ReadQuality(dir, &read));
   const std::vector<QualityWarning> warnings = {{"calibrate", "a/calibration.json", "dot-residual", "what", "1 mm", "cause"},
@@ -124,7 +120,6 @@ TEST(QualityFile, RoundTripsAndRefusesOtherVersions) {
   EXPECT_EQ(json["thresholds"]["k_s_max"], kMaxPlausibleKs);
   json["version"] = 99;
   EXPECT_THROW(QualityFromJson(json, "q.json"), Error);
-  fs::remove_all(dir);
 }
 
 }  // namespace

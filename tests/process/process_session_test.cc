@@ -25,7 +25,7 @@
 #include "svbtdf/fit/slice_store.h"
 #include "svbtdf/process/diffuse_separation.h"
 #include "svbtdf/process/slice_store_writer.h"
-#include "svbtdf/simulate/session_writer.h"
+#include "svbtdf/acquire/simulated_session.h"
 #include "svbtdf/simulate/truth_io.h"
 #include "truth_calibration.h"
 
@@ -55,7 +55,7 @@ Simulation Simulate(const std::string& name, bool noise) {
   options.preset = "tiny";
   options.noise = noise;
   options.progress = false;
-  SimulateSession(s.folder, options);
+  acquire::SimulateSession(s.folder, options);
   s.calibration = CalibrationFromTruth(s.folder);
   return s;
 }

@@ -24,7 +24,7 @@
 #include "svbtdf/fit/slice_store.h"
 #include "svbtdf/process/diffuse_separation.h"
 #include "svbtdf/process/slice_store_writer.h"
-#include "svbtdf/simulate/session_writer.h"
+#include "svbtdf/acquire/simulated_session.h"
 #include "truth_calibration.h"
 
 namespace svbtdf::process {
@@ -53,7 +53,7 @@ Errors Measure(const std::string& preset) {
     SimulationOptions options;
     options.preset = preset;
     options.progress = false;
-    SimulateSession(folder, options);  // resumes an interrupted one
+    acquire::SimulateSession(folder, options);  // resumes an interrupted one
     std::ofstream(folder / "simulated") << "done\n";
   }
   const fs::path out = folder / "processed";

@@ -1,5 +1,4 @@
-// Tests of a whole synthetic capture: completeness, determinism, resumption after an interrupt,
-// chessboard images that OpenCV finds at the true corners, and the rig truth file.
+// Tests of the synthetic captures: planned exposures, chessboard images that OpenCV finds at the true corners, and the rig truth file.
 
 #include <gtest/gtest.h>
 
@@ -8,33 +7,16 @@
 #include <opencv2/imgproc.hpp>
 
 #include <filesystem>
-#include <map>
-#include <unistd.h>
 
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/simulate/capture_render.h"
-#include "svbtdf/simulate/capture_simulator.h"
 #include "svbtdf/simulate/truth_io.h"
 #include "svbtdf/simulate/truth_material.h"
+#include "temp_folder.h"
 
 namespace svbtdf {
 namespace {
-
-std::string Key(const CaptureId& id) { return id.key.Format(); }
-
-class MemorySink : public CaptureSink {
- public:
-  bool Contains(const CaptureId& id) const override { return images.count(Key(id)) > 0; }
-  void Write(const CaptureId& id, const CameraImage& image) override {
-    images[Key(id)] = image.pixels;
-    if (interrupt_after > 0 && static_cast<int>(images.size()) == interrupt_after) {
-      SetInterruptRequested(true);
-    }
-  }
-  std::map<std::string, std::vector<uint16_t>> images;
-  int interrupt_after = 0;
-};
 
 struct TinyCapture {
   SimulationPreset preset = MakePreset("tiny");
@@ -43,45 +25,6 @@ struct TinyCapture {
   RigRenderer renderer{rig, &material, 2};
   CaptureTruth plan = PlanCapture(preset, renderer, 5);
 };
-
-TEST(Capture, TinyIsCompleteDeterministicAndResumable) {
-  TinyCapture tiny;
-  CaptureOptions options;
-  options.seed = 5;
-  options.progress = false;
-  MemorySink first;
-  RunCapture(tiny.renderer, tiny.plan, first, options);
-  const RigConfig& rig = tiny.preset.rig;
-  const size_t dots = static_cast<size_t>(rig.dots.cols * rig.dots.rows);
-  // darks (per bracket), boards, holder, all-dots, fiducials, flat, one image per dot and bracket
-  const size_t brackets = tiny.plan.dot_exposures_s.size();
-  const size_t expected =
-      static_cast<size_t>(rig.dark_frames) * brackets + static_cast<size_t>(rig.board.views) + 4 + dots * brackets;
-  ASSERT_EQ(brackets, 2u);  // the tiny preset brackets its dots twice
-  EXPECT_EQ(first.images.size(), expected);
-  EXPECT_EQ(CaptureList(tiny.rig, tiny.plan).size(), expected);
-
-  // Interrupted after 20 images, then resumed: the same bytes as the uninterrupted run.
-  MemorySink resumed;
-  resumed.interrupt_after = 20;
-  try {
-    RunCapture(tiny.renderer, tiny.plan, resumed, options);
-    ADD_FAILURE() << "the interrupt was not noticed";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kInterrupted);
-  }
-  SetInterruptRequested(false);
-  EXPECT_EQ(resumed.images.size(), 20u);
-  resumed.interrupt_after = 0;
-  RunCapture(tiny.renderer, tiny.plan, resumed, options);
-  EXPECT_EQ(resumed.images, first.images);
-
-  // Another seed changes the noise.
-  MemorySink other;
-  options.seed = 6;
-  RunCapture(tiny.renderer, tiny.plan, other, options);
-  EXPECT_NE(other.images.at("dot/q0010/e0/r0"), first.images.at("dot/q0010/e0/r0"));
-}
 
 TEST(Capture, BrightestDotImageIsExposedAsPlanned) {
   TinyCapture tiny;
@@ -153,10 +96,8 @@ TEST(Capture, BoardImagesAreFoundAtTheTrueCorners) {
 
 TEST(Capture, RigTruthRoundTrip) {
   TinyCapture tiny;
-  const auto dir = std::filesystem::temp_directory_path() / ("svbtdf_rig_truth_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+  const svbtdf::testing::TempFolder dir;
   const auto path = dir / "rig.json";
-  std::filesystem::remove(path);
   WriteRigTruth(path, tiny.rig, tiny.plan);
   EXPECT_THROW(WriteRigTruth(path, tiny.rig, tiny.plan), Error);  // never overwritten
   const RigTruth truth = ReadRigTruth(path);
@@ -169,7 +110,6 @@ TEST(Capture, RigTruthRoundTrip) {
   EXPECT_EQ(truth.dots[7].position, tiny.rig.dots()[7].position);
   EXPECT_EQ(truth.capture.dot_exposures_s, tiny.plan.dot_exposures_s);
   EXPECT_EQ(truth.capture.zhang_boards.size(), tiny.plan.zhang_boards.size());
-  std::filesystem::remove_all(dir);
   EXPECT_THROW(ReadRigTruth(dir / "missing.json"), Error);
 }
 

@@ -4,7 +4,6 @@
 // names the file at fault. The end-to-end `simulate --truth montecarlo` run is here too.
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -21,8 +20,9 @@
 #include "svbtdf/session/session.h"
 #include "svbtdf/simulate/montecarlo_truth.h"
 #include "svbtdf/simulate/presets.h"
-#include "svbtdf/simulate/session_writer.h"
+#include "svbtdf/acquire/simulated_session.h"
 #include "svbtdf/simulate/truth_io.h"
+#include "temp_folder.h"
 
 namespace svbtdf {
 namespace {
@@ -59,7 +59,7 @@ TEST(MonteCarloTruth, ViewGridSpansTheSampleAndInterpolatesExactlyAtNodes) {
   const double spread = std::acos(views.Node(0).dot(views.Node(views.num_nodes() - 1)));
   EXPECT_GT(spread, 2.0 * kPi / 180);
   EXPECT_LT(spread, 10.0 * kPi / 180);
-  for (const Vec3 p : {Vec3(-0.04, 0.04, 0), Vec3(0.04, -0.04, 0), Vec3(0, 0, 0)}) {
+  for (const Vec3& p : {Vec3(-0.04, 0.04, 0), Vec3(0.04, -0.04, 0), Vec3(0, 0, 0)}) {
     const Vec3 o = (camera - p).normalized();
     EXPECT_GT(o.x(), views.x0);
     EXPECT_LT(o.x(), views.x1);
@@ -170,12 +170,6 @@ TEST(MonteCarloTruth, DeterministicForTheSeedWhateverTheThreads) {
 
 class MonteCarloTruthFiles : public ::testing::Test {
  protected:
-  void SetUp() override {
-    folder_ = fs::temp_directory_path() / ("svbtdf-mctruth-" + std::to_string(::getpid()));
-    fs::remove_all(folder_);
-    fs::create_directories(folder_);
-  }
-  void TearDown() override { fs::remove_all(folder_); }
   // The error message of reading the truth, which must be an svbtdf::Error.
   std::string ReadError() {
     try {
@@ -191,7 +185,8 @@ class MonteCarloTruthFiles : public ::testing::Test {
     edit(manifest);
     WriteTextAtomically(folder_ / "material.json", manifest.dump(), /*overwrite=*/true);
   }
-  fs::path folder_;
+  svbtdf::testing::TempFolder temp_;
+  const fs::path folder_ = temp_.path();
 };
 
 TEST_F(MonteCarloTruthFiles, RoundTripIsExact) {
@@ -268,15 +263,15 @@ TEST_F(MonteCarloTruthFiles, MalformedFilesAreRejectedNamingTheFile) {
 // as the Monte Carlo truth of the preset, with every material in view; rerun from its truth, the
 // same images.
 TEST(SimulateMonteCarlo, TinyPresetWritesAReadableTruth) {
-  const fs::path out = fs::temp_directory_path() / ("svbtdf-simulate-mc-" + std::to_string(::getpid()));
-  fs::remove_all(out);
+  const svbtdf::testing::TempFolder temp;
+  const fs::path out = temp / "out";
   SimulationOptions options;
   options.preset = "tiny";
   options.truth = "montecarlo";
   options.seed = 2;
   options.threads = 2;
   options.progress = false;
-  const SimulationOutput result = SimulateSession(out, options);
+  const acquire::SimulationOutput result = acquire::SimulateSession(out, options);
   EXPECT_TRUE(session::Session::Open(result.session).Verify().complete());
   EXPECT_EQ(ReadRigTruth(result.truth / "rig.json").capture.truth_kind, "montecarlo");
   const MonteCarloTruth truth = ReadMonteCarloTruth(result.truth);
@@ -290,15 +285,14 @@ TEST(SimulateMonteCarlo, TinyPresetWritesAReadableTruth) {
   for (int t = 0; t < truth.num_texels(); ++t) ++count[truth.material_of(t)];
   for (int c : count) EXPECT_GT(c, 50);
   // A complete simulation is never redone.
-  EXPECT_THROW(SimulateSession(out, options), Error);
+  EXPECT_THROW(acquire::SimulateSession(out, options), Error);
   // Without its session, the folder is an unfinished simulation: the truth is read back, not
   // traced again, and renders exactly the same images (what resuming an interrupted run relies on).
-  const fs::path first_folder = out.string() + "-first";
-  fs::remove_all(first_folder);
+  const fs::path first_folder = temp / "out-first";
   fs::rename(result.session, first_folder);
   const session::Session first = session::Session::Open(first_folder);
   const std::string manifest = ReadTextFile(result.truth / "material.json");
-  SimulateSession(out, options);
+  acquire::SimulateSession(out, options);
   EXPECT_EQ(ReadTextFile(result.truth / "material.json"), manifest);
   const session::Session second = session::Session::Open(result.session);
   ASSERT_EQ(first.entries().size(), second.entries().size());
@@ -306,9 +300,7 @@ TEST(SimulateMonteCarlo, TinyPresetWritesAReadableTruth) {
   // A truth of other settings in the folder is refused rather than rendered.
   fs::remove_all(result.session);
   options.seed = 3;
-  EXPECT_THROW(SimulateSession(out, options), Error);
-  fs::remove_all(out);
-  fs::remove_all(first_folder);
+  EXPECT_THROW(acquire::SimulateSession(out, options), Error);
 }
 
 }  // namespace

@@ -4,7 +4,7 @@
 
 #include "svbtdf/fit/material.h"
 #include "svbtdf/model/tabulated_ndf.h"
-#include "svbtdf/simulate/session_writer.h"
+#include "svbtdf/simulate/truth_io.h"
 
 namespace svbtdf {
 

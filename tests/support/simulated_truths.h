@@ -9,7 +9,7 @@
 #include <map>
 #include <string>
 
-#include "svbtdf/simulate/session_writer.h"
+#include "svbtdf/acquire/simulated_session.h"
 
 namespace svbtdf {
 
@@ -26,7 +26,7 @@ class SimulatedTruths {
       options.truth = kind;
       options.threads = 2;
       options.progress = false;
-      it->second = SimulateSession(out, options).truth;
+      it->second = acquire::SimulateSession(out, options).truth;
     }
     return it->second;
   }

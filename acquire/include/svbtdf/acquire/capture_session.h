@@ -60,6 +60,13 @@ struct AcquireOptions {
   int retries = 3;                 // further attempts after a failed capture
   double retry_backoff_s = 0.5;    // wait before retry k: backoff * 2^k
   bool progress = true;
+  std::string progress_label = "acquire";
+  // Added to the manifest's rig beside what AcquisitionRig records (`svbtdf simulate` names its
+  // preset, seed and truth there); must be an object.
+  nlohmann::json rig_additions = nlohmann::json::object();
+  // Called before every attempt at a capture, with what the plan asks for. A real rig has no use
+  // for it; the simulated one learns which capture it renders (a resumed dark frame's number).
+  std::function<void(const PlannedCapture&)> before_capture;
   // Free bytes at a folder (the first existing ancestor of the session); injectable for tests.
   std::function<uint64_t(const std::filesystem::path&)> free_space;
   // Sleeping (settle time, back-off); injectable so that tests do not wait.

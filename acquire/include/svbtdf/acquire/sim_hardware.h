@@ -7,7 +7,9 @@
 
 #include <filesystem>
 #include <map>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -17,6 +19,7 @@
 #include "svbtdf/acquire/capture_session.h"
 #include "svbtdf/acquire/display.h"
 #include "svbtdf/common/image_io.h"
+#include "svbtdf/session/capture_key.h"
 
 namespace svbtdf {
 struct SimulatedSetup;
@@ -30,7 +33,14 @@ struct SimWorld {
   Scene scene = Scene::kSample;
   int view = 0;
   int patterns_shown = 0;
+  // The capture the loop says it takes next (AnnounceCaptures); unset when nobody says.
+  std::optional<session::CaptureKey> announced;
 };
+
+// AcquireOptions::before_capture for a simulated rig: the loop tells the virtual lab which capture
+// it takes, so that a resumed session's dark frame n gets dark frame n's noise (a camera counting
+// its own captures would start again at 0).
+std::function<void(const PlannedCapture&)> AnnounceCaptures(std::shared_ptr<SimWorld> world);
 
 class SimDisplay : public Display {
  public:
@@ -60,7 +70,8 @@ class SimOperator : public Operator {
 // Renders the current SimWorld with the simulator. The noise stream of each image is the one
 // `svbtdf simulate` uses for the same capture (dot q at bracket e, dark frame n, board view v),
 // so a fresh acquisition with the simulation's plan stores the simulator's very bytes. Repeated
-// captures of one scene (dark frames, repeats) are numbered in the order this camera takes them.
+// captures of one scene (dark frames, repeats) are numbered as the loop announces them
+// (AnnounceCaptures), else in the order this camera takes them.
 // Dots that are not the rig's (another plan's grid, radius or intensity) are rendered too, with
 // noise streams of their own.
 class SimCamera : public Camera {

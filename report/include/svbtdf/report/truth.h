@@ -13,7 +13,7 @@
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/hemicube.h"
 #include "svbtdf/simulate/montecarlo_truth.h"
-#include "svbtdf/simulate/session_writer.h"
+#include "svbtdf/simulate/truth_io.h"
 #include "svbtdf/simulate/spatial_btdf.h"
 #include "svbtdf/simulate/truth_io.h"
 

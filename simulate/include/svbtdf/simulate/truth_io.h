@@ -6,11 +6,16 @@
 // `svbtdf compare` and the calibration tests read these with the functions below.
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "svbtdf/common/image_io.h"
+#include "svbtdf/model/dual_microfacet.h"
+#include "svbtdf/model/ndf.h"
 #include "svbtdf/simulate/renderer.h"
 #include "svbtdf/simulate/rig.h"
+#include "svbtdf/simulate/truth_material.h"
 
 namespace svbtdf {
 
@@ -50,5 +55,25 @@ void WriteRigTruth(const std::filesystem::path& path, const Rig& rig, const Capt
 // Throws svbtdf::Error(kFormat/kIo) naming the file for a missing file, a wrong version or a
 // missing key.
 RigTruth ReadRigTruth(const std::filesystem::path& path);
+
+// The analytic ground-truth material, DIR/truth/material.json and its EXR maps, as written.
+struct MaterialTruth {
+  double eta = 1.5;
+  std::string ndf_name = "ggx";
+  FloatImage ndf_params;  // 5 channels: alpha_x, alpha_y, theta_x, theta_y, theta_z
+  FloatImage alpha, shadowing_roughness, k_s, rho_d;
+  int width() const { return alpha.width; }
+  int height() const { return alpha.height; }
+  // The texel's parameters and NDF, as the renderer used them.
+  DualMicrofacetParams Params(int x, int y) const;
+  std::unique_ptr<Ndf> TexelNdf(int x, int y) const;
+  // The same material as the renderer's SpatialBtdf (texel index = y * width + x).
+  TruthMaterial ToTruthMaterial() const;
+};
+
+// Writes `material` as DIR/material.json plus its maps (atomically; never overwrites).
+void WriteMaterialTruth(const std::filesystem::path& folder, const TruthMaterial& material);
+// Throws svbtdf::Error naming the file for anything missing or malformed.
+MaterialTruth ReadMaterialTruth(const std::filesystem::path& truth_folder);
 
 }  // namespace svbtdf

@@ -1,0 +1,28 @@
+#pragma once
+// `svbtdf simulate`: a capture session of a known material, taken by the one capture loop
+// (capture_session.h, Acquire) with the simulated camera, display and operator of
+// sim_hardware.h and the plan of the simulated lab (PlanFromSimulation), beside its ground truth.
+// So a simulated session is, byte for byte, what `svbtdf acquire` writes on the simulated rig,
+// and the simulator cannot drift from a lab capture.
+
+#include <cstdint>
+#include <filesystem>
+
+#include "svbtdf/simulate/simulation.h"
+
+namespace svbtdf::acquire {
+
+struct SimulationOutput {
+  std::filesystem::path session;  // OUT/session
+  std::filesystem::path truth;    // OUT/truth
+  int64_t images = 0;             // images in the session
+  int64_t resumed = 0;            // of which were already there
+};
+
+// Simulates `options` into OUT/session and OUT/truth. A folder holding an unfinished simulation
+// of the same settings is resumed (byte-identical to an uninterrupted run); any other non-empty
+// OUT is refused (svbtdf::Error(kInvalidInput)), and a complete session is never touched again.
+// Ctrl-C ends it between images with Error(kInterrupted), leaving a resumable session.
+SimulationOutput SimulateSession(const std::filesystem::path& out, const SimulationOptions& options);
+
+}  // namespace svbtdf::acquire

@@ -1,0 +1,74 @@
+#include "svbtdf/acquire/simulated_session.h"
+
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "svbtdf/acquire/capture_plan.h"
+#include "svbtdf/acquire/capture_session.h"
+#include "svbtdf/acquire/sim_hardware.h"
+#include "svbtdf/common/error.h"
+#include "svbtdf/session/session.h"
+
+namespace svbtdf::acquire {
+namespace fs = std::filesystem;
+namespace {
+
+// OUT must be new, empty, or an unfinished simulation (session/ and truth/ only).
+void CheckOutputFolder(const fs::path& out) {
+  if (!fs::exists(out)) return;
+  if (!fs::is_directory(out)) ThrowIoError(out.string(), "exists and is not a folder");
+  for (const auto& entry : fs::directory_iterator(out)) {
+    const std::string name = entry.path().filename().string();
+    if (name != "session" && name != "truth") {
+      ThrowInvalidInput(out.string(), "is not empty (it holds '" + name + "')", "choose a new output folder");
+    }
+  }
+}
+
+// A complete session is never overwritten, and a damaged one cannot be resumed: the journal is
+// append-only, so a damaged image could not be rendered again under its key.
+void CheckResumable(const fs::path& session_folder) {
+  if (!fs::exists(session_folder / "session.json")) return;
+  const session::SessionVerification check = session::Session::Open(session_folder).Verify(/*check_crc=*/true);
+  if (check.complete()) {
+    ThrowInvalidInput(session_folder.string(), "holds a complete simulated session already; it is never overwritten",
+                      "choose a new output folder");
+  }
+  if (!check.corrupt.empty() || !check.duplicated.empty()) {
+    ThrowFormatError(session_folder.string(), "cannot be resumed: " + check.Summary(), "simulate into a new output folder");
+  }
+}
+
+// What the manifest records beyond what the lab's acquisition writes: that the session is
+// simulated, of which preset, seed and truth, and the monitor's black level a lab would measure.
+nlohmann::json SimulationNotes(const SimulatedSetup& setup) {
+  return {{"simulated", {{"preset", setup.preset.name}, {"seed", setup.seed}, {"truth", setup.plan.truth_kind}}},
+          {"monitor", {{"black_level", setup.rig->config().monitor.black_level}}}};
+}
+
+}  // namespace
+
+SimulationOutput SimulateSession(const fs::path& out, const SimulationOptions& options) {
+  SimulationOutput output{out / "session", out / "truth"};
+  PresetWithOptions(options);  // bad options are refused before anything is written
+  CheckOutputFolder(out);
+  CheckResumable(output.session);
+  const std::shared_ptr<const SimulatedSetup> setup = PrepareSimulation(output.truth, options);
+
+  auto world = std::make_shared<SimWorld>();
+  SimDisplay display(world, SimDisplayInfo(*setup));
+  SimCamera camera(world, setup, "sim");
+  SimOperator op(world);
+  AcquireOptions acquire_options;
+  acquire_options.progress = options.progress;
+  acquire_options.progress_label = "simulate";
+  acquire_options.rig_additions = SimulationNotes(*setup);
+  acquire_options.before_capture = AnnounceCaptures(world);
+  acquire_options.sleep = [](double) {};  // a simulated monitor settles at once
+  const AcquireResult result = Acquire(PlanFromSimulation(*setup), camera, display, op, output.session, acquire_options);
+  output.resumed = result.already;
+  output.images = result.already + result.captured;
+  return output;
+}
+
+}  // namespace svbtdf::acquire

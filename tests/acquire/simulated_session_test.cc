@@ -1,0 +1,153 @@
+// `svbtdf simulate` as the capture loop run on the simulated rig: a complete tiny session whose
+// manifest says what was simulated, byte-identical resumption (also in the middle of the dark
+// frames, which the simulated camera cannot tell apart by what it sees), Ctrl-C, and refusals.
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "svbtdf/acquire/simulated_session.h"
+#include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/interrupt.h"
+#include "svbtdf/session/session.h"
+#include "temp_folder.h"
+
+namespace svbtdf::acquire {
+namespace {
+namespace fs = std::filesystem;
+
+class SimulatedSession : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    folder_ = std::make_unique<svbtdf::testing::TempFolder>("simulated_session");
+    Options().progress = false;
+    const SimulationOutput whole = SimulateSession(Whole(), Options());
+    ASSERT_EQ(whole.resumed, 0);
+    ASSERT_GT(whole.images, 0);
+  }
+  static void TearDownTestSuite() { folder_.reset(); }
+  void TearDown() override { SetInterruptRequested(false); }
+
+  static SimulationOptions& Options() {
+    static SimulationOptions options;
+    return options;
+  }
+  static fs::path Whole() { return folder_->path() / "whole"; }
+
+  // Every planned image of `out` has the bytes (CRC) of the uninterrupted simulation's.
+  static void ExpectSameImagesAsTheWholeRun(const fs::path& out) {
+    const session::Session whole = session::Session::Open(Whole() / "session");
+    const session::Session other = session::Session::Open(out / "session");
+    EXPECT_TRUE(other.Verify(/*check_crc=*/true).complete()) << other.Verify().Summary();
+    ASSERT_EQ(other.planned_keys(), whole.planned_keys());
+    for (const std::string& key : whole.planned_keys()) {
+      EXPECT_EQ(other.Entry(key).crc32, whole.Entry(key).crc32) << key;
+      EXPECT_EQ(other.Entry(key).exposure_s, whole.Entry(key).exposure_s) << key;
+    }
+  }
+
+  static inline std::unique_ptr<svbtdf::testing::TempFolder> folder_;
+};
+
+TEST_F(SimulatedSession, IsACompleteAcquisitionThatNamesWhatWasSimulated) {
+  const session::Session session = session::Session::Open(Whole() / "session");
+  EXPECT_TRUE(session.Verify(true).complete());
+  const nlohmann::json& rig = session.rig();
+  EXPECT_EQ(rig.at("simulated").at("preset"), "tiny");
+  EXPECT_EQ(rig.at("simulated").at("seed"), 1);
+  EXPECT_EQ(rig.at("simulated").at("truth"), "model");
+  // The plan the loop ran is recorded, as for any acquisition (a resume must use the same one).
+  EXPECT_TRUE(rig.contains("acquisition_plan"));
+  EXPECT_TRUE(rig.at("monitor").contains("black_level"));
+  EXPECT_TRUE(fs::exists(Whole() / "truth" / "rig.json"));
+  EXPECT_TRUE(fs::exists(Whole() / "truth" / "material.json"));
+}
+
+TEST_F(SimulatedSession, ResumedBetweenTwoDarkFramesStoresTheUninterruptedBytes) {
+  // The state a crash after the first dark frame leaves: its journal line and image only.
+  const fs::path out = folder_->path() / "after_one_dark";
+  fs::create_directories(out / "session" / "images" / "dark" / "e0");
+  fs::copy(Whole() / "truth", out / "truth", fs::copy_options::recursive);
+  for (const auto& entry : fs::directory_iterator(Whole() / "session")) {  // the manifest and plan
+    if (entry.is_regular_file() && entry.path().filename() != "journal.jsonl") {
+      fs::copy_file(entry.path(), out / "session" / entry.path().filename());
+    }
+  }
+  fs::copy_file(Whole() / "session" / "images" / "dark" / "e0" / "r0.png",
+                out / "session" / "images" / "dark" / "e0" / "r0.png");
+  const std::string journal = ReadTextFile(Whole() / "session" / "journal.jsonl");
+  const std::string first_line = journal.substr(0, journal.find('\n') + 1);
+  ASSERT_NE(first_line.find("\"dark/e0/r0\""), std::string::npos) << first_line;
+  std::ofstream(out / "session" / "journal.jsonl", std::ios::binary) << first_line;
+
+  const SimulationOutput resumed = SimulateSession(out, Options());
+  EXPECT_EQ(resumed.resumed, 1);
+  // dark/e0/r1 is dark frame 1's noise, not dark frame 0's again.
+  ExpectSameImagesAsTheWholeRun(out);
+}
+
+TEST_F(SimulatedSession, CtrlCLeavesAResumableSessionWithTheSameBytes) {
+  const fs::path out = folder_->path() / "interrupted";
+  std::atomic<bool> done = false;
+  std::thread interrupter([&] {  // Ctrl-C once a few images are journalled
+    const fs::path journal = out / "session" / "journal.jsonl";
+    while (!done) {
+      std::error_code error;
+      if (fs::file_size(journal, error) > 600 && !error) {
+        SetInterruptRequested(true);
+        return;
+      }
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+  });
+  try {
+    SimulateSession(out, Options());
+    ADD_FAILURE() << "the interrupt was not noticed";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kInterrupted) << e.what();
+  }
+  done = true;
+  interrupter.join();
+  SetInterruptRequested(false);
+  const SimulationOutput resumed = SimulateSession(out, Options());
+  EXPECT_GT(resumed.resumed, 0);
+  EXPECT_LT(resumed.resumed, resumed.images);
+  ExpectSameImagesAsTheWholeRun(out);
+}
+
+TEST_F(SimulatedSession, ACompleteSessionOrAForeignFolderIsNeverTouched) {
+  const auto expect_refused = [](const fs::path& out, const std::string& words) {
+    try {
+      SimulateSession(out, Options());
+      ADD_FAILURE() << out << " was not refused";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(out.string()), std::string::npos) << e.what();
+    }
+  };
+  const auto before = fs::last_write_time(Whole() / "session" / "journal.jsonl");
+  expect_refused(Whole(), "complete");
+  EXPECT_EQ(fs::last_write_time(Whole() / "session" / "journal.jsonl"), before);
+  const fs::path foreign = folder_->path() / "foreign";
+  fs::create_directories(foreign);
+  std::ofstream(foreign / "notes.txt") << "mine\n";
+  expect_refused(foreign, "notes.txt");
+}
+
+TEST_F(SimulatedSession, BadOptionsAreRefusedBeforeAnythingIsWritten) {
+  SimulationOptions options = Options();
+  options.eta = 0.5;
+  const fs::path out = folder_->path() / "bad_eta";
+  EXPECT_THROW(SimulateSession(out, options), Error);
+  EXPECT_FALSE(fs::exists(out));
+}
+
+}  // namespace
+}  // namespace svbtdf::acquire
