@@ -412,7 +412,7 @@ Radiometry RadiometryOf(const session::Session& session, int bits, const cv::Siz
     }
   } else if (response != "linear") {
     ThrowFormatError((session.folder() / "session.json").string(), "has camera response '" + response + "'",
-                     "use 'linear' or 'srgb', or recover the curve with calib::RecoverResponse");
+                     "use 'linear' or 'srgb' (docs/calibration-format.md)");
   }
   // The black offset: the median of the first dark frame (dark current adds little to it).
   const std::vector<std::string> darks = session.PlannedKeys(session::CaptureKind::kDark);

@@ -2,23 +2,24 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <opencv2/photo.hpp>
 
 #include "svbtdf/common/error.h"
 
 namespace svbtdf::calib {
+namespace {
 
-InverseResponse InverseResponse::Linear(int levels) {
-  InverseResponse response;
-  response.levels = levels;
-  response.linear = true;
-  response.table.resize(levels);
-  for (int v = 0; v < levels; ++v) response.table[v] = {float(v), float(v), float(v)};
-  return response;
+int CameraValue(const cv::Mat& image, int y, int x, int c) {
+  const int channels = image.channels();
+  return image.depth() == CV_8U ? image.ptr<uint8_t>(y)[x * channels + c] : image.ptr<uint16_t>(y)[x * channels + c];
 }
 
-InverseResponse RecoverResponse(const std::vector<cv::Mat>& images, const std::vector<double>& exposures_s,
-                                ResponseMethod method, const std::string& source) {
+}  // namespace
+
+
+Radiometry RecoverResponse(const std::vector<cv::Mat>& images, const std::vector<double>& exposures_s,
+                           ResponseMethod method, const std::string& source) {
   if (images.size() < 2 || images.size() != exposures_s.size()) {
     ThrowInvalidInput(source, "a response needs at least 2 images, each with its exposure time");
   }
@@ -48,32 +49,63 @@ InverseResponse RecoverResponse(const std::vector<cv::Mat>& images, const std::v
   } else {
     cv::createCalibrateRobertson()->process(colour, curve, times);
   }
-  InverseResponse response;
-  response.levels = 256;
-  response.linear = false;
-  response.table.resize(256);
-  // Scale so that the mid-grey value maps to itself: only ratios matter downstream.
+  Radiometry radiometry;
+  radiometry.response = "table";
+  radiometry.bit_depth = 8;
+  radiometry.saturation_dn = 255.0;
+  radiometry.inverse_response.resize(256);
+  // The channels' curves, each scaled so that mid-grey maps to itself (only ratios matter
+  // downstream), averaged: one linearisation for the camera, as calibration.json records it.
   const cv::Vec3f mid = curve.at<cv::Vec3f>(128);
   for (int v = 0; v < 256; ++v) {
     const cv::Vec3f value = curve.at<cv::Vec3f>(v);
-    for (int c = 0; c < 3; ++c) response.table[v][c] = value[c] / mid[c] * 128.0f;
+    double sum = 0.0;
+    for (int c = 0; c < 3; ++c) sum += value[c] / mid[c] * 128.0;
+    radiometry.inverse_response[v] = sum / 3.0;
   }
-  return response;
+  return radiometry;
 }
 
-namespace {
-
-int FullScale(const cv::Mat& image) { return image.depth() == CV_8U ? 255 : 65535; }
-
-double CameraValue(const cv::Mat& image, int y, int x, int c) {
-  const int channels = image.channels();
-  return image.depth() == CV_8U ? image.ptr<uint8_t>(y)[x * channels + c] : image.ptr<uint16_t>(y)[x * channels + c];
+double Radiometry::Linearize(double raw_dn) const {
+  const double value = raw_dn - black_offset_dn;
+  if (response != "table" || inverse_response.size() < 2) return value;
+  // The table samples the inverse response at evenly spaced raw values over [0, 2^bits - 1].
+  const double max_dn = std::ldexp(1.0, bit_depth) - 1.0;
+  const double u = std::clamp(value / max_dn, 0.0, 1.0) * (inverse_response.size() - 1);
+  const size_t k = std::min(static_cast<size_t>(u), inverse_response.size() - 2);
+  const double t = u - k;
+  return (1 - t) * inverse_response[k] + t * inverse_response[k + 1];
 }
 
-}  // namespace
+std::vector<float> Radiometry::LinearTable(int levels) const {
+  std::vector<float> table(levels);
+  for (int v = 0; v < levels; ++v) table[v] = static_cast<float>(Linearize(v));
+  return table;
+}
 
-HdrResult MergeExposures(const std::vector<Exposure>& brackets, const cv::Mat& dark, const InverseResponse& response,
-                         const HdrOptions& options) {
+HdrAccumulator::HdrAccumulator(int64_t samples, int channels)
+    : samples_(samples), channels_(channels), sum_(samples * channels, 0.0), exposure_(samples, 0.0) {}
+
+void HdrAccumulator::Add(const float* values, const uint8_t* saturated, double exposure_s) {
+  for (int64_t s = 0; s < samples_; ++s) {
+    const float* v = values + s * channels_;
+    if (saturated[s] || !std::isfinite(v[0])) continue;
+    for (int c = 0; c < channels_; ++c) sum_[s * channels_ + c] += v[c];
+    exposure_[s] += exposure_s;
+  }
+}
+
+std::vector<float> HdrAccumulator::Rates() const {
+  std::vector<float> rates(sum_.size(), std::numeric_limits<float>::quiet_NaN());
+  for (int64_t s = 0; s < samples_; ++s) {
+    if (exposure_[s] <= 0) continue;
+    for (int c = 0; c < channels_; ++c) rates[s * channels_ + c] = static_cast<float>(sum_[s * channels_ + c] / exposure_[s]);
+  }
+  return rates;
+}
+
+
+HdrResult MergeExposures(const std::vector<Exposure>& brackets, const cv::Mat& dark, const Radiometry& radiometry) {
   if (brackets.empty()) ThrowInvalidInput("exposure brackets", "no images to merge");
   const cv::Mat& first = brackets.front().image;
   for (const Exposure& e : brackets) {
@@ -85,44 +117,41 @@ HdrResult MergeExposures(const std::vector<Exposure>& brackets, const cv::Mat& d
       ThrowInvalidInput(e.source, "camera frames must be 8- or 16-bit integers");
     }
     if (!(e.exposure_s > 0) || !(e.gain > 0)) ThrowInvalidInput(e.source, "exposure time and gain must be > 0");
-    if (FullScale(e.image) > response.levels) ThrowInvalidInput(e.source, "more camera levels than the response table has");
   }
   if (!dark.empty() && (dark.size() != first.size() || dark.type() != first.type())) {
     ThrowInvalidInput("dark frame", "size or type differs from the exposures");
   }
   const int channels = first.channels();
-  const double saturation = options.saturation_fraction * FullScale(first);
+  const int64_t pixels = static_cast<int64_t>(first.rows) * first.cols;
+  const std::vector<float> table = radiometry.LinearTable(first.depth() == CV_8U ? 256 : 65536);
+  HdrAccumulator merge(pixels, channels);
+  std::vector<float> linear(pixels * channels);
+  std::vector<uint8_t> saturated(pixels), saturated_everywhere(pixels, 1);
+  for (const Exposure& e : brackets) {
+    for (int64_t p = 0; p < pixels; ++p) {
+      const int y = static_cast<int>(p / first.cols), x = static_cast<int>(p % first.cols);
+      saturated[p] = 0;
+      for (int c = 0; c < channels; ++c) {
+        const int value = CameraValue(e.image, y, x, c);
+        saturated[p] |= value >= radiometry.saturation_dn;
+        linear[p * channels + c] = table[value] - (dark.empty() ? 0.0f : table[CameraValue(dark, y, x, c)]);
+      }
+      saturated_everywhere[p] &= saturated[p];
+    }
+    merge.Add(linear.data(), saturated.data(), e.exposure_s * e.gain);
+  }
+  const std::vector<float> rates = merge.Rates();
   HdrResult result;
   result.radiance = cv::Mat::zeros(first.size(), CV_32FC(channels));
   result.valid = cv::Mat::zeros(first.size(), CV_8U);
   result.saturated = cv::Mat::zeros(first.size(), CV_8U);
-  const double mid = 0.5 * saturation;
-  for (int y = 0; y < first.rows; ++y) {
-    float* out = result.radiance.ptr<float>(y);
-    for (int x = 0; x < first.cols; ++x) {
-      bool any_valid = false, all_saturated = true;
-      for (int c = 0; c < channels; ++c) {
-        double weighted = 0, weights = 0;
-        for (const Exposure& e : brackets) {
-          const double value = CameraValue(e.image, y, x, c);
-          if (value < saturation) all_saturated = false;
-          const double linear = response.Apply(static_cast<int>(value), c) -
-                                (dark.empty() ? 0.0 : response.Apply(static_cast<int>(CameraValue(dark, y, x, c)), c));
-          if (value >= saturation || linear < options.noise_floor) continue;
-          // Hat weight on the camera value, times the exposure: longer exposures have more signal
-          // for the same value, so their relative shot noise is lower.
-          const double w = (1.0 - std::abs(value - mid) / mid + 1e-3) * e.exposure_s * e.gain;
-          weighted += w * linear / (e.exposure_s * e.gain);
-          weights += w;
-        }
-        if (weights > 0) {
-          out[x * channels + c] = static_cast<float>(weighted / weights);
-          any_valid = true;
-        }
-      }
-      if (any_valid) result.valid.at<uint8_t>(y, x) = 255;
-      if (all_saturated) result.saturated.at<uint8_t>(y, x) = 255;
+  for (int64_t p = 0; p < pixels; ++p) {
+    const int y = static_cast<int>(p / first.cols), x = static_cast<int>(p % first.cols);
+    if (merge.AnyUsable(p)) {
+      result.valid.at<uint8_t>(y, x) = 255;
+      for (int c = 0; c < channels; ++c) result.radiance.ptr<float>(y)[x * channels + c] = rates[p * channels + c];
     }
+    if (saturated_everywhere[p]) result.saturated.at<uint8_t>(y, x) = 255;
   }
   return result;
 }

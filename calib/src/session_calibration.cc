@@ -64,17 +64,6 @@ double MonitorCalibration::Emission(double cos_theta) const {
   return 1.0;
 }
 
-double Radiometry::Linearize(double raw_dn) const {
-  const double value = raw_dn - black_offset_dn;
-  if (response != "table" || inverse_response.size() < 2) return value;
-  // The table samples the inverse response at evenly spaced raw values over [0, 2^bits - 1].
-  const double max_dn = std::ldexp(1.0, bit_depth) - 1.0;
-  const double u = std::clamp(value / max_dn, 0.0, 1.0) * (inverse_response.size() - 1);
-  const size_t k = std::min(static_cast<size_t>(u), inverse_response.size() - 2);
-  const double t = u - k;
-  return (1 - t) * inverse_response[k] + t * inverse_response[k + 1];
-}
-
 nlohmann::json ToJson(const SessionCalibration& calibration) {
   nlohmann::json camera = ToJson(calibration.camera);
   const SamplePlane& plane = calibration.sample_plane;

@@ -65,13 +65,6 @@ CapturePlan ParsePlan(const session::Session& session, int num_dots) {
   return plan;
 }
 
-// Raw digital number -> linear value, as a table over every 16-bit code.
-std::vector<float> LinearizationTable(const calib::Radiometry& radiometry) {
-  std::vector<float> table(65536);
-  for (int v = 0; v < 65536; ++v) table[v] = static_cast<float>(radiometry.Linearize(v));
-  return table;
-}
-
 // The rectification: each texel's value is the mean of k x k points inset in the texel, each
 // interpolated bilinearly in the image, so pixels straddling a texel edge barely contribute.
 class Rectifier {
@@ -158,7 +151,7 @@ class Rectifier {
 class ImageReader {
  public:
   ImageReader(const session::Session& session, const calib::SessionCalibration& calibration)
-      : session_(session), calibration_(calibration), table_(LinearizationTable(calibration.radiometry)) {}
+      : session_(session), calibration_(calibration), table_(calibration.radiometry.LinearTable()) {}
 
   struct Linear {
     std::vector<float> values;
@@ -288,28 +281,17 @@ std::vector<float> WhiteExitance(ImageReader& reader, const std::string& flat_ke
   return exitance;
 }
 
-// One dot's HDR values per texel: for each channel, the sum of the unsaturated brackets' values
-// over the sum of their exposures (the maximum-likelihood rate under shot noise).
+// One dot's HDR values per texel: its brackets rectified, then merged by calibration's HDR merge.
 std::vector<float> MergeBrackets(ReadAhead& images, int brackets, const Rectifier& rectifier, int threads) {
-  const int64_t texels = rectifier.texels();
-  std::vector<double> sum(3 * texels, 0.0), time(texels, 0.0);
+  calib::HdrAccumulator merge(rectifier.texels(), 3);
   std::vector<float> rectified;
   std::vector<uint8_t> saturated;
   for (int b = 0; b < brackets; ++b) {
     const ImageReader::Linear image = images.Next();
     rectifier.Apply(image.values, image.saturated, image.channels, threads, &rectified, &saturated);
-    for (int64_t t = 0; t < texels; ++t) {
-      if (saturated[t] || !std::isfinite(rectified[3 * t])) continue;
-      for (int c = 0; c < 3; ++c) sum[3 * t + c] += rectified[3 * t + c];
-      time[t] += image.exposure_s;
-    }
+    merge.Add(rectified.data(), saturated.data(), image.exposure_s);
   }
-  std::vector<float> rate(3 * texels, kNaN);
-  for (int64_t t = 0; t < texels; ++t) {
-    if (time[t] <= 0) continue;
-    for (int c = 0; c < 3; ++c) rate[3 * t + c] = static_cast<float>(sum[3 * t + c] / time[t]);
-  }
-  return rate;
+  return merge.Rates();
 }
 
 // The measurement equation (notes, "Measurement to BTDF"): R = I |p - x|^2 / (|i.z| L_q P(theta_q)),

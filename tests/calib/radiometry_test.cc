@@ -1,4 +1,5 @@
-// HDR merging and response recovery against synthetic exposure stacks of a known scene.
+// The HDR merge, the linearisation and response recovery against synthetic exposure stacks of a
+// known scene.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -41,7 +42,9 @@ TEST(HdrMerge, LinearSixteenBitBracketsRecoverTheSceneWithinShotNoise) {
     }
     brackets.push_back({image, t, 1.0, "t=" + std::to_string(t)});
   }
-  const HdrResult hdr = MergeExposures(brackets, dark, InverseResponse::Linear(65536));
+  Radiometry linear;  // 16-bit, the top 5% of the range unusable
+  linear.saturation_dn = 0.95 * 65535;
+  const HdrResult hdr = MergeExposures(brackets, dark, linear);
   // Each pixel's error must be within 4 standard deviations of the shot noise of its best
   // unsaturated exposure, and the mean error within 1%.
   double sum_error = 0;
@@ -66,7 +69,7 @@ TEST(HdrMerge, LinearSixteenBitBracketsRecoverTheSceneWithinShotNoise) {
 
 TEST(HdrMerge, MasksPixelsThatAreSaturatedEverywhere) {
   const cv::Mat bright(2, 2, CV_16U, cv::Scalar(65535));
-  const HdrResult hdr = MergeExposures({{bright, 0.01, 1.0, "a"}, {bright, 0.1, 1.0, "b"}}, cv::Mat(), InverseResponse::Linear(65536));
+  const HdrResult hdr = MergeExposures({{bright, 0.01, 1.0, "a"}, {bright, 0.1, 1.0, "b"}}, cv::Mat(), Radiometry{});
   EXPECT_EQ(hdr.valid.at<uint8_t>(0, 0), 0);
   EXPECT_EQ(hdr.saturated.at<uint8_t>(0, 0), 255);
 }
@@ -74,12 +77,50 @@ TEST(HdrMerge, MasksPixelsThatAreSaturatedEverywhere) {
 TEST(HdrMerge, ErrorsNameTheOffendingImage) {
   const cv::Mat a(4, 4, CV_16U, cv::Scalar(100)), b(4, 5, CV_16U, cv::Scalar(100));
   try {
-    MergeExposures({{a, 0.01, 1.0, "dot/q0001/e0"}, {b, 0.1, 1.0, "dot/q0001/e1"}}, cv::Mat(), InverseResponse::Linear(65536));
+    MergeExposures({{a, 0.01, 1.0, "dot/q0001/e0"}, {b, 0.1, 1.0, "dot/q0001/e1"}}, cv::Mat(), Radiometry{});
     FAIL();
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("dot/q0001/e1"), std::string::npos);
   }
-  EXPECT_THROW(MergeExposures({{a, 0.0, 1.0, "zero"}}, cv::Mat(), InverseResponse::Linear(65536)), Error);
+  EXPECT_THROW(MergeExposures({{a, 0.0, 1.0, "zero"}}, cv::Mat(), Radiometry{}), Error);
+}
+
+// The merge is the maximum-likelihood rate: the sum of the usable values over the sum of their
+// exposures; saturated and non-finite samples are skipped, and a sample with none is NaN.
+TEST(HdrAccumulator, SumsUsableValuesOverTheirExposures) {
+  HdrAccumulator merge(3, 2);
+  const float short_values[] = {1, 2, 10, 20, NAN, 5};
+  const uint8_t short_saturated[] = {0, 0, 0};
+  const float long_values[] = {9, 18, 99, 99, 7, 7};
+  const uint8_t long_saturated[] = {0, 1, 1};
+  merge.Add(short_values, short_saturated, 0.1);
+  merge.Add(long_values, long_saturated, 0.9);
+  const std::vector<float> rates = merge.Rates();
+  EXPECT_FLOAT_EQ(rates[0], 10.0f);  // (1 + 9) / (0.1 + 0.9)
+  EXPECT_FLOAT_EQ(rates[1], 20.0f);
+  EXPECT_FLOAT_EQ(rates[2], 100.0f);  // the long bracket saturated: 10 / 0.1
+  EXPECT_FLOAT_EQ(rates[3], 200.0f);
+  EXPECT_TRUE(std::isnan(rates[4]));  // not finite, then saturated
+  EXPECT_FALSE(merge.AnyUsable(2));
+  EXPECT_TRUE(merge.AnyUsable(0));
+}
+
+TEST(Radiometry, TableLinearisationInterpolatesAfterTheBlackOffset) {
+  Radiometry r;
+  r.response = "table";
+  r.bit_depth = 8;
+  r.black_offset_dn = 5;
+  r.inverse_response = {0.0, 1.0, 4.0};  // at raw 0, 127.5 and 255
+  EXPECT_DOUBLE_EQ(r.Linearize(5), 0.0);
+  EXPECT_DOUBLE_EQ(r.Linearize(5 + 127.5), 1.0);
+  EXPECT_DOUBLE_EQ(r.Linearize(5 + 191.25), 2.5);
+  EXPECT_DOUBLE_EQ(r.Linearize(1000), 4.0);  // clamped
+  const std::vector<float> table = r.LinearTable(256);
+  ASSERT_EQ(table.size(), 256u);
+  EXPECT_FLOAT_EQ(table[5], 0.0f);
+  Radiometry linear;
+  linear.black_offset_dn = 64;
+  EXPECT_DOUBLE_EQ(linear.Linearize(100), 36.0);
 }
 
 TEST(ResponseRecovery, DebevecRecoversAnSrgbLikeCurveFromAnEightBitStack) {
@@ -100,14 +141,17 @@ TEST(ResponseRecovery, DebevecRecoversAnSrgbLikeCurveFromAnEightBitStack) {
     images.push_back(image);
     times.push_back(t);
   }
-  const InverseResponse response = RecoverResponse(images, times, ResponseMethod::kDebevec, "stack");
+  const Radiometry response = RecoverResponse(images, times, ResponseMethod::kDebevec, "stack");
+  EXPECT_EQ(response.response, "table");
+  EXPECT_EQ(response.bit_depth, 8);
+  ASSERT_EQ(response.inverse_response.size(), 256u);
   // Compare the recovered inverse response (up to scale) with the true inverse sRGB curve over
   // the well-exposed range (values 30 to 220: Debevec's smoothness prior bends the ends); the
   // ratio to the truth must be flat within 5%.
   auto inverse_srgb = [](double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); };
-  const double reference = response.Apply(128, 1) / inverse_srgb(128 / 255.0);
+  const double reference = response.Linearize(128) / inverse_srgb(128 / 255.0);
   for (int v = 30; v <= 220; v += 10) {
-    const double ratio = response.Apply(v, 1) / inverse_srgb(v / 255.0) / reference;
+    const double ratio = response.Linearize(v) / inverse_srgb(v / 255.0) / reference;
     EXPECT_NEAR(ratio, 1.0, 0.05) << "camera value " << v;
   }
 }

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "svbtdf/calib/camera_calibration.h"
+#include "svbtdf/calib/radiometry.h"
 #include "svbtdf/model/vec.h"
 
 namespace svbtdf::calib {
@@ -62,18 +63,6 @@ struct MonitorCalibration {
 
   // The angular emission profile P(theta_e) relative to the normal direction.
   double Emission(double cos_theta) const;
-};
-
-// The camera's radiometric chain, inverted: raw digital number -> value linear in exposure.
-struct Radiometry {
-  std::string response = "linear";      // "linear" | "table"
-  std::vector<double> inverse_response;  // "table": relative exposure at raw = k / (size - 1) * max
-  int bit_depth = 16;
-  double saturation_dn = 65535.0;        // raw values at or above this are saturated
-  double black_offset_dn = 0.0;          // subtracted before the response (dark frames carry the rest)
-
-  // Linear value of a raw digital number (before dividing by the exposure time).
-  double Linearize(double raw_dn) const;
 };
 
 struct SessionCalibration {
