@@ -10,15 +10,10 @@
 #include "fit_command.h"
 #include "quality_output.h"
 #include "svbtdf/common/error.h"
-#include "svbtdf/fit/fit_material.h"
-#include "svbtdf/fit/material.h"
-#include "svbtdf/fit/slice_store.h"
-#include "svbtdf/fit/slice_store_format.h"
-#include "svbtdf/process/calibration_quality.h"
+#include "svbtdf/process/pipeline.h"
 
 namespace svbtdf::cli {
 namespace {
-namespace fs = std::filesystem;
 
 struct FitCommandOptions {
   std::string processed, out;
@@ -26,16 +21,6 @@ struct FitCommandOptions {
   fit::FitMaterialOptions fit;
   bool strict = false;
 };
-
-}  // namespace
-
-namespace {
-
-// The checkpoint of an unfinished fit of MATERIAL, next to it (the material folder itself is
-// written only once, complete).
-fs::path FitCheckpointPath(const fs::path& material) {
-  return material.parent_path() / (material.filename().string() + ".partial-fits.jsonl");
-}
 
 }  // namespace
 
@@ -48,52 +33,6 @@ double ParseRepresentatives(const std::string& text) {
   } catch (const std::exception&) {
   }
   ThrowInvalidInput("--representatives", "must be a fraction in (0, 1] or 'all', got '" + text + "'");
-}
-
-std::vector<fit::QualityWarning> FitAndWriteMaterial(const fs::path& processed, const fs::path& out,
-                                                     fit::FitMaterialOptions options,
-                                                     const std::vector<fit::QualityWarning>* earlier) {
-  if (fs::exists(out) && (!fs::is_directory(out) || !fs::is_empty(out))) {
-    ThrowInvalidInput(out.string(), "exists and is not empty; a material is never overwritten", "choose a new --out folder");
-  }
-  const fit::SliceStore store = fit::SliceStore::Open(processed);
-  options.checkpoint = FitCheckpointPath(out);
-  const fit::Material material = fit::FitMaterial(store, options);
-  fit::WriteMaterial(out, material);
-  fs::remove(options.checkpoint);
-  const nlohmann::json& statistics = material.provenance["statistics"];
-  std::printf("fitted %s: %s representatives of %s valid texels (%s failed, %s resumed) in %.1f s (%.2f s per fit); "
-              "median residual %.3f\n",
-              fit::MaterialModelName(material.model), statistics["representatives"].dump().c_str(),
-              statistics["valid_texels"].dump().c_str(), statistics["failed_fits"].dump().c_str(),
-              statistics["resumed_fits"].dump().c_str(), statistics["seconds"].get<double>(),
-              statistics["seconds_per_fit"].get<double>(),
-              statistics["median_relative_rmse"].is_number() ? statistics["median_relative_rmse"].get<double>() : -1.0);
-  if (statistics["refined_representatives"].get<int64_t>() > 0) {
-    std::printf("refined alpha and k_s of %s representatives\n", statistics["refined_representatives"].dump().c_str());
-  }
-  if (statistics["refined_texels"].get<int64_t>() > 0) {
-    std::printf("refined alpha, k_s and weights of %s interpolated texels: median residual %.3f -> %.3f\n",
-                statistics["refined_texels"].dump().c_str(), statistics["median_relative_rmse_blended"].get<double>(),
-                statistics["median_relative_rmse_refined"].get<double>());
-  }
-  std::printf("material: %s\n", out.c_str());
-
-  std::vector<fit::QualityWarning> warnings;
-  if (earlier) {
-    warnings = *earlier;
-  } else {
-    const fs::path calibration = processed / fit::store::kCalibration;
-    warnings = process::CheckCalibration(calib::ReadSessionCalibration(calibration), calibration.string());
-    const std::vector<fit::QualityWarning> stored = fit::CheckSliceStore(processed);
-    warnings.insert(warnings.end(), stored.begin(), stored.end());
-    PrintQualityWarnings(warnings);
-  }
-  const std::vector<fit::QualityWarning> fitted = fit::CheckMaterial(material, out);
-  PrintQualityWarnings(fitted);
-  warnings.insert(warnings.end(), fitted.begin(), fitted.end());
-  fit::WriteQuality(out, warnings);
-  return warnings;
 }
 
 void AddFitOptions(CLI::App* command, fit::FitMaterialOptions* options, std::string* representatives) {
@@ -129,7 +68,8 @@ void AddFitCommand(CLI::App& app) {
   fit->callback([options] {
     fit::FitMaterialOptions fit_options = options->fit;
     fit_options.representative_fraction = ParseRepresentatives(options->representatives);
-    ExitIfStrict(FitAndWriteMaterial(options->processed, options->out, fit_options), options->strict);
+    ExitIfStrict(process::FitAndWriteMaterial(options->processed, options->out, fit_options, ConsoleListener()),
+                 options->strict);
   });
 }
 

@@ -10,6 +10,10 @@ void PrintQualityWarnings(const std::vector<fit::QualityWarning>& warnings) {
   std::fflush(stderr);
 }
 
+process::PipelineListener ConsoleListener() {
+  return {[](const std::string& line) { std::printf("%s\n", line.c_str()); }, PrintQualityWarnings};
+}
+
 void AddStrictFlag(CLI::App* command, bool* strict) {
   command->add_flag("--strict", *strict,
                     "exit with code " + std::to_string(fit::kQualityWarningExitCode) +

@@ -54,12 +54,12 @@ void RequireDotsOnDisplay(const CapturePlan& plan, const DisplayInfo& display) {
 std::optional<session::Session> OpenExisting(const fs::path& folder, const CapturePlan& plan) {
   if (!fs::exists(folder / "session.json")) return std::nullopt;
   session::Session session = session::Session::Open(folder);
-  const nlohmann::json& rig = session.rig();
-  if (!rig.contains("acquisition_plan")) {
+  const nlohmann::json& acquired_plan = session.rig().acquisition_plan;
+  if (acquired_plan.is_null()) {
     ThrowInvalidInput(folder.string(), "holds a session that `svbtdf acquire` did not write; it will not be changed",
                       "choose a new --out folder");
   }
-  if (rig.at("acquisition_plan") != CapturePlanToJson(plan)) {
+  if (acquired_plan != CapturePlanToJson(plan)) {
     ThrowInvalidInput(folder.string(), "holds a session of a different capture plan; it will not be changed",
                       "resume with the plan it was started with (its session.json records it), or choose a new --out");
   }
@@ -103,7 +103,7 @@ class CaptureRun {
   CaptureRun(const CapturePlan& plan, Camera& camera, Display& display, Operator& op, session::Session& session,
              const AcquireOptions& options, AcquireResult& result)
       : plan_(plan), camera_(camera), display_(display), op_(op), session_(session), options_(options),
-        result_(result), info_(camera.Info()), camera_id_(info_.id), windowed_(info_.sensor_width > 0) {}
+        result_(result), info_(camera.Info()), camera_id_(info_.id), windowed_(!info_.window.whole_sensor()) {}
 
   void Run(const std::vector<PlannedCapture>& captures) {
     std::unique_ptr<ProgressBar> progress;
@@ -144,7 +144,7 @@ class CaptureRun {
     const std::array<int, 3> size = {frame.width, frame.height, frame.channels};
     std::string source = "the session holds";
     if (!expected && whole_sensor) {  // the camera told us its sensor
-      expected = {info_.sensor_width, info_.sensor_height, frame.channels};
+      expected = {info_.window.sensor_width, info_.window.sensor_height, frame.channels};
       source = "the camera's sensor is";
     }
     for (size_t n = 0; !expected && n < session_.entries().size(); ++n) {
@@ -292,44 +292,40 @@ uint64_t EstimatedBytesPerImage(const CapturePlan& plan, const CameraInfo& camer
 }
 
 nlohmann::json AcquisitionRig(const CapturePlan& plan, const CameraInfo& camera, const DisplayInfo& display) {
-  nlohmann::json positions = nlohmann::json::array();
-  for (const auto& [x, y] : plan.dots_px) positions.push_back({x, y});
   const RigNotes& notes = plan.rig;
+  session::RigDescription rig;
+  // What the camera backend and the plan's notes know; the rest stays unset (docs/session-format.md).
+  rig.camera.id = camera.id;
+  rig.camera.model = camera.model;
+  rig.camera.width = camera.frame_width;
+  rig.camera.height = camera.frame_width > 0 ? camera.frame_height : 0;
+  rig.camera.channels = camera.frame_channels;
+  rig.camera.bit_depth = camera.frame_bits;
+  rig.camera.response = notes.camera_response;
+  rig.camera.sensor = camera.window;
+  rig.monitor.id = display.id;
+  rig.monitor.width_px = display.width_px;
+  rig.monitor.height_px = display.height_px;
+  rig.monitor.gamma = display.gamma;
   const double pitch_mm = plan.pixel_pitch_mm > 0 ? plan.pixel_pitch_mm : display.pixel_pitch_mm;
-  nlohmann::json rig = {
-      {"camera", {{"id", camera.id}, {"model", camera.model}}},
-      {"monitor", {{"id", display.id}, {"width_px", display.width_px}, {"height_px", display.height_px},
-                   {"gamma", display.gamma}}},
-      {"dots", {{"cols", plan.dot_cols}, {"rows", plan.dot_rows}, {"radius_px", plan.dot_radius_px},
-                {"positions_px", positions}}},
-      {"exposures_s", plan.exposures_s},
-      {"acquisition_plan", CapturePlanToJson(plan)},
-  };
-  // The keys `svbtdf simulate` writes, only where known, so that calibration reads either.
-  nlohmann::json& c = rig["camera"];
-  if (camera.frame_width > 0) c["width"] = camera.frame_width, c["height"] = camera.frame_height;
-  if (camera.frame_channels > 0) c["channels"] = camera.frame_channels;
-  if (camera.frame_bits > 0) c["bit_depth"] = camera.frame_bits;
-  if (!notes.camera_response.empty()) c["response"] = notes.camera_response;
-  nlohmann::json& m = rig["monitor"];
-  if (pitch_mm > 0) m["pixel_pitch_m"] = pitch_mm / 1000.0;
-  if (notes.monitor_distance_mm > 0) m["distance_m"] = notes.monitor_distance_mm / 1000.0;
-  if (!notes.emission.empty()) m["emission"] = notes.emission;
-  if (!std::isnan(notes.monitor_orientation_deg)) m["orientation_deg"] = notes.monitor_orientation_deg;
-  if (plan.fiducials) rig["dots"]["fiducials"] = plan.fiducial_dots;
-  if (camera.sensor_width > 0) {
-    c["sensor"] = {{"width", camera.sensor_width}, {"height", camera.sensor_height},
-                   {"window_offset", {camera.window_x, camera.window_y}}};
-  }
-  if (!notes.board.empty()) rig["board"] = {{"spec", notes.board}, {"views", plan.board_views}};
-  if (!notes.sample_plane_board.empty()) rig["sample_plane_board"] = {{"spec", notes.sample_plane_board}};
-  nlohmann::json sample = nlohmann::json::object();
-  if (notes.sample_width_mm > 0) sample["width_m"] = notes.sample_width_mm / 1000.0;
-  if (notes.sample_height_mm > 0) sample["height_m"] = notes.sample_height_mm / 1000.0;
-  if (notes.texels_x > 0) sample["texels_x"] = notes.texels_x, sample["texels_y"] = notes.texels_y;
-  if (notes.eta > 0) sample["eta"] = notes.eta;
-  if (!sample.empty()) rig["sample"] = sample;
-  return rig;
+  if (pitch_mm > 0) rig.monitor.pixel_pitch_m = pitch_mm / 1000.0;
+  if (notes.monitor_distance_mm > 0) rig.monitor.distance_m = notes.monitor_distance_mm / 1000.0;
+  rig.monitor.emission = notes.emission;
+  rig.monitor.orientation_deg = notes.monitor_orientation_deg;
+  rig.dots.cols = plan.dot_cols;
+  rig.dots.rows = plan.dot_rows;
+  rig.dots.radius_px = plan.dot_radius_px;
+  rig.dots.positions_px = plan.dots_px;
+  if (plan.fiducials) rig.dots.fiducials = plan.fiducial_dots;
+  if (!notes.board.empty()) rig.board = {notes.board, plan.board_views};
+  rig.sample_plane_board.spec = notes.sample_plane_board;
+  if (notes.sample_width_mm > 0) rig.sample.width_m = notes.sample_width_mm / 1000.0;
+  if (notes.sample_height_mm > 0) rig.sample.height_m = notes.sample_height_mm / 1000.0;
+  if (notes.texels_x > 0) rig.sample.texels_x = notes.texels_x, rig.sample.texels_y = notes.texels_y;
+  rig.sample.eta = notes.eta;
+  rig.exposures_s = plan.exposures_s;
+  rig.acquisition_plan = CapturePlanToJson(plan);
+  return session::ToJson(rig);
 }
 
 AcquireResult Acquire(const CapturePlan& plan, Camera& camera, Display& display, Operator& op,

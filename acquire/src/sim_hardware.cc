@@ -80,13 +80,7 @@ CameraInfo SimCamera::Info() const {
   info.frame_height = k.height;
   info.frame_channels = 3;
   info.frame_bits = setup_->rig->config().sensor.bit_depth;
-  const SensorWindow& window = setup_->rig->config().window;
-  if (!window.whole_sensor()) {
-    info.sensor_width = window.sensor_width;
-    info.sensor_height = window.sensor_height;
-    info.window_x = window.offset_x;
-    info.window_y = window.offset_y;
-  }
+  info.window = setup_->rig->config().window;
   return info;
 }
 

@@ -183,25 +183,18 @@ NominalDots ReadNominalDots(const session::Session& session) {
   const std::string source = (session.folder() / "session.json").string();
   NominalDots n;
   DisplayedGrid& grid = n.grid;
-  std::vector<int> fiducials;
-  try {
-    const nlohmann::json& rig = session.rig();
-    const nlohmann::json& monitor = rig.at("monitor");
-    grid.pixel_pitch_m = monitor.at("pixel_pitch_m").get<double>();
-    n.distance_m = monitor.at("distance_m").get<double>();
-    if (monitor.contains("orientation_deg")) n.orientation_deg = monitor.at("orientation_deg").get<double>();
-    n.radius_px = rig.at("dots").at("radius_px").get<double>();
-    for (const nlohmann::json& p : rig.at("dots").at("positions_px")) {
-      // Monitor pixel (i, j) covers [i, i + 1) x [j, j + 1): a dot drawn on it is centred on
-      // (i + 0.5, j + 0.5).
-      grid.monitor_px.emplace_back(p.at(0).get<double>() + 0.5, p.at(1).get<double>() + 0.5);
-    }
-    if (rig.at("dots").contains("fiducials")) fiducials = rig.at("dots").at("fiducials").get<std::vector<int>>();
-  } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(source, std::string("does not describe the monitor and dots: ") + e.what());
-  }
-  if (grid.monitor_px.size() < 4 || !(grid.pixel_pitch_m > 0) || !(n.distance_m > 0)) {
-    ThrowFormatError(source, "needs at least 4 dots, a positive monitor pixel pitch and distance");
+  const session::RigDescription& rig = session.rig();
+  grid.pixel_pitch_m = rig.monitor.pixel_pitch_m;
+  n.distance_m = rig.monitor.distance_m;
+  if (!std::isnan(rig.monitor.orientation_deg)) n.orientation_deg = rig.monitor.orientation_deg;
+  n.radius_px = rig.dots.radius_px;
+  // Monitor pixel (i, j) covers [i, i + 1) x [j, j + 1): a dot drawn on it is centred on (i + 0.5, j + 0.5).
+  for (const auto& [x, y] : rig.dots.positions_px) grid.monitor_px.emplace_back(x + 0.5, y + 0.5);
+  const std::vector<int> fiducials = rig.dots.fiducials.value_or(std::vector<int>{});
+  if (grid.monitor_px.size() < 4 || !(grid.pixel_pitch_m > 0) || !(n.distance_m > 0) || !(n.radius_px > 0)) {
+    ThrowFormatError(source, "does not describe the monitor and dots: it needs at least 4 dots "
+                             "(rig.dots.positions_px), their radius (rig.dots.radius_px), a positive monitor pixel "
+                             "pitch (rig.monitor.pixel_pitch_m) and distance (rig.monitor.distance_m)");
   }
   if (!fiducials.empty()) {
     grid.fiducial.assign(grid.monitor_px.size(), false);
@@ -360,7 +353,7 @@ MonitorCalibration CalibrateMonitor(const session::Session& session, const Camer
   monitor.distance_m = std::abs(monitor.normal.dot(origin)) / std::max(1e-9, std::abs(monitor.normal.z()));
   monitor.pixel_pitch_m = grid.pixel_pitch_m;
   monitor.dot_radius_m = nominal.radius_px * grid.pixel_pitch_m;
-  monitor.emission = session.rig().value("monitor", nlohmann::json::object()).value("emission", "isotropic");
+  monitor.emission = session.rig().monitor.emission;
   if (monitor.emission != "lambertian" && monitor.emission != "lcd") monitor.emission = "isotropic";
   // The screen's u axis in the sample plane, as measured by the pose.
   const Vec3 right = to_sample.col(0);
@@ -399,7 +392,7 @@ Radiometry RadiometryOf(const session::Session& session, int bits, const cv::Siz
   Radiometry r;
   r.bit_depth = bits;
   r.saturation_dn = MaxDn(bits);  // clipped values sit at full scale
-  const std::string response = session.rig().at("camera").value("response", "linear");
+  const std::string response = session.rig().camera.response.empty() ? "linear" : session.rig().camera.response;
   if (response == "srgb") {
     // The sRGB transfer curve inverted, in digital-number units so that "linear" and "table"
     // agree at full scale.
@@ -432,17 +425,9 @@ struct SensorWindow {
   cv::Point offset;  // the window's top-left pixel on the sensor
 };
 
-SensorWindow ReadSensorWindow(const nlohmann::json& camera, const cv::Size& window, const std::string& manifest) {
-  if (!camera.contains("sensor")) return {window, {0, 0}};
-  SensorWindow w;
-  try {
-    const nlohmann::json& s = camera.at("sensor");
-    w.sensor = cv::Size(s.at("width").get<int>(), s.at("height").get<int>());
-    w.offset = cv::Point(s.at("window_offset").at(0).get<int>(), s.at("window_offset").at(1).get<int>());
-  } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(manifest, std::string("has a malformed rig.camera.sensor: ") + e.what(),
-                     "it needs width, height and window_offset [x, y]");
-  }
+SensorWindow WindowOnSensor(const session::SensorWindow& described, const cv::Size& window, const std::string& manifest) {
+  if (described.whole_sensor()) return {window, {0, 0}};
+  const SensorWindow w{{described.sensor_width, described.sensor_height}, {described.offset_x, described.offset_y}};
   if (w.offset.x < 0 || w.offset.y < 0 || w.offset.x + window.width > w.sensor.width ||
       w.offset.y + window.height > w.sensor.height) {
     ThrowFormatError(manifest, "has a " + std::to_string(window.width) + "x" + std::to_string(window.height) +
@@ -466,26 +451,19 @@ void MoveToWindow(const SensorWindow& w, const cv::Size& window, CameraModel* ca
 
 SessionCalibration CalibrateSession(const session::Session& session, const CalibrateSessionOptions& options) {
   const std::string manifest = (session.folder() / "session.json").string();
-  int bits = 16, width = 0, height = 0;
-  std::string board_text;
-  double sample_width = 0, sample_height = 0;
-  try {
-    const nlohmann::json& rig = session.rig();
-    bits = rig.at("camera").at("bit_depth").get<int>();
-    width = rig.at("camera").at("width").get<int>();
-    height = rig.at("camera").at("height").get<int>();
-    board_text = rig.at("board").at("spec").get<std::string>();
-    sample_width = rig.at("sample").at("width_m").get<double>();
-    sample_height = rig.at("sample").at("height_m").get<double>();
-  } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(manifest, std::string("does not describe the rig: ") + e.what(),
-                     "calibration needs rig.camera (width, height, bit_depth), rig.board.spec and rig.sample");
+  const session::RigDescription& rig = session.rig();
+  const int bits = rig.camera.bit_depth, width = rig.camera.width, height = rig.camera.height;
+  const double sample_width = rig.sample.width_m, sample_height = rig.sample.height_m;
+  if (bits <= 0 || width <= 0 || height <= 0 || rig.board.spec.empty() || !(sample_width > 0) || !(sample_height > 0)) {
+    ThrowFormatError(manifest, "does not describe the rig",
+                     "calibration needs rig.camera (width, height, bit_depth), rig.board.spec and rig.sample "
+                     "(width_m, height_m)");
   }
-  const BoardSpec board = BoardSpec::Parse(board_text, manifest + " rig.board.spec");
-  const std::string holder_text = session.rig().value("sample_plane_board", nlohmann::json::object()).value("spec", board_text);
+  const BoardSpec board = BoardSpec::Parse(rig.board.spec, manifest + " rig.board.spec");
+  const std::string& holder_text = rig.sample_plane_board.spec.empty() ? rig.board.spec : rig.sample_plane_board.spec;
   const BoardSpec holder_board = BoardSpec::Parse(holder_text, manifest + " rig.sample_plane_board.spec");
   const cv::Size size(width, height);
-  const SensorWindow window = ReadSensorWindow(session.rig().at("camera"), size, manifest);
+  const SensorWindow window = WindowOnSensor(rig.camera.sensor, size, manifest);
   SessionCalibration c;
   c.camera = CalibrateCameraFromBoards(session, board, window.sensor, bits, options);
   MoveToWindow(window, size, &c.camera.camera);

@@ -245,10 +245,10 @@ class ReadAhead {
 
 void ResolveTexelGrid(const session::Session& session, const calib::SessionCalibration& calibration, ProcessOptions* options) {
   if (options->texels_x > 0 && options->texels_y > 0) return;
-  const nlohmann::json& sample = session.rig().value("sample", nlohmann::json::object());
-  if (sample.contains("texels_x") && sample.contains("texels_y")) {
-    options->texels_x = sample["texels_x"].get<int>();
-    options->texels_y = sample["texels_y"].get<int>();
+  const session::RigSample& sample = session.rig().sample;
+  if (sample.texels_x > 0 && sample.texels_y > 0) {
+    options->texels_x = sample.texels_x;
+    options->texels_y = sample.texels_y;
     return;
   }
   // About two camera pixels per texel along the sample's wider side.
@@ -328,7 +328,7 @@ ProcessReport ProcessSession(const session::Session& session, const calib::Sessi
   info.num_dots = num_dots;
   info.light_resolution = options.light_resolution;
   info.tile_texels = options.tile_texels;
-  info.eta = session.rig().value("sample", nlohmann::json::object()).value("eta", 0.0);
+  info.eta = session.rig().sample.eta;
   info.provenance = {{"session", fs::absolute(session.folder()).string()},
                      {"rectify_samples", options.rectify_samples},
                      {"diffuse_threshold", options.diffuse_threshold}};

@@ -94,6 +94,7 @@ std::string SessionVerification::Summary() const {
 }
 
 Session Session::Create(const fs::path& folder, const nlohmann::json& rig, const std::vector<std::string>& planned_keys) {
+  RigDescription description = ParseRigDescription(rig, (folder / kManifest).string() + " (new)");
   if (fs::exists(folder) && (!fs::is_directory(folder) || !fs::is_empty(folder))) {
     ThrowInvalidInput(folder.string(), "exists and is not empty; an existing session is never overwritten",
                  "choose a new output folder, or resume with the same command");
@@ -108,7 +109,8 @@ Session Session::Create(const fs::path& folder, const nlohmann::json& rig, const
   }
   Session session;
   session.folder_ = folder;
-  session.rig_ = rig;
+  session.rig_json_ = rig;
+  session.rig_ = std::move(description);
   session.planned_keys_ = planned_keys;
   session.planned_.insert(planned_keys.begin(), planned_keys.end());
   const nlohmann::json manifest = {{"format", "svbtdf-session"}, {"version", kSessionFormatVersion},
@@ -133,23 +135,13 @@ Session Session::Open(const fs::path& folder) {
     ThrowFormatError(manifest_path.string(), "has session format version " + std::to_string(version) +
                                                  "; this svbtdf reads version " + std::to_string(kSessionFormatVersion));
   }
-  session.rig_ = manifest.value("rig", nlohmann::json::object());
+  session.rig_json_ = manifest.value("rig", nlohmann::json::object());
+  session.rig_ = ParseRigDescription(session.rig_json_, manifest_path.string());
   const fs::path plan_path = folder / kPlan;
   session.planned_keys_ = Field<std::vector<std::string>>(ParseJsonFile(plan_path), "captures", plan_path.string());
   for (const std::string& key : session.planned_keys_) RequireValidKey(key, plan_path.string());
   session.planned_.insert(session.planned_keys_.begin(), session.planned_keys_.end());
   session.ReadJournal();
-  return session;
-}
-
-Session Session::CreateOrResume(const fs::path& folder, const nlohmann::json& rig,
-                                const std::vector<std::string>& planned_keys) {
-  if (!fs::exists(folder / kManifest)) return Create(folder, rig, planned_keys);
-  Session session = Open(folder);
-  if (session.planned_keys_ != planned_keys) {
-    ThrowInvalidInput(folder.string(), "holds a session with a different plan; it will not be changed",
-                 "resume with the same settings, or choose a new output folder");
-  }
   return session;
 }
 

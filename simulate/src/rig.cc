@@ -146,10 +146,6 @@ std::string BoardConfig::Spec() const {
   return "chessboard:" + std::to_string(inner_cols) + "x" + std::to_string(inner_rows) + ":" + Fmt(square * 1000.0);
 }
 
-SensorWindow SensorWindow::Centred(int width, int height, int sensor_width, int sensor_height) {
-  return {sensor_width, sensor_height, (sensor_width - width) / 2, (sensor_height - height) / 2};
-}
-
 namespace {
 
 CameraIntrinsics WholeSensor(const CameraIntrinsics& window_intrinsics, const SensorWindow& window) {

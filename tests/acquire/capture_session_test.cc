@@ -96,7 +96,7 @@ TEST_F(AcquireOnSimulatedRig, TinyPlanStoresTheSimulatorsImages) {
   EXPECT_TRUE(result.complete());
   ExpectEqualToTheSimulator(out);
   // The manifest holds the nominal rig values calibration reads, as `svbtdf simulate` writes them.
-  const nlohmann::json a = session::Session::Open(out).rig(), b = session::Session::Open(SimulatedSession()).rig();
+  const nlohmann::json a = session::Session::Open(out).rig_json(), b = session::Session::Open(SimulatedSession()).rig_json();
   for (const char* key : {"/camera/width", "/camera/height", "/camera/bit_depth", "/camera/channels",
                           "/camera/response", "/board/spec", "/board/views", "/monitor/emission",
                           "/dots/radius_px", "/dots/positions_px", "/dots/fiducials", "/dots/cols",

@@ -46,7 +46,15 @@ class FakeLibcameraSession : public LibcameraSession {
     worker_.join();
   }
 
-  CameraInfo Info() const override { return {"libcamera:fake", "Fake Sensor", {"SRGGB8 8x4"}, {}, 1e-5, 1.0}; }
+  CameraInfo Info() const override {
+    CameraInfo info;
+    info.id = "libcamera:fake";
+    info.model = "Fake Sensor";
+    info.formats = {"SRGGB8 8x4"};
+    info.min_exposure_s = 1e-5;
+    info.max_exposure_s = 1.0;
+    return info;
+  }
   LibcameraStreamInfo Stream() const override {
     return {{SampleLayout::kRaw8, 8, "RGGB", "SRGGB8"}, 8, 4, 8, 4};
   }

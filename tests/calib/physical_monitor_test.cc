@@ -83,10 +83,8 @@ TEST_P(PhysicalMonitorTest, DotsLandWhereAScreenLyingSoShowsThem) {
   // The screen's active area: centre, size and distance are the rig's; its axes are the test's.
   const MonitorConfig& m = truth.monitor;
   const Vec3 corner = Vec3(m.centre.x(), m.centre.y(), -m.distance) - 0.5 * m.width * o.right - 0.5 * m.height * o.down;
-  const nlohmann::json& positions = session.rig().at("dots").at("positions_px");
   std::vector<Vec3> expected;
-  for (const nlohmann::json& p : positions) {
-    const double i = p.at(0).get<double>(), j = p.at(1).get<double>();
+  for (const auto& [i, j] : session.rig().dots.positions_px) {
     expected.push_back(corner + m.pixel_pitch * ((i + 0.5) * o.right + (j + 0.5) * o.down));
   }
   ASSERT_EQ(expected.size(), truth.dots.size());

@@ -162,6 +162,14 @@ TEST_F(AcquireCommand, BadArgumentsPlansAndFoldersAreClearErrors) {
   const auto own = RunSvbtdf("-q acquire --plan " + changed.string() + " " + sim + " --out " + partial.string());
   ASSERT_EQ(own.exit_code, 0) << own.output;
   EXPECT_EQ(RunSvbtdf("session verify " + partial.string()).exit_code, 0);
+  // `svbtdf simulate` is this loop on the simulated rig: its session is an acquisition of the tiny
+  // plan, which acquire finds complete.
+  const auto simulated = RunSvbtdf("-q acquire --plan-preset tiny " + sim + " --out " + (Sim() / "session").string());
+  EXPECT_EQ(simulated.exit_code, 0) << simulated.output;
+  EXPECT_NE(simulated.output.find("acquired 0 images"), std::string::npos) << simulated.output;
+  // A session another program wrote (no acquisition plan in its manifest) is never changed.
+  const fs::path foreign = root_ / "foreign";
+  session::Session::Create(foreign, {{"camera", {{"model", "someone else's"}}}}, {"dark/e0/r0"});
   struct Case {
     std::string arguments, names;
   };
@@ -173,7 +181,7 @@ TEST_F(AcquireCommand, BadArgumentsPlansAndFoldersAreClearErrors) {
       {"acquire --plan-preset tiny --camera sim:" + Sim().string() + " --display sdl:0 --out " + (root_ / "d").string(),
        "--display"},
       {"acquire --plan-preset tiny " + sim + " --out " + partial.string(), "different capture plan"},
-      {"acquire --plan-preset tiny " + sim + " --out " + (Sim() / "session").string(), "did not write"},
+      {"acquire --plan-preset tiny " + sim + " --out " + foreign.string(), "did not write"},
       {"acquire --plan " + changed.string() + " --plan-preset tiny " + sim + " --out " + (root_ / "e").string(),
        "exactly one"},
   };

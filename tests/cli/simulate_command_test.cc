@@ -1,5 +1,5 @@
-// `svbtdf simulate` end to end: the tiny and demo presets write a complete session and the
-// truth; an interrupted run resumes to the same images; bad output folders are refused.
+// `svbtdf simulate` end to end: the tiny preset writes a complete session and the truth (demo:
+// simulate_command_slow_test.cc); an interrupted run resumes to the same images; bad output folders are refused.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -114,13 +114,6 @@ TEST_F(SimulateCommand, BadArgumentsAndFoldersAreClearErrors) {
     EXPECT_NE(result.output.find("svbtdf: error: "), std::string::npos) << result.output;
   }
   EXPECT_EQ(ReadTextFile(root_ / "busy" / "notes.txt"), "mine");
-}
-
-TEST_F(SimulateCommand, DemoPresetRunsToACompleteSession) {
-  const fs::path out = root_ / "demo";
-  const auto result = RunSvbtdf("-q simulate --preset demo --out " + out.string());
-  ASSERT_EQ(result.exit_code, 0) << result.output;
-  ExpectCompleteSimulation(out);
 }
 
 }  // namespace

@@ -41,7 +41,7 @@ inline calib::SessionCalibration CalibrationFromTruth(const std::filesystem::pat
     p.monitor_px = {dot.monitor_x, dot.monitor_y};
     c.monitor.dots.push_back(p);
   }
-  const int bits = session.rig().at("camera").at("bit_depth").get<int>();
+  const int bits = session.rig().camera.bit_depth;
   c.radiometry.bit_depth = bits;
   c.radiometry.saturation_dn = std::ldexp(1.0, bits) - 1.0;  // the simulator clips at full scale
   return c;

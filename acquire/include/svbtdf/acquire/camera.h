@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "svbtdf/session/rig.h"
+
 namespace svbtdf::acquire {
 
 // One captured frame in camera-native units, before any radiometric processing.
@@ -40,8 +42,8 @@ struct CameraInfo {
   int frame_width = 0, frame_height = 0, frame_channels = 0, frame_bits = 0;
   // When the frames are a window (region of interest) of a larger sensor: the sensor's size and
   // the window's top-left pixel on it. Board views for Zhang calibration (Scene::kBoardView) are
-  // then whole-sensor frames. sensor_width = 0: the frames are the whole sensor.
-  int sensor_width = 0, sensor_height = 0, window_x = 0, window_y = 0;
+  // then whole-sensor frames.
+  session::SensorWindow window;
 };
 
 class Camera {

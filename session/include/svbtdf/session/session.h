@@ -25,6 +25,7 @@
 #include "svbtdf/common/durable_log.h"
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/session/capture_key.h"
+#include "svbtdf/session/rig.h"
 
 namespace svbtdf::session {
 
@@ -59,12 +60,11 @@ class Session {
   // journal line cut short by a crash is ignored; any other malformed line is an error naming the
   // file and line.
   static Session Open(const std::filesystem::path& folder);
-  // Opens SESSION if it exists (checking that its plan equals `planned_keys`), else creates it.
-  static Session CreateOrResume(const std::filesystem::path& folder, const nlohmann::json& rig,
-                                const std::vector<std::string>& planned_keys);
 
   const std::filesystem::path& folder() const { return folder_; }
-  const nlohmann::json& rig() const { return rig_; }
+  // The manifest's rig description, typed; rig_json() as written (for tools that show it).
+  const RigDescription& rig() const { return rig_; }
+  const nlohmann::json& rig_json() const { return rig_json_; }
   const std::vector<std::string>& planned_keys() const { return planned_keys_; }
   // The planned keys of one kind, in plan order.
   std::vector<std::string> PlannedKeys(CaptureKind kind) const;
@@ -89,7 +89,8 @@ class Session {
   void ReadJournal();
 
   std::filesystem::path folder_;
-  nlohmann::json rig_;
+  RigDescription rig_;
+  nlohmann::json rig_json_;
   std::vector<std::string> planned_keys_;
   std::unordered_set<std::string> planned_;  // the same keys, for lookups
   std::vector<SessionEntry> entries_;

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "svbtdf/session/rig.h"
 #include "svbtdf/model/vec.h"
 
 namespace svbtdf {
@@ -177,22 +178,13 @@ struct SensorConfig {
   double black_offset = 0.0;     // pedestal added to the digital value, as a fraction of full scale
 };
 
-// Where the stored images lie on the camera's sensor. A lab crops its dot images to the region of
-// interest around the sample, and calibrates the lens on the whole sensor with a board that fills
-// it: only a wide view separates the principal point from the camera's rotation, and the focal
-// length from the board's distance (docs/simulator.md, "Sensor window"). The rig's `intrinsics`
-// are the window's (principal point relative to the window's corner); the Zhang board views are
-// whole-sensor images. sensor_width = 0: the window is the whole sensor.
-struct SensorWindow {
-  int sensor_width = 0;
-  int sensor_height = 0;
-  int offset_x = 0;  // the window's top-left pixel on the sensor
-  int offset_y = 0;
-
-  bool whole_sensor() const { return sensor_width == 0; }
-  // A window of `width` x `height` centred on a sensor of `sensor_width` x `sensor_height`.
-  static SensorWindow Centred(int width, int height, int sensor_width, int sensor_height);
-};
+// Where the stored images lie on the camera's sensor (session::SensorWindow). A lab crops its dot
+// images to the region of interest around the sample, and calibrates the lens on the whole sensor
+// with a board that fills it: only a wide view separates the principal point from the camera's
+// rotation, and the focal length from the board's distance (docs/simulator.md, "Sensor window").
+// The rig's `intrinsics` are the window's (principal point relative to the window's corner); the
+// Zhang board views are whole-sensor images.
+using session::SensorWindow;
 
 // A chessboard: the one held up for Zhang calibration, or the one laid in the sample holder for
 // the sample plane's pose.

@@ -1,0 +1,206 @@
+#include "svbtdf/session/rig.h"
+
+#include <algorithm>
+
+#include "svbtdf/common/error.h"
+
+namespace svbtdf::session {
+namespace {
+
+using nlohmann::json;
+
+// Reads the optional fields of one object of the rig, naming `where` (e.g. "rig.camera") in errors.
+class Fields {
+ public:
+  Fields(const json& parent, const std::string& key, std::string where, const std::string& source)
+      : where_(std::move(where)), source_(source) {
+    if (!parent.contains(key) || parent.at(key).is_null()) return;
+    object_ = &parent.at(key);
+    if (!object_->is_object()) ThrowFormatError(source_, where_ + " must be an object");
+  }
+
+  template <typename T>
+  void Read(const char* key, T* out) const {
+    if (!object_ || !object_->contains(key) || object_->at(key).is_null()) return;
+    try {
+      *out = object_->at(key).get<T>();
+    } catch (const json::exception&) {
+      ThrowFormatError(source_, where_ + "." + key + " has the wrong type (" + object_->at(key).dump() + ")");
+    }
+  }
+  void ReadBoard(const char* key, RigBoard* board) const {
+    const Fields fields(*this, key);
+    fields.Read("spec", &board->spec);
+    fields.Read("views", &board->views);
+  }
+  Fields(const Fields& parent, const char* key)
+      : Fields(parent.object_ ? *parent.object_ : Empty(), key, parent.where_ + "." + key, parent.source_) {}
+
+ private:
+  static const json& Empty() {
+    static const json empty = json::object();
+    return empty;
+  }
+  const json* object_ = nullptr;
+  std::string where_;
+  const std::string& source_;
+};
+
+SensorWindow ReadSensor(const Fields& camera, const std::string& source) {
+  const Fields sensor(camera, "sensor");
+  SensorWindow window;
+  sensor.Read("width", &window.sensor_width);
+  sensor.Read("height", &window.sensor_height);
+  std::vector<int> offset;
+  sensor.Read("window_offset", &offset);
+  if (window.sensor_width > 0 || !offset.empty()) {
+    if (offset.size() != 2 || window.sensor_height <= 0) {
+      ThrowFormatError(source, "has a malformed rig.camera.sensor",
+                       "it needs width, height and window_offset [x, y]");
+    }
+    window.offset_x = offset[0];
+    window.offset_y = offset[1];
+  }
+  return window;
+}
+
+// Sets `object[key]` when the value is known.
+void Put(json& object, const char* key, const std::string& value) {
+  if (!value.empty()) object[key] = value;
+}
+void Put(json& object, const char* key, int value) {
+  if (value != 0) object[key] = value;
+}
+void Put(json& object, const char* key, double value) {
+  if (value != 0.0 && !std::isnan(value)) object[key] = value;
+}
+void PutObject(json& object, const char* key, json value) {
+  if (!value.empty()) object[key] = std::move(value);
+}
+
+json BoardToJson(const RigBoard& board) {
+  json out = json::object();
+  Put(out, "spec", board.spec);
+  Put(out, "views", board.views);
+  return out;
+}
+
+}  // namespace
+
+SensorWindow SensorWindow::Centred(int width, int height, int sensor_width, int sensor_height) {
+  return {sensor_width, sensor_height, (sensor_width - width) / 2, (sensor_height - height) / 2};
+}
+
+RigDescription ParseRigDescription(const json& rig, const std::string& source) {
+  if (!rig.is_object()) ThrowFormatError(source, "rig must be an object");
+  const json root = {{"rig", rig}};
+  const Fields all(root, "rig", "rig", source);
+  RigDescription d;
+
+  const Fields camera(all, "camera");
+  camera.Read("id", &d.camera.id);
+  camera.Read("model", &d.camera.model);
+  camera.Read("width", &d.camera.width);
+  camera.Read("height", &d.camera.height);
+  camera.Read("channels", &d.camera.channels);
+  camera.Read("bit_depth", &d.camera.bit_depth);
+  camera.Read("response", &d.camera.response);
+  d.camera.sensor = ReadSensor(camera, source);
+
+  const Fields monitor(all, "monitor");
+  monitor.Read("id", &d.monitor.id);
+  monitor.Read("width_px", &d.monitor.width_px);
+  monitor.Read("height_px", &d.monitor.height_px);
+  monitor.Read("gamma", &d.monitor.gamma);
+  monitor.Read("pixel_pitch_m", &d.monitor.pixel_pitch_m);
+  monitor.Read("distance_m", &d.monitor.distance_m);
+  monitor.Read("orientation_deg", &d.monitor.orientation_deg);
+  monitor.Read("black_level", &d.monitor.black_level);
+  monitor.Read("emission", &d.monitor.emission);
+
+  const Fields dots(all, "dots");
+  dots.Read("cols", &d.dots.cols);
+  dots.Read("rows", &d.dots.rows);
+  dots.Read("radius_px", &d.dots.radius_px);
+  dots.Read("positions_px", &d.dots.positions_px);
+  std::vector<int> fiducials;
+  if (rig.contains("dots") && rig["dots"].contains("fiducials")) {
+    dots.Read("fiducials", &fiducials);
+    d.dots.fiducials = std::move(fiducials);
+  }
+
+  all.ReadBoard("board", &d.board);
+  all.ReadBoard("sample_plane_board", &d.sample_plane_board);
+  const Fields sample(all, "sample");
+  sample.Read("width_m", &d.sample.width_m);
+  sample.Read("height_m", &d.sample.height_m);
+  sample.Read("texels_x", &d.sample.texels_x);
+  sample.Read("texels_y", &d.sample.texels_y);
+  sample.Read("eta", &d.sample.eta);
+  all.Read("exposures_s", &d.exposures_s);
+  if (rig.contains("acquisition_plan")) d.acquisition_plan = rig.at("acquisition_plan");
+  if (rig.contains("simulated")) d.simulated = rig.at("simulated");
+  for (const auto& [key, value] : rig.items()) {
+    static const char* const kKnown[] = {"camera", "monitor", "dots", "board", "sample_plane_board",
+                                         "sample", "exposures_s", "acquisition_plan", "simulated"};
+    if (std::find(std::begin(kKnown), std::end(kKnown), key) == std::end(kKnown)) d.others[key] = value;
+  }
+  return d;
+}
+
+json ToJson(const RigDescription& d) {
+  json rig = d.others.is_object() ? d.others : json::object();
+  json camera = json::object();
+  Put(camera, "id", d.camera.id);
+  Put(camera, "model", d.camera.model);
+  Put(camera, "width", d.camera.width);
+  Put(camera, "height", d.camera.height);
+  Put(camera, "channels", d.camera.channels);
+  Put(camera, "bit_depth", d.camera.bit_depth);
+  Put(camera, "response", d.camera.response);
+  if (!d.camera.sensor.whole_sensor()) {
+    const SensorWindow& s = d.camera.sensor;
+    camera["sensor"] = {{"width", s.sensor_width}, {"height", s.sensor_height}, {"window_offset", {s.offset_x, s.offset_y}}};
+  }
+  PutObject(rig, "camera", camera);
+
+  json monitor = json::object();
+  Put(monitor, "id", d.monitor.id);
+  Put(monitor, "width_px", d.monitor.width_px);
+  Put(monitor, "height_px", d.monitor.height_px);
+  Put(monitor, "gamma", d.monitor.gamma);
+  Put(monitor, "pixel_pitch_m", d.monitor.pixel_pitch_m);
+  Put(monitor, "distance_m", d.monitor.distance_m);
+  if (!std::isnan(d.monitor.orientation_deg)) monitor["orientation_deg"] = d.monitor.orientation_deg;
+  if (!std::isnan(d.monitor.black_level)) monitor["black_level"] = d.monitor.black_level;
+  Put(monitor, "emission", d.monitor.emission);
+  PutObject(rig, "monitor", monitor);
+
+  json dots = json::object();
+  Put(dots, "cols", d.dots.cols);
+  Put(dots, "rows", d.dots.rows);
+  Put(dots, "radius_px", d.dots.radius_px);
+  if (!d.dots.positions_px.empty()) {
+    json positions = json::array();
+    for (const auto& [x, y] : d.dots.positions_px) positions.push_back({x, y});
+    dots["positions_px"] = positions;
+  }
+  if (d.dots.fiducials) dots["fiducials"] = *d.dots.fiducials;
+  PutObject(rig, "dots", dots);
+
+  PutObject(rig, "board", BoardToJson(d.board));
+  PutObject(rig, "sample_plane_board", BoardToJson(d.sample_plane_board));
+  json sample = json::object();
+  Put(sample, "width_m", d.sample.width_m);
+  Put(sample, "height_m", d.sample.height_m);
+  Put(sample, "texels_x", d.sample.texels_x);
+  Put(sample, "texels_y", d.sample.texels_y);
+  Put(sample, "eta", d.sample.eta);
+  PutObject(rig, "sample", sample);
+  if (!d.exposures_s.empty()) rig["exposures_s"] = d.exposures_s;
+  if (!d.acquisition_plan.is_null()) rig["acquisition_plan"] = d.acquisition_plan;
+  if (!d.simulated.is_null()) rig["simulated"] = d.simulated;
+  return rig;
+}
+
+}  // namespace svbtdf::session
