@@ -22,6 +22,7 @@
 #include "svbtdf/process/slice_store_writer.h"
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/ggx.h"
+#include "temp_folder.h"
 
 namespace svbtdf::process {
 using fit::SliceStore;
@@ -30,11 +31,10 @@ using fit::TexelGeometry;
 namespace {
 namespace fs = std::filesystem;
 
+// A fresh folder NAME inside this test program's temporary folder (removed at exit).
 fs::path TestFolder(const std::string& name) {
-  const fs::path folder = fs::temp_directory_path() / ("svbtdf_diffuse_test_" + std::to_string(::getpid())) / name;
-  fs::remove_all(folder);
-  fs::create_directories(folder.parent_path());
-  return folder;
+  static const svbtdf::testing::TempFolder root("diffuse_test");
+  return root.path() / name;
 }
 
 // A camera that records R through the measurement equation: the dot's light reaches the pixel as

@@ -28,6 +28,7 @@
 #include "svbtdf/acquire/simulated_session.h"
 #include "svbtdf/simulate/truth_io.h"
 #include "truth_calibration.h"
+#include "temp_folder.h"
 
 namespace svbtdf::process {
 using fit::SliceStore;
@@ -36,11 +37,10 @@ using fit::TexelGeometry;
 namespace {
 namespace fs = std::filesystem;
 
+// A fresh folder NAME inside this test program's temporary folder (removed at exit).
 fs::path TestFolder(const std::string& name) {
-  const fs::path folder = fs::temp_directory_path() / ("svbtdf_process_test_" + std::to_string(::getpid())) / name;
-  fs::remove_all(folder);
-  fs::create_directories(folder.parent_path());
-  return folder;
+  static const svbtdf::testing::TempFolder root("process_test");
+  return root.path() / name;
 }
 
 struct Simulation {

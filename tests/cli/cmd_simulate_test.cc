@@ -1,5 +1,5 @@
 // `svbtdf simulate` end to end: the tiny preset writes a complete session and the truth (demo:
-// simulate_command_slow_test.cc); an interrupted run resumes to the same images; bad output folders are refused.
+// cmd_simulate_slow_test.cc); an interrupted run resumes to the same images; bad output folders are refused.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>

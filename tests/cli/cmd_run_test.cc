@@ -34,7 +34,7 @@ TEST_F(FitChain, RecoversTheTruthOnHeldOutDots) {
 
 // The paper's 1% (10 representatives here): the interpolated texels, refined against their own
 // samples, meet the held-out bound (measured 1.18%, alpha within 0.05 on 98.8%, NDF 2.5%).
-// Fitting every texel measures 2.66% (fit_chain_slow_test.cc, which checks the 1.2x
+// Fitting every texel measures 2.66% (cmd_run_slow_test.cc, which checks the 1.2x
 // against it); 2.5% here keeps that bound in the default run too.
 TEST_F(FitChain, OnePercentRepresentativesMeetTheHeldOutBound) {
   const nlohmann::json m = FitAndCompare("one_percent", "--holdout 0.1 --representatives 0.01");

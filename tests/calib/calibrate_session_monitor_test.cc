@@ -22,6 +22,7 @@
 #include "svbtdf/fit/slice_store.h"
 #include "svbtdf/acquire/simulated_session.h"
 #include "svbtdf/simulate/truth_io.h"
+#include "measured_btdf_error.h"
 #include "temp_folder.h"
 
 namespace svbtdf::calib {
@@ -112,31 +113,12 @@ TEST_P(PhysicalMonitorTest, DotsLandWhereAScreenLyingSoShowsThem) {
   options.progress = false;
   process::ProcessSession(session, c, out / "processed", options);
   const fit::SliceStore store = fit::SliceStore::Open(out / "processed");
-  const MaterialTruth material = ReadMaterialTruth(out / "truth");
-  std::vector<double> errors;
-  std::vector<float> samples;
-  const fit::TexelGeometry& g = store.geometry();
-  for (int64_t t = 0; t < g.num_texels(); ++t) {
-    const int x = static_cast<int>(t % g.texels_x), y = static_cast<int>(t / g.texels_x);
-    if (store.mask().at(x, y) == 0) continue;
-    store.ReadSamples(t, &samples);
-    const auto ndf = material.TexelNdf(x, y);
-    const DualMicrofacetParams params = material.Params(x, y);
-    const Vec3 centre = g.TexelCentre(t);
-    const Vec3 view = (truth.pose.Centre() - centre).normalized();
-    std::vector<double> r_true;
-    for (const Vec3& p : expected) r_true.push_back(Luminance(EvaluateMaterial(*ndf, params, (p - centre).normalized(), view)));
-    const double peak = *std::max_element(r_true.begin(), r_true.end());
-    for (size_t q = 0; q < r_true.size(); ++q) {
-      const double measured = (samples[3 * q] + samples[3 * q + 1] + samples[3 * q + 2]) / 3.0;
-      if (r_true[q] >= 0.05 * peak && std::isfinite(measured)) errors.push_back(std::abs(measured / r_true[q] - 1));
-    }
-  }
-  ASSERT_FALSE(errors.empty());
-  std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
-  std::printf("orientation %3.0f: median |R/R_true - 1| %.4f over %zu samples\n", o.degrees, errors[errors.size() / 2],
-              errors.size());
-  EXPECT_LT(errors[errors.size() / 2], 0.03);
+  size_t count = 0;
+  const double median = svbtdf::testing::MedianBtdfError(store, ReadMaterialTruth(out / "truth"), expected,
+                                                         truth.pose.Centre(), &count);
+  std::printf("orientation %3.0f: median |R/R_true - 1| %.4f over %zu samples\n", o.degrees, median, count);
+  ASSERT_GT(count, 0u);
+  EXPECT_LT(median, 0.03);
 }
 
 INSTANTIATE_TEST_SUITE_P(FourWaysDown, PhysicalMonitorTest, ::testing::ValuesIn(kOrientations),
