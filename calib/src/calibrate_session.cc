@@ -353,8 +353,8 @@ MonitorCalibration CalibrateMonitor(const session::Session& session, const Camer
   monitor.distance_m = std::abs(monitor.normal.dot(origin)) / std::max(1e-9, std::abs(monitor.normal.z()));
   monitor.pixel_pitch_m = grid.pixel_pitch_m;
   monitor.dot_radius_m = nominal.radius_px * grid.pixel_pitch_m;
-  monitor.emission = session.rig().monitor.emission;
-  if (monitor.emission != "lambertian" && monitor.emission != "lcd") monitor.emission = "isotropic";
+  // Checked by CalibrateSession: empty (not noted) or a known profile.
+  monitor.emission = session.rig().monitor.emission.empty() ? "isotropic" : session.rig().monitor.emission;
   // The screen's u axis in the sample plane, as measured by the pose.
   const Vec3 right = to_sample.col(0);
   monitor.orientation_deg = std::fmod(360.0 + std::atan2(right.y(), right.x()) * 180.0 / kPi, 360.0);
@@ -458,6 +458,11 @@ SessionCalibration CalibrateSession(const session::Session& session, const Calib
     ThrowFormatError(manifest, "does not describe the rig",
                      "calibration needs rig.camera (width, height, bit_depth), rig.board.spec and rig.sample "
                      "(width_m, height_m)");
+  }
+  const std::string& emission = rig.monitor.emission;
+  if (!emission.empty() && emission != "isotropic" && emission != "lambertian" && emission != "lcd") {
+    ThrowFormatError(manifest, "has rig.monitor.emission '" + emission + "'",
+                     "use isotropic, lambertian or lcd (docs/calibration-format.md)");
   }
   const BoardSpec board = BoardSpec::Parse(rig.board.spec, manifest + " rig.board.spec");
   const std::string& holder_text = rig.sample_plane_board.spec.empty() ? rig.board.spec : rig.sample_plane_board.spec;

@@ -155,6 +155,20 @@ TEST(PhysicalMonitor, ALabNoteThatContradictsTheFiducialsIsRefused) {
   ExpectRefused(copy, "fiducials/e0.png", "rig.monitor.orientation_deg says 180");
 }
 
+// A misspelt emission profile would silently become isotropic and bias every dot's L_q: refused
+// before any image is read, naming the manifest and the key.
+TEST(PhysicalMonitor, AMisspeltEmissionProfileIsRefused) {
+  ProgressBar::SetEnabled(false);
+  const fs::path out = Simulate("o0", 0.0, false);
+  const fs::path copy = Root() / "misspelt";
+  fs::remove_all(copy);
+  fs::copy(out / "session", copy, fs::copy_options::recursive);
+  nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(copy / "session.json"));
+  manifest["rig"]["monitor"]["emission"] = "lambertain";
+  std::ofstream(copy / "session.json", std::ios::trunc) << manifest.dump(2);
+  ExpectRefused(copy, "session.json", "rig.monitor.emission 'lambertain'");
+}
+
 // Dots displayed elsewhere than the session says (here each moved by up to 4 monitor pixels, 1 mm)
 // fit no flat grid of the stated layout: refused, naming the all-dots image, not turned into
 // wrong dot positions.
