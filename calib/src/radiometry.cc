@@ -125,6 +125,14 @@ HdrResult MergeExposures(const std::vector<Exposure>& brackets, const cv::Mat& d
   const int64_t pixels = static_cast<int64_t>(first.rows) * first.cols;
   const std::vector<float> table = radiometry.LinearTable(first.depth() == CV_8U ? 256 : 65536);
   HdrAccumulator merge(pixels, channels);
+  // The dark frame in linear units, once for all brackets.
+  std::vector<float> dark_linear(pixels * channels, 0.0f);
+  if (!dark.empty()) {
+    for (int64_t p = 0; p < pixels; ++p) {
+      const int y = static_cast<int>(p / first.cols), x = static_cast<int>(p % first.cols);
+      for (int c = 0; c < channels; ++c) dark_linear[p * channels + c] = table[CameraValue(dark, y, x, c)];
+    }
+  }
   std::vector<float> linear(pixels * channels);
   std::vector<uint8_t> saturated(pixels), saturated_everywhere(pixels, 1);
   for (const Exposure& e : brackets) {
@@ -134,7 +142,7 @@ HdrResult MergeExposures(const std::vector<Exposure>& brackets, const cv::Mat& d
       for (int c = 0; c < channels; ++c) {
         const int value = CameraValue(e.image, y, x, c);
         saturated[p] |= value >= radiometry.saturation_dn;
-        linear[p * channels + c] = table[value] - (dark.empty() ? 0.0f : table[CameraValue(dark, y, x, c)]);
+        linear[p * channels + c] = table[value] - dark_linear[p * channels + c];
       }
       saturated_everywhere[p] &= saturated[p];
     }

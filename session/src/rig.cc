@@ -12,42 +12,48 @@ using nlohmann::json;
 // Reads the optional fields of one object of the rig, naming `where` (e.g. "rig.camera") in errors.
 class Fields {
  public:
-  Fields(const json& parent, const std::string& key, std::string where, const std::string& source)
-      : where_(std::move(where)), source_(source) {
-    if (!parent.contains(key) || parent.at(key).is_null()) return;
-    object_ = &parent.at(key);
-    if (!object_->is_object()) ThrowFormatError(source_, where_ + " must be an object");
+  // The fields of `object`, none when it is null.
+  Fields(const json* object, std::string where, const std::string& source)
+      : object_(object), where_(std::move(where)), source_(source) {}
+
+  // The fields of member `key`, which must be an object when present.
+  Fields Member(const char* key) const {
+    const json* member = Find(key);
+    if (member && !member->is_object()) ThrowFormatError(source_, where_ + "." + key + " must be an object");
+    return Fields(member, where_ + "." + key, source_);
   }
 
+  // Sets *out to member `key` when present; false when absent.
   template <typename T>
-  void Read(const char* key, T* out) const {
-    if (!object_ || !object_->contains(key) || object_->at(key).is_null()) return;
+  bool Read(const char* key, T* out) const {
+    const json* member = Find(key);
+    if (!member) return false;
     try {
-      *out = object_->at(key).get<T>();
+      *out = member->get<T>();
     } catch (const json::exception&) {
-      ThrowFormatError(source_, where_ + "." + key + " has the wrong type (" + object_->at(key).dump() + ")");
+      ThrowFormatError(source_, where_ + "." + key + " has the wrong type (" + member->dump() + ")");
     }
+    return true;
   }
   void ReadBoard(const char* key, RigBoard* board) const {
-    const Fields fields(*this, key);
+    const Fields fields = Member(key);
     fields.Read("spec", &board->spec);
     fields.Read("views", &board->views);
   }
-  Fields(const Fields& parent, const char* key)
-      : Fields(parent.object_ ? *parent.object_ : Empty(), key, parent.where_ + "." + key, parent.source_) {}
 
  private:
-  static const json& Empty() {
-    static const json empty = json::object();
-    return empty;
+  const json* Find(const char* key) const {
+    if (!object_ || !object_->contains(key) || object_->at(key).is_null()) return nullptr;
+    return &object_->at(key);
   }
-  const json* object_ = nullptr;
+
+  const json* object_;
   std::string where_;
   const std::string& source_;
 };
 
 SensorWindow ReadSensor(const Fields& camera, const std::string& source) {
-  const Fields sensor(camera, "sensor");
+  const Fields sensor = camera.Member("sensor");
   SensorWindow window;
   sensor.Read("width", &window.sensor_width);
   sensor.Read("height", &window.sensor_height);
@@ -93,11 +99,10 @@ SensorWindow SensorWindow::Centred(int width, int height, int sensor_width, int 
 
 RigDescription ParseRigDescription(const json& rig, const std::string& source) {
   if (!rig.is_object()) ThrowFormatError(source, "rig must be an object");
-  const json root = {{"rig", rig}};
-  const Fields all(root, "rig", "rig", source);
+  const Fields all(&rig, "rig", source);
   RigDescription d;
 
-  const Fields camera(all, "camera");
+  const Fields camera = all.Member("camera");
   camera.Read("id", &d.camera.id);
   camera.Read("model", &d.camera.model);
   camera.Read("width", &d.camera.width);
@@ -107,7 +112,7 @@ RigDescription ParseRigDescription(const json& rig, const std::string& source) {
   camera.Read("response", &d.camera.response);
   d.camera.sensor = ReadSensor(camera, source);
 
-  const Fields monitor(all, "monitor");
+  const Fields monitor = all.Member("monitor");
   monitor.Read("id", &d.monitor.id);
   monitor.Read("width_px", &d.monitor.width_px);
   monitor.Read("height_px", &d.monitor.height_px);
@@ -118,20 +123,16 @@ RigDescription ParseRigDescription(const json& rig, const std::string& source) {
   monitor.Read("black_level", &d.monitor.black_level);
   monitor.Read("emission", &d.monitor.emission);
 
-  const Fields dots(all, "dots");
+  const Fields dots = all.Member("dots");
   dots.Read("cols", &d.dots.cols);
   dots.Read("rows", &d.dots.rows);
   dots.Read("radius_px", &d.dots.radius_px);
   dots.Read("positions_px", &d.dots.positions_px);
-  std::vector<int> fiducials;
-  if (rig.contains("dots") && rig["dots"].contains("fiducials")) {
-    dots.Read("fiducials", &fiducials);
-    d.dots.fiducials = std::move(fiducials);
-  }
+  if (std::vector<int> fiducials; dots.Read("fiducials", &fiducials)) d.dots.fiducials = std::move(fiducials);
 
   all.ReadBoard("board", &d.board);
   all.ReadBoard("sample_plane_board", &d.sample_plane_board);
-  const Fields sample(all, "sample");
+  const Fields sample = all.Member("sample");
   sample.Read("width_m", &d.sample.width_m);
   sample.Read("height_m", &d.sample.height_m);
   sample.Read("texels_x", &d.sample.texels_x);
