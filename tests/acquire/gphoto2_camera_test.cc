@@ -7,6 +7,7 @@
 #include <map>
 
 #include "svbtdf/acquire/gphoto2_camera.h"
+#include "expect_error.h"
 #include "svbtdf/common/error.h"
 #include "test_jpeg.h"
 
@@ -56,16 +57,7 @@ std::shared_ptr<FakeGphoto2Session::State> Canon30D() {
   return state;
 }
 
-template <typename Body>
-void ExpectError(ErrorKind kind, const std::string& text, Body body) {
-  try {
-    body();
-    FAIL() << "expected an error containing '" << text << "'";
-  } catch (const Error& error) {
-    EXPECT_EQ(error.kind(), kind) << error.what();
-    EXPECT_NE(std::string(error.what()).find(text), std::string::npos) << error.what();
-  }
-}
+using svbtdf::testing::ExpectError;
 
 TEST(Gphoto2ParseTest, ShutterSpeedsAndIsos) {
   EXPECT_DOUBLE_EQ(*ParseShutterSpeed("1/250"), 1.0 / 250);

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "svbtdf/acquire/libcamera_camera.h"
+#include "expect_error.h"
 #include "svbtdf/common/error.h"
 
 namespace svbtdf::acquire {
@@ -152,16 +153,7 @@ std::unique_ptr<LibcameraCamera> MakeCamera(const std::shared_ptr<FakeLibcameraS
                                            options);
 }
 
-template <typename Body>
-void ExpectError(ErrorKind kind, const std::string& text, Body body) {
-  try {
-    body();
-    FAIL() << "expected an error containing '" << text << "'";
-  } catch (const Error& error) {
-    EXPECT_EQ(error.kind(), kind) << error.what();
-    EXPECT_NE(std::string(error.what()).find(text), std::string::npos) << error.what();
-  }
-}
+using svbtdf::testing::ExpectError;
 
 TEST(LibcameraDriverTest, ExposureChangeSettlesBeforeAFrameIsReturned) {
   for (int delay : {0, 2, 5}) {

@@ -8,6 +8,7 @@
 
 #include "fake_v4l2_device.h"
 #include "svbtdf/acquire/v4l2_camera.h"
+#include "expect_error.h"
 #include "svbtdf/common/error.h"
 #include "test_jpeg.h"
 
@@ -22,17 +23,7 @@ std::shared_ptr<FakeV4l2Device> FakeWithFormats(std::vector<testing::FakeFormat>
   return fake;
 }
 
-// Runs `body`, expecting an svbtdf::Error of `kind` whose message contains `text`.
-template <typename Body>
-void ExpectError(ErrorKind kind, const std::string& text, Body body) {
-  try {
-    body();
-    FAIL() << "expected an error containing '" << text << "'";
-  } catch (const Error& error) {
-    EXPECT_EQ(error.kind(), kind) << error.what();
-    EXPECT_NE(std::string(error.what()).find(text), std::string::npos) << error.what();
-  }
-}
+using svbtdf::testing::ExpectError;
 
 void ExpectNoLeak(const FakeV4l2Device& fake) {
   EXPECT_TRUE(fake.open_fds.empty()) << "file descriptor left open";

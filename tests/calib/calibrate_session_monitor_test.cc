@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
@@ -143,15 +144,23 @@ TEST(PhysicalMonitor, AMirroredDisplayIsRefusedNamingTheFiducialCapture) {
   ExpectRefused(out / "session", "fiducials/e0.png", "mirrored");
 }
 
-TEST(PhysicalMonitor, ALabNoteThatContradictsTheFiducialsIsRefused) {
-  ProgressBar::SetEnabled(false);
-  const fs::path out = Simulate("o0", 0.0, false);
-  const fs::path copy = Root() / "contradicted";
+// A copy NAME of the session in OUT whose manifest's rig `edit` changed (the images are the same).
+fs::path CopyWithEditedRig(const fs::path& out, const std::string& name,
+                           const std::function<void(nlohmann::json& rig)>& edit) {
+  const fs::path copy = Root() / name;
   fs::remove_all(copy);
   fs::copy(out / "session", copy, fs::copy_options::recursive);
   nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(copy / "session.json"));
-  manifest["rig"]["monitor"]["orientation_deg"] = 180.0;  // the lab noted the screen upside down
+  edit(manifest["rig"]);
   std::ofstream(copy / "session.json", std::ios::trunc) << manifest.dump(2);
+  return copy;
+}
+
+TEST(PhysicalMonitor, ALabNoteThatContradictsTheFiducialsIsRefused) {
+  ProgressBar::SetEnabled(false);
+  const fs::path copy = CopyWithEditedRig(Simulate("o0", 0.0, false), "contradicted", [](nlohmann::json& rig) {
+    rig["monitor"]["orientation_deg"] = 180.0;  // the lab noted the screen upside down
+  });
   ExpectRefused(copy, "fiducials/e0.png", "rig.monitor.orientation_deg says 180");
 }
 
@@ -159,13 +168,9 @@ TEST(PhysicalMonitor, ALabNoteThatContradictsTheFiducialsIsRefused) {
 // before any image is read, naming the manifest and the key.
 TEST(PhysicalMonitor, AMisspeltEmissionProfileIsRefused) {
   ProgressBar::SetEnabled(false);
-  const fs::path out = Simulate("o0", 0.0, false);
-  const fs::path copy = Root() / "misspelt";
-  fs::remove_all(copy);
-  fs::copy(out / "session", copy, fs::copy_options::recursive);
-  nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(copy / "session.json"));
-  manifest["rig"]["monitor"]["emission"] = "lambertain";
-  std::ofstream(copy / "session.json", std::ios::trunc) << manifest.dump(2);
+  const fs::path copy = CopyWithEditedRig(Simulate("o0", 0.0, false), "misspelt", [](nlohmann::json& rig) {
+    rig["monitor"]["emission"] = "lambertain";
+  });
   ExpectRefused(copy, "session.json", "rig.monitor.emission 'lambertain'");
 }
 
@@ -174,18 +179,14 @@ TEST(PhysicalMonitor, AMisspeltEmissionProfileIsRefused) {
 // wrong dot positions.
 TEST(PhysicalMonitor, DotsFarOffAnyGridOfTheStatedLayoutAreRefused) {
   ProgressBar::SetEnabled(false);
-  const fs::path out = Simulate("o90", 90.0, false);
-  const fs::path copy = Root() / "moved";
-  fs::remove_all(copy);
-  fs::copy(out / "session", copy, fs::copy_options::recursive);
-  nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(copy / "session.json"));
-  int k = 0;
-  for (nlohmann::json& p : manifest["rig"]["dots"]["positions_px"]) {
-    p[0] = p[0].get<int>() + (k % 3 - 1) * 4;
-    p[1] = p[1].get<int>() + ((k / 3) % 3 - 1) * 4;
-    ++k;
-  }
-  std::ofstream(copy / "session.json", std::ios::trunc) << manifest.dump(2);
+  const fs::path copy = CopyWithEditedRig(Simulate("o90", 90.0, false), "moved", [](nlohmann::json& rig) {
+    int k = 0;
+    for (nlohmann::json& p : rig["dots"]["positions_px"]) {
+      p[0] = p[0].get<int>() + (k % 3 - 1) * 4;
+      p[1] = p[1].get<int>() + ((k / 3) % 3 - 1) * 4;
+      ++k;
+    }
+  });
   ExpectRefused(copy, "all_dots/e0.png", "off");
 }
 
