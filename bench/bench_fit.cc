@@ -36,12 +36,12 @@ int main(int argc, char** argv) {
   TexelFitOptions options;
   options.ndf_resolution = 32;
   const TexelFitter fitter(1.5, options);
-  const Vec3 view = Vec3(0.0, -std::sin(0.785), std::cos(0.785)).normalized();
+  const model::Vec3 view = model::Vec3(0.0, -std::sin(0.785), std::cos(0.785)).normalized();
   std::vector<TexelSlice> slices;
   for (int t = 0; t < texels; ++t) {
     // Roughness 0.1 .. 0.4 and alpha 0.2 .. 0.8: the range of the presets.
     const double roughness = 0.1 + 0.3 * t / std::max(1, texels - 1);
-    const Truth truth = MakeTruth(fitter.ndf_grid(), GgxNdf(roughness), 0.2 + 0.6 * t / std::max(1, texels - 1));
+    const Truth truth = MakeTruth(fitter.ndf_grid(), model::GgxNdf(roughness), 0.2 + 0.6 * t / std::max(1, texels - 1));
     slices.push_back(Synthesize(truth, view, DotGrid(view, 40, 0.0), 0.01, 100 + t));
   }
   // Baseline: a fresh workspace per texel.
@@ -52,11 +52,11 @@ int main(int argc, char** argv) {
   }
   const double baseline = Seconds(start) / texels;
   // Shared workspace, one per thread, as `svbtdf fit` runs it.
-  const int threads = ThreadCount(0);
+  const int threads = common::ThreadCount(0);
   start = std::chrono::steady_clock::now();
   std::vector<FitWorkspace> workspaces(threads);
   std::atomic<int> next{0};
-  ParallelFor(threads, threads, 1, [&](int64_t worker, int64_t) {
+  common::ParallelFor(threads, threads, 1, [&](int64_t worker, int64_t) {
     for (int t = next++; t < texels; t = next++) fitter.Fit(slices[t], &workspaces[worker]);
   });
   const double shared_wall = Seconds(start) / texels;

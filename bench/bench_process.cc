@@ -66,7 +66,7 @@ int main(int argc, char** argv) {
     std::printf("ratio measured / baseline:         %.2f\n", measured / baseline);
     std::printf("peak resident memory:              %.0f MB\n", PeakResidentMegabytes());
     fs::remove_all(out);
-  } catch (const svbtdf::Error& e) {
+  } catch (const svbtdf::common::Error& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;
   }

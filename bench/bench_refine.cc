@@ -60,7 +60,7 @@ int main(int argc, char** argv) {
       fitted.provenance.at("statistics").at("seconds_per_fit").get<double>();
 
   const double baseline = SecondsPerTexel(store, fitted, 1);
-  const int threads = ThreadCount(0);
+  const int threads = common::ThreadCount(0);
   const double measured = SecondsPerTexel(store, fitted, threads);
   std::filesystem::remove_all(folder);
 

@@ -26,9 +26,9 @@ struct AcquireArgs {
 
 void RunAcquire(const AcquireArgs& args) {
   if (args.plan.empty() == args.plan_preset.empty()) {
-    ThrowInvalidInput("--plan", "give exactly one of --plan PLAN and --plan-preset NAME");
+    common::ThrowInvalidInput("--plan", "give exactly one of --plan PLAN and --plan-preset NAME");
   }
-  if (args.retries < 0 || args.retries > 100) ThrowInvalidInput("--retries", "must lie in [0, 100]");
+  if (args.retries < 0 || args.retries > 100) common::ThrowInvalidInput("--retries", "must lie in [0, 100]");
   // The plan is checked before any hardware is touched.
   const acquire::CapturePlan plan =
       args.plan.empty() ? acquire::MakePlanPreset(args.plan_preset) : acquire::ReadCapturePlan(args.plan);

@@ -34,71 +34,71 @@ struct BtdfEvalOptions {
   bool json = false;
 };
 
-Vec3 ParseDirection(const std::vector<double>& xyz, const std::string& flag) {
-  const Vec3 v(xyz.at(0), xyz.at(1), xyz.at(2));
+model::Vec3 ParseDirection(const std::vector<double>& xyz, const std::string& flag) {
+  const model::Vec3 v(xyz.at(0), xyz.at(1), xyz.at(2));
   if (!v.allFinite() || v.norm() == 0.0) {
-    ThrowInvalidInput(flag, "must be a non-zero finite vector X Y Z");
+    common::ThrowInvalidInput(flag, "must be a non-zero finite vector X Y Z");
   }
   return v.normalized();
 }
 
-void ValidateDirections(const Vec3& wi, const Vec3& wo) {
+void ValidateDirections(const model::Vec3& wi, const model::Vec3& wo) {
   if (wi.z() * wo.z() > 0) {
-    ThrowInvalidInput("--wi/--wo", "both directions are on the same side of the sample",
+    common::ThrowInvalidInput("--wi/--wo", "both directions are on the same side of the sample",
                       "a BTDF needs --wi toward the light below the sample (z < 0) and --wo toward "
                       "the camera above it (z > 0)");
   }
   if (!(wi.z() < 0)) {
-    ThrowInvalidInput("--wi", "must point toward the light, below the sample (z < 0)",
+    common::ThrowInvalidInput("--wi", "must point toward the light, below the sample (z < 0)",
                       "directions point away from the surface; z is the normal toward the camera");
   }
   if (!(wo.z() > 0)) {
-    ThrowInvalidInput("--wo", "must point toward the camera, above the sample (z > 0)",
+    common::ThrowInvalidInput("--wo", "must point toward the camera, above the sample (z > 0)",
                       "directions point away from the surface; z is the normal toward the camera");
   }
 }
 
 void RequireRoughness(const char* flag, double value) {
   if (!(value > 0) || !std::isfinite(value)) {
-    ThrowInvalidInput(flag, "must be a finite number > 0 (the GGX/Beckmann alpha), got " + std::to_string(value));
+    common::ThrowInvalidInput(flag, "must be a finite number > 0 (the GGX/Beckmann alpha), got " + std::to_string(value));
   }
 }
 
-SmithShadowing MakeShadowing(const BtdfEvalOptions& options) {
+model::SmithShadowing MakeShadowing(const BtdfEvalOptions& options) {
   if (options.shadowing == "none") {
     if (options.shadowing_roughness >= 0) {
-      ThrowInvalidInput("--shadowing-roughness", "given, but --shadowing is none",
+      common::ThrowInvalidInput("--shadowing-roughness", "given, but --shadowing is none",
                         "add --shadowing smith");
     }
-    return SmithShadowing::None();
+    return model::SmithShadowing::None();
   }
   if (options.shadowing_roughness < 0) {
-    ThrowInvalidInput("--shadowing-roughness", "is required with --shadowing smith",
+    common::ThrowInvalidInput("--shadowing-roughness", "is required with --shadowing smith",
                       "the paper starts at 0.2");
   }
-  return SmithShadowing::Ggx(options.shadowing_roughness);
+  return model::SmithShadowing::Ggx(options.shadowing_roughness);
 }
 
-nlohmann::json ToJson(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
+nlohmann::json ToJson(const model::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
 void RunBtdfEval(const BtdfEvalOptions& options) {
-  const Vec3 wi = ParseDirection(options.wi, "--wi");
-  const Vec3 wo = ParseDirection(options.wo, "--wo");
+  const model::Vec3 wi = ParseDirection(options.wi, "--wi");
+  const model::Vec3 wo = ParseDirection(options.wo, "--wo");
   ValidateDirections(wi, wo);
   if (!(options.eta > 1.0) || !std::isfinite(options.eta)) {
-    ThrowInvalidInput("--eta", "must be > 1 (eta = n_slab / n_air), got " + std::to_string(options.eta));
+    common::ThrowInvalidInput("--eta", "must be > 1 (eta = n_slab / n_air), got " + std::to_string(options.eta));
   }
   if (!(options.alpha >= 0.0 && options.alpha <= 1.0)) {
-    ThrowInvalidInput("--alpha", "the blend weight must lie in [0, 1], got " + std::to_string(options.alpha));
+    common::ThrowInvalidInput("--alpha", "the blend weight must lie in [0, 1], got " + std::to_string(options.alpha));
   }
   RequireRoughness("--roughness", options.roughness);
   if (options.anisotropic) RequireRoughness("--roughness-y", options.roughness_y);
-  AnalyticNdfParams ndf_params;
+  model::AnalyticNdfParams ndf_params;
   ndf_params.alpha_x = options.roughness;
   ndf_params.alpha_y = options.anisotropic ? options.roughness_y : options.roughness;
-  const std::unique_ptr<Ndf> ndf = MakeAnalyticNdf(options.ndf, ndf_params);
+  const std::unique_ptr<model::Ndf> ndf = model::MakeAnalyticNdf(options.ndf, ndf_params);
 
-  DualMicrofacetParams params;
+  model::DualMicrofacetParams params;
   params.eta = options.eta;
   params.alpha = options.alpha;
   params.shadowing = MakeShadowing(options);
@@ -106,13 +106,13 @@ void RunBtdfEval(const BtdfEvalOptions& options) {
     params.k_s[c] = options.k_s[c];
     params.rho_d[c] = options.rho_d[c];
   }
-  const DualMicrofacetModel model(params.eta, params.shadowing);
-  const VirtualConfiguration entry = model.RoughEntry(wi, wo);
-  const VirtualConfiguration exit = model.RoughExit(wi, wo);
+  const model::DualMicrofacetModel btdf(params.eta, params.shadowing);
+  const model::VirtualConfiguration entry = btdf.RoughEntry(wi, wo);
+  const model::VirtualConfiguration exit = btdf.RoughExit(wi, wo);
   const double rho_T = entry.valid ? entry.factor * ndf->D(entry.h) : 0.0;
   const double rho_B = exit.valid ? exit.factor * ndf->D(exit.h) : 0.0;
-  const double rho = LogBlend(rho_T, rho_B, params.alpha);
-  const Rgb rgb = EvaluateMaterial(*ndf, params, wi, wo);
+  const double rho = model::LogBlend(rho_T, rho_B, params.alpha);
+  const model::Rgb rgb = model::EvaluateMaterial(*ndf, params, wi, wo);
 
   if (!options.json) {
     std::printf("rho_T = %.9g\nrho_B = %.9g\nrho   = %.9g   (alpha = %g)\nR_rgb = %.9g %.9g %.9g\n",

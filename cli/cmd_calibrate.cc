@@ -42,7 +42,7 @@ std::vector<std::string> ExpandGlob(const std::string& pattern) {
   }
   ::globfree(&matches);
   if (files.empty()) {
-    ThrowInvalidInput("--images", "no file matches '" + pattern + "'",
+    common::ThrowInvalidInput("--images", "no file matches '" + pattern + "'",
                       "quote the pattern so the shell does not expand it, e.g. --images 'boards/*.png'");
   }
   return files;
@@ -87,7 +87,7 @@ void RunCalibrateSession(const CalibrateOptions& options) {
   if (options.full_lens_model) calibrate_options.camera.max_principal_point_std_fraction = 0;
   const calib::SessionCalibration c = calib::CalibrateSession(session, calibrate_options);
   PrintSummary(c.camera);
-  const Vec3 centre = c.sample_plane.CameraCentre();
+  const model::Vec3 centre = c.sample_plane.CameraCentre();
   const double angle = std::acos(centre.normalized().z()) * 180.0 / 3.14159265358979;
   std::printf("sample plane: reprojection RMS %.3f px; camera %.1f mm from the sample centre, %.1f degrees from its normal\n",
               c.sample_plane.rms_px, 1000.0 * centre.norm(), angle);
@@ -128,7 +128,7 @@ void AddCalibrateCommand(CLI::App& app) {
   calibrate->callback([options] {
     if (!options->session.empty()) return RunCalibrateSession(*options);
     if (options->images_glob.empty()) {
-      ThrowInvalidInput("calibrate", "needs a SESSION folder or --images 'GLOB'", "see 'svbtdf calibrate --help'");
+      common::ThrowInvalidInput("calibrate", "needs a SESSION folder or --images 'GLOB'", "see 'svbtdf calibrate --help'");
     }
     RunCalibrateImages(*options);
   });

@@ -37,7 +37,7 @@ void PrintSummary(const report::CompareMetrics& m) {
 
 void RunCompare(CompareCommandOptions options) {
   if (!options.json.empty() && fs::exists(options.json)) {
-    ThrowInvalidInput(options.json, "already exists", "compare never overwrites; choose another --json file");
+    common::ThrowInvalidInput(options.json, "already exists", "compare never overwrites; choose another --json file");
   }
   const fit::Material material = fit::ReadMaterial(options.material);
   const report::Truth truth = report::ReadTruth(options.truth);
@@ -45,7 +45,7 @@ void RunCompare(CompareCommandOptions options) {
   const report::CompareMetrics metrics = report::Compare(material, truth, options.compare);
   PrintSummary(metrics);
   if (!options.json.empty()) {
-    WriteTextAtomically(options.json, report::ToJson(metrics).dump(2) + "\n", /*overwrite=*/false);
+    common::WriteTextAtomically(options.json, report::ToJson(metrics).dump(2) + "\n", /*overwrite=*/false);
   }
 }
 

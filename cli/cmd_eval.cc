@@ -22,11 +22,11 @@ struct EvalOptions {
   bool json = false;
 };
 
-Vec3 Direction(const std::vector<double>& xyz, const char* flag, bool toward_light) {
-  const Vec3 v(xyz.at(0), xyz.at(1), xyz.at(2));
-  if (!v.allFinite() || v.norm() == 0.0) ThrowInvalidInput(flag, "must be a non-zero finite vector X Y Z");
+model::Vec3 Direction(const std::vector<double>& xyz, const char* flag, bool toward_light) {
+  const model::Vec3 v(xyz.at(0), xyz.at(1), xyz.at(2));
+  if (!v.allFinite() || v.norm() == 0.0) common::ThrowInvalidInput(flag, "must be a non-zero finite vector X Y Z");
   if (toward_light ? !(v.z() < 0) : !(v.z() > 0)) {
-    ThrowInvalidInput(flag, toward_light ? "must point toward the light, below the sample (z < 0)"
+    common::ThrowInvalidInput(flag, toward_light ? "must point toward the light, below the sample (z < 0)"
                                          : "must point toward the camera, above the sample (z > 0)");
   }
   return v.normalized();
@@ -34,24 +34,24 @@ Vec3 Direction(const std::vector<double>& xyz, const char* flag, bool toward_lig
 
 // The terms behind R, for the reader: rho_T, rho_B and alpha of a dual-microfacet texel, or the
 // lobe of a baseline texel. R itself always comes from TexelBtdf::Evaluate.
-nlohmann::json ModelTerms(const fit::TexelBtdf& texel, const Vec3& wi, const Vec3& wo) {
-  const DualMicrofacetParams& p = texel.params();
+nlohmann::json ModelTerms(const fit::TexelBtdf& texel, const model::Vec3& wi, const model::Vec3& wo) {
+  const model::DualMicrofacetParams& p = texel.params();
   if (const auto& lobe = texel.baseline()) {
     return {{"baseline_alpha_x", lobe->alpha_x},
             {"baseline_alpha_y", lobe->alpha_y},
             {"baseline_azimuth", lobe->azimuth},
             {"rho", fit::BaselineShape(*lobe, p.eta, wi, wo)}};
   }
-  const DualMicrofacetModel model(p.eta, p.shadowing);
-  const double rho_T = model.RhoT(texel.ndf(), wi, wo), rho_B = model.RhoB(texel.ndf(), wi, wo);
+  const model::DualMicrofacetModel btdf(p.eta, p.shadowing);
+  const double rho_T = btdf.RhoT(texel.ndf(), wi, wo), rho_B = btdf.RhoB(texel.ndf(), wi, wo);
   return {{"rho_T", rho_T},
           {"rho_B", rho_B},
-          {"rho", LogBlend(rho_T, rho_B, p.alpha)},
+          {"rho", model::LogBlend(rho_T, rho_B, p.alpha)},
           {"alpha", p.alpha},
           {"shadowing_roughness", p.shadowing.roughness()}};
 }
 
-void PrintSummary(const Rgb& value, const nlohmann::json& terms) {
+void PrintSummary(const model::Rgb& value, const nlohmann::json& terms) {
   std::printf("R = %.9g %.9g %.9g   ", value[0], value[1], value[2]);
   if (terms.contains("baseline_alpha_x")) {
     std::printf("(walter-ggx: alpha_x %.4f, alpha_y %.4f, azimuth %.3f)\n", terms["baseline_alpha_x"].get<double>(),
@@ -63,15 +63,15 @@ void PrintSummary(const Rgb& value, const nlohmann::json& terms) {
 }
 
 void RunEval(const EvalOptions& options) {
-  const Vec3 wi = Direction(options.wi, "--wi", true), wo = Direction(options.wo, "--wo", false);
+  const model::Vec3 wi = Direction(options.wi, "--wi", true), wo = Direction(options.wo, "--wo", false);
   const fit::Material material = fit::ReadMaterial(options.material);
   const fit::MaterialEvaluator evaluator(material);
   const int x = options.texel.at(0), y = options.texel.at(1);
   const fit::TexelBtdf texel = evaluator.Texel(x, y);
-  const Rgb value = texel.Evaluate(wi, wo);
+  const model::Rgb value = texel.Evaluate(wi, wo);
   const nlohmann::json terms = ModelTerms(texel, wi, wo);
   if (!options.json) return PrintSummary(value, terms);
-  const DualMicrofacetParams& p = texel.params();
+  const model::DualMicrofacetParams& p = texel.params();
   nlohmann::json out = {
       {"texel", {x, y}},
       {"btdf", fit::MaterialModelName(texel.model())},

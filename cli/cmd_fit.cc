@@ -32,7 +32,7 @@ double ParseRepresentatives(const std::string& text) {
     if (used == text.size() && fraction > 0 && fraction <= 1) return fraction;
   } catch (const std::exception&) {
   }
-  ThrowInvalidInput("--representatives", "must be a fraction in (0, 1] or 'all', got '" + text + "'");
+  common::ThrowInvalidInput("--representatives", "must be a fraction in (0, 1] or 'all', got '" + text + "'");
 }
 
 void AddFitOptions(CLI::App* command, fit::FitMaterialOptions* options, std::string* representatives) {

@@ -27,7 +27,7 @@ void ParseTexels(const std::string& text, process::ProcessOptions* options) {
   int w = 0, h = 0;
   char x = 0, extra = 0;
   if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || x != 'x' || w <= 0 || h <= 0) {
-    ThrowInvalidInput("--texels", "must be WIDTHxHEIGHT with positive numbers, got '" + text + "'");
+    common::ThrowInvalidInput("--texels", "must be WIDTHxHEIGHT with positive numbers, got '" + text + "'");
   }
   options->texels_x = w;
   options->texels_y = h;
@@ -38,7 +38,7 @@ void RunProcess(ProcessCommandOptions options) {
   const session::Session session = session::Session::Open(options.session);
   const std::filesystem::path calibration_path = std::filesystem::path(options.session) / "calibration.json";
   if (!std::filesystem::exists(calibration_path)) {
-    ThrowInvalidInput(options.session, "has no calibration.json", "run 'svbtdf calibrate " + options.session + "' first");
+    common::ThrowInvalidInput(options.session, "has no calibration.json", "run 'svbtdf calibrate " + options.session + "' first");
   }
   const calib::SessionCalibration calibration = calib::ReadSessionCalibration(calibration_path);
   const process::ProcessReport report = process::ProcessSession(session, calibration, options.out, options.process);

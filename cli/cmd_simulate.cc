@@ -11,10 +11,10 @@
 namespace svbtdf::cli {
 
 void AddSimulateCommand(CLI::App& app) {
-  auto options = std::make_shared<SimulationOptions>();
+  auto options = std::make_shared<simulate::SimulationOptions>();
   auto out = std::make_shared<std::string>();
   std::string presets;
-  for (const std::string& name : PresetNames()) presets += (presets.empty() ? "" : ", ") + name;
+  for (const std::string& name : simulate::PresetNames()) presets += (presets.empty() ? "" : ", ") + name;
   CLI::App* simulate = app.add_subcommand(
       "simulate", "Render a synthetic capture session (OUT/session) of a known material (OUT/truth)");
   simulate->add_option("--preset", options->preset, "rig and material preset: " + presets)->required();

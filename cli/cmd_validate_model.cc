@@ -47,32 +47,32 @@ void PrepareOutputs(const ValidateModelOptions& options) {
   std::error_code error;
   if (!options.json.empty()) {
     if (fs::exists(options.json)) {
-      ThrowInvalidInput(options.json, "already exists", "validate-model never overwrites; choose another --json file");
+      common::ThrowInvalidInput(options.json, "already exists", "validate-model never overwrites; choose another --json file");
     }
     const fs::path parent = fs::path(options.json).parent_path();
     if (!parent.empty()) fs::create_directories(parent, error);
-    if (error) ThrowIoError(parent.string(), "cannot create: " + error.message());
+    if (error) common::ThrowIoError(parent.string(), "cannot create: " + error.message());
   }
   if (!options.plots.empty()) {
     if (fs::exists(options.plots) && (!fs::is_directory(options.plots) || !fs::is_empty(options.plots))) {
-      ThrowInvalidInput(options.plots, "exists and is not an empty folder",
+      common::ThrowInvalidInput(options.plots, "exists and is not an empty folder",
                         "validate-model never overwrites; choose a new --plots folder");
     }
     fs::create_directories(options.plots, error);
-    if (error) ThrowIoError(options.plots, "cannot create: " + error.message());
+    if (error) common::ThrowIoError(options.plots, "cannot create: " + error.message());
   }
 }
 
 void CheckOptions(const ValidateModelOptions& options) {
   if (!(options.roughness > 0) || !std::isfinite(options.roughness)) {
-    ThrowInvalidInput("--roughness", "must be finite and > 0");
+    common::ThrowInvalidInput("--roughness", "must be finite and > 0");
   }
-  if (options.samples < 1000) ThrowInvalidInput("--samples", "must be at least 1000 paths per case");
+  if (options.samples < 1000) common::ThrowInvalidInput("--samples", "must be at least 1000 paths per case");
   if (options.resolution < 4 || options.resolution % 2 != 0) {
-    ThrowInvalidInput("--resolution", "must be an even number >= 4", "the paper uses 32");
+    common::ThrowInvalidInput("--resolution", "must be an even number >= 4", "the paper uses 32");
   }
-  if (options.threads < 0) ThrowInvalidInput("--threads", "must be >= 0 (0: all cores)");
-  if (options.max_bounces < 2) ThrowInvalidInput("--max-bounces", "must be >= 2 to cross the slab");
+  if (options.threads < 0) common::ThrowInvalidInput("--threads", "must be >= 0 (0: all cores)");
+  if (options.max_bounces < 2) common::ThrowInvalidInput("--max-bounces", "must be >= 2 to cross the slab");
 }
 
 // The settings recorded in the JSON and on the page.
@@ -89,12 +89,12 @@ report::ValidationSettings Settings(const ValidateModelOptions& options) {
 void RunValidateModel(const ValidateModelOptions& options) {
   CheckOptions(options);
   PrepareOutputs(options);
-  ValidationOptions validation;
+  simulate::ValidationOptions validation;
   validation.make_ndf = [&](double roughness) {
-    AnalyticNdfParams params;
+    model::AnalyticNdfParams params;
     params.alpha_x = roughness;
     params.alpha_y = roughness;
-    return MakeAnalyticNdf(options.ndf, params);
+    return model::MakeAnalyticNdf(options.ndf, params);
   };
   validation.make_ndf(options.roughness);  // fails early on an unknown --ndf
   validation.roughness = options.roughness;
@@ -105,17 +105,17 @@ void RunValidateModel(const ValidateModelOptions& options) {
   validation.slice.threads = options.threads;
   validation.slice.max_interactions = options.max_bounces;
 
-  const Hemicube grid(options.resolution);
-  ProgressBar progress("validate-model",
+  const model::Hemicube grid(options.resolution);
+  common::ProgressBar progress("validate-model",
                        static_cast<int64_t>(validation.configurations.size() * options.incidences.size()),
                        "cases");
-  const std::vector<ValidationCase> cases =
-      ValidateModel(validation, grid, [&](const ValidationCase&) { progress.Advance(); });
+  const std::vector<simulate::ValidationCase> cases =
+      simulate::ValidateModel(validation, grid, [&](const simulate::ValidationCase&) { progress.Advance(); });
   progress.Finish();
   std::fputs(report::ValidationTable(cases).c_str(), stdout);
 
   if (!options.json.empty()) {
-    WriteTextAtomically(options.json, report::ValidationJson(cases, Settings(options)).dump(2) + "\n",
+    common::WriteTextAtomically(options.json, report::ValidationJson(cases, Settings(options)).dump(2) + "\n",
                         /*overwrite=*/false);
     spdlog::info("wrote {}", options.json);
   }

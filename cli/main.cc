@@ -47,11 +47,11 @@ int main(int argc, char** argv) {
     spdlog::set_pattern("%^[%l]%$ %v");
     spdlog::set_level(quiet ? spdlog::level::warn
                             : (verbose ? spdlog::level::debug : spdlog::level::info));
-    svbtdf::ProgressBar::SetEnabled(!quiet);
+    svbtdf::common::ProgressBar::SetEnabled(!quiet);
   });
 
   svbtdf::cli::AddAllCommands(app);
-  svbtdf::InstallInterruptHandler();
+  svbtdf::common::InstallInterruptHandler();
 
   try {
     app.parse(argc, argv);
@@ -63,9 +63,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "svbtdf: error: %s (see 'svbtdf %s--help')\n", e.what(),
                  SelectedCommandPath(app).c_str());
     return kUsageExitCode;
-  } catch (const svbtdf::Error& e) {
+  } catch (const svbtdf::common::Error& e) {
     std::fprintf(stderr, "svbtdf: error: %s\n", e.what());
-    return svbtdf::ExitCodeFor(e.kind());
+    return svbtdf::common::ExitCodeFor(e.kind());
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "svbtdf: error: out of memory (try a smaller --threads or tile size)\n");
     return 1;

@@ -22,6 +22,9 @@ What is checked (each finding is printed as ``path:line: message``, paths relati
 * every such include anywhere in a consumer folder: <m> must be a library of the table;
 * a file under ``<folder>/include/`` must live in ``<folder>/include/svbtdf/<folder>/``
   (a header filed in another folder's namespace is an error);
+* every ``namespace svbtdf...`` a library folder's sources open is ``svbtdf::<folder>`` (or nested
+  in it), or ``svbtdf::<m>`` of a folder <m> it may include (to forward-declare one of its types);
+  the bare ``svbtdf`` namespace belongs to no folder and is refused;
 * each library folder's CMakeLists.txt: the ``svbtdf::<m>`` entries of ``PUBLIC_DEPS`` and
   ``PRIVATE_DEPS`` in ``svbtdf_add_library(...)`` (and of ``target_link_libraries(svbtdf_<folder>
   ...)``) respect the same table, and the library's NAME is the folder's name;
@@ -49,6 +52,7 @@ import tempfile
 ARCHITECTURE_DOC = os.path.join("docs", "architecture.md")
 SOURCE_SUFFIXES = (".h", ".cc")
 INCLUDE_RE = re.compile(r'^\s*#\s*include\s*[<"](svbtdf/([A-Za-z0-9_]+)/[^">]*)[">]')
+NAMESPACE_RE = re.compile(r'^\s*namespace\s+svbtdf((?:::[A-Za-z0-9_]+)*)\s*\{')
 FENCE_RE = re.compile(r"^\s*```\s*([A-Za-z0-9_-]*)\s*$")
 MERMAID_EDGE_RE = re.compile(
     r"([A-Za-z0-9_]+)(?:\s*[\[\(\{][^\]\)\}]*[\]\)\}])?\s*-->\s*(?:\|[^|]*\|\s*)?([A-Za-z0-9_]+)")
@@ -227,6 +231,24 @@ def check_includes(root, path, folder, deps, libraries, findings, stats):
                                         f"(allowed: {allowed_text(folder, deps)})"))
 
 
+def check_namespaces(root, path, folder, deps, findings):
+    """A library folder declares its names in svbtdf::<folder>, reopening another room's namespace
+    only to forward-declare a type of a folder it may include."""
+    rel = os.path.relpath(path, root)
+    with open(path, encoding="utf-8", errors="replace") as f:
+        for number, line in enumerate(f, 1):
+            m = NAMESPACE_RE.match(line)
+            if not m:
+                continue
+            room = m.group(1)[2:].split("::")[0] if m.group(1) else ""
+            if not room:
+                findings.append(Finding(rel, number, f"namespace svbtdf is no room's; {folder}/ declares its "
+                                        f"names in svbtdf::{folder}"))
+            elif room != folder and room not in deps:
+                findings.append(Finding(rel, number, f"{folder}/ opens namespace svbtdf::{room}, a room it may "
+                                        f"not include (allowed: {allowed_text(folder, deps)})"))
+
+
 def check_header_places(root, folder, findings):
     include_dir = os.path.join(root, folder, "include")
     if not os.path.isdir(include_dir):
@@ -342,6 +364,7 @@ def check(root):
         for sub in ("include", "src"):
             for path in source_files(os.path.join(top, sub)):
                 check_includes(root, path, folder, deps, libraries, findings, stats)
+                check_namespaces(root, path, folder, deps, findings)
         check_cmake(root, folder, deps, findings)
     return findings, stats
 
@@ -404,7 +427,8 @@ def fake_tree(root):
     write(root, "common/src/error.cc", '#include "svbtdf/common/error.h"\n')
     write(root, "common/CMakeLists.txt", FAKE_CMAKE.format(name="common", public="Eigen3::Eigen", private=""))
     write(root, "model/include/svbtdf/model/ggx.h", '#pragma once\n#include "svbtdf/common/error.h"\n')
-    write(root, "model/src/ggx.cc", '#include "svbtdf/model/ggx.h"\n\n#include <vector>\n')
+    write(root, "model/src/ggx.cc", '#include "svbtdf/model/ggx.h"\n\n#include <vector>\n\n'
+          'namespace svbtdf::common {\nclass Error;\n}\n\nnamespace svbtdf::model {\nnamespace {\n}\n}\n')
     write(root, "model/CMakeLists.txt", FAKE_CMAKE.format(name="model", public="svbtdf::common", private=""))
     write(root, "fit/include/svbtdf/fit/fit.h", '#pragma once\n#include "svbtdf/model/ggx.h"\n')
     write(root, "fit/src/fit.cc", '#include "svbtdf/fit/fit.h"\n#include <svbtdf/common/error.h>\n')
@@ -453,7 +477,8 @@ def self_test():
         write(other, "model/CMakeLists.txt",
               FAKE_CMAKE.format(name="model", public="svbtdf::common", private="svbtdf::fit ZLIB::ZLIB"))
         write(other, "report/include/svbtdf/report/compare.h", "#pragma once\n")
-        write(other, "fit/src/fit.cc", '#include "svbtdf/fit/fit.h"\n#include "svbtdf/session/session.h"\n')
+        write(other, "fit/src/fit.cc", '#include "svbtdf/fit/fit.h"\n#include "svbtdf/session/session.h"\n'
+              'namespace svbtdf {\n}\nnamespace svbtdf::session::detail {\n}\nnamespace svbtdf::fit::store {\n}\n')
         write(other, "cli/main.cc", '#include "svbtdf/fit/fit.h"\n#include "svbtdf/processs/x.h"\n')
         write(other, ARCHITECTURE_DOC, FAKE_DOC.replace("  fit --> model\n", "  fit --> session\n"))
         findings, _ = check(other)
@@ -465,6 +490,10 @@ def self_test():
             "(included as svbtdf/processs/x.h)",
             os.path.join("fit", "src", "fit.cc") + ":2: fit may not include svbtdf/session/session.h "
             "(allowed: fit itself, common, model)",
+            os.path.join("fit", "src", "fit.cc") + ":3: namespace svbtdf is no room's; fit/ declares its names "
+            "in svbtdf::fit",
+            os.path.join("fit", "src", "fit.cc") + ":5: fit/ opens namespace svbtdf::session, a room it may not "
+            "include (allowed: fit itself, common, model)",
             os.path.join("model", "CMakeLists.txt") + ":5: model may not link svbtdf::fit "
             "(allowed: model itself, common)",
             os.path.join("model", "include", "svbtdf", "common", "statistics.h") +

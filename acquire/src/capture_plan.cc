@@ -71,7 +71,7 @@ class Fields {
     return v;
   }
   [[noreturn]] void Fail(const std::string& field, const std::string& problem) const {
-    ThrowFormatError(source_, "field '" + field + "' " + problem, "see docs/capture.md for the plan format");
+    common::ThrowFormatError(source_, "field '" + field + "' " + problem, "see docs/capture.md for the plan format");
   }
 
  private:
@@ -172,7 +172,7 @@ CapturePlan ParsePlanJson(const json& root, const std::string& source) {
   if (f.Text("format", "") != kFormatName) f.Fail("format", std::string("must be \"") + kFormatName + "\"");
   const int version = f.Integer("version", 0, 1000000);
   if (version != kCapturePlanVersion) {
-    ThrowFormatError(source, "is a version " + std::to_string(version) + " capture plan; this build reads version " +
+    common::ThrowFormatError(source, "is a version " + std::to_string(version) + " capture plan; this build reads version " +
                                  std::to_string(kCapturePlanVersion));
   }
   CapturePlan plan;
@@ -219,17 +219,17 @@ CapturePlan ParseCapturePlan(const std::string& text, const std::string& source)
   try {
     root = json::parse(text);
   } catch (const json::exception& e) {
-    ThrowFormatError(source, std::string("is not valid JSON: ") + e.what(), "see docs/capture.md for the plan format");
+    common::ThrowFormatError(source, std::string("is not valid JSON: ") + e.what(), "see docs/capture.md for the plan format");
   }
   try {
     return ParsePlanJson(root, source);
   } catch (const json::exception& e) {  // a value of an unexpected type deep inside
-    ThrowFormatError(source, std::string("is malformed: ") + e.what(), "see docs/capture.md for the plan format");
+    common::ThrowFormatError(source, std::string("is malformed: ") + e.what(), "see docs/capture.md for the plan format");
   }
 }
 
 CapturePlan ReadCapturePlan(const std::filesystem::path& path) {
-  return ParseCapturePlan(ReadTextFile(path), path.string());
+  return ParseCapturePlan(common::ReadTextFile(path), path.string());
 }
 
 json CapturePlanToJson(const CapturePlan& plan) {
@@ -268,21 +268,21 @@ std::vector<std::string> PlanPresetNames() { return {"tiny", "demo"}; }
 CapturePlan MakePlanPreset(const std::string& name) {
   const std::vector<std::string> names = PlanPresetNames();
   if (std::find(names.begin(), names.end(), name) == names.end()) {
-    ThrowInvalidInput("--plan-preset", "unknown preset '" + name + "'", "use tiny or demo, or write a plan file (--plan)");
+    common::ThrowInvalidInput("--plan-preset", "unknown preset '" + name + "'", "use tiny or demo, or write a plan file (--plan)");
   }
   // The simulator's default seed: its material decides the exposures PlanCapture picks.
-  const std::unique_ptr<SimulatedSetup> setup = MakeSimulatedSetup(MakePreset(name), 1, 0);
+  const std::unique_ptr<simulate::SimulatedSetup> setup = simulate::MakeSimulatedSetup(simulate::MakePreset(name), 1, 0);
   return PlanFromSimulation(*setup);
 }
 
-CapturePlan PlanFromSimulation(const SimulatedSetup& setup) {
-  const RigConfig& config = setup.rig->config();
-  const CaptureTruth& capture = setup.plan;
+CapturePlan PlanFromSimulation(const simulate::SimulatedSetup& setup) {
+  const simulate::RigConfig& config = setup.rig->config();
+  const simulate::CaptureTruth& capture = setup.plan;
   CapturePlan plan;
   plan.name = setup.preset.name;
   plan.dot_cols = config.dots.cols;
   plan.dot_rows = config.dots.rows;
-  for (const Dot& dot : setup.rig->dots()) plan.dots_px.emplace_back(dot.monitor_x, dot.monitor_y);
+  for (const simulate::Dot& dot : setup.rig->dots()) plan.dots_px.emplace_back(dot.monitor_x, dot.monitor_y);
   plan.dot_radius_px = config.dots.radius_px;
   plan.dot_intensity = config.monitor.Luminance(config.dots.level);
   plan.exposures_s = capture.dot_exposures_s;
@@ -309,7 +309,7 @@ CapturePlan PlanFromSimulation(const SimulatedSetup& setup) {
   plan.rig.texels_y = config.sample.texels_y;
   plan.rig.eta = setup.preset.eta;
   plan.rig.camera_response = config.sensor.response;
-  plan.rig.monitor_orientation_deg = NominalOrientationDeg(config.monitor);
+  plan.rig.monitor_orientation_deg = simulate::NominalOrientationDeg(config.monitor);
   return plan;
 }
 
@@ -367,7 +367,7 @@ PlannedCapture Planned(const CapturePlan& plan, const session::CaptureKey& key) 
     case CaptureKind::kMonitorPoseView:
       break;
   }
-  ThrowInvalidInput(plan.name, "plans a capture the acquisition cannot take: " + key.Format());
+  common::ThrowInvalidInput(plan.name, "plans a capture the acquisition cannot take: " + key.Format());
 }
 
 }  // namespace

@@ -41,7 +41,7 @@ void RequireDotsOnDisplay(const CapturePlan& plan, const DisplayInfo& display) {
     const auto [x, y] = plan.dots_px[q];
     const double r = plan.dot_radius_px;
     if (x - r < -0.5 || y - r < -0.5 || x + r > display.width_px - 0.5 || y + r > display.height_px - 0.5) {
-      ThrowInvalidInput("plan", "dot " + std::to_string(q) + " at (" + std::to_string(x) + ", " + std::to_string(y) +
+      common::ThrowInvalidInput("plan", "dot " + std::to_string(q) + " at (" + std::to_string(x) + ", " + std::to_string(y) +
                                     ") px does not fit display " + display.id + " (" + std::to_string(display.width_px) +
                                     " x " + std::to_string(display.height_px) + " px)",
                         "move the dot grid's origin or shrink its pitch");
@@ -56,16 +56,16 @@ std::optional<session::Session> OpenExisting(const fs::path& folder, const Captu
   session::Session session = session::Session::Open(folder);
   const nlohmann::json& acquired_plan = session.rig().acquisition_plan;
   if (acquired_plan.is_null()) {
-    ThrowInvalidInput(folder.string(), "holds a session that `svbtdf acquire` did not write; it will not be changed",
+    common::ThrowInvalidInput(folder.string(), "holds a session that `svbtdf acquire` did not write; it will not be changed",
                       "choose a new --out folder");
   }
   if (acquired_plan != CapturePlanToJson(plan)) {
-    ThrowInvalidInput(folder.string(), "holds a session of a different capture plan; it will not be changed",
+    common::ThrowInvalidInput(folder.string(), "holds a session of a different capture plan; it will not be changed",
                       "resume with the plan it was started with (its session.json records it), or choose a new --out");
   }
   const session::SessionVerification report = session.Verify(/*check_crc=*/true);
   if (!report.corrupt.empty() || !report.duplicated.empty()) {
-    ThrowFormatError(folder.string(), "cannot be resumed: " + report.Summary(),
+    common::ThrowFormatError(folder.string(), "cannot be resumed: " + report.Summary(),
                      "run `svbtdf session verify " + folder.string() + "` for the list");
   }
   return session;
@@ -74,20 +74,20 @@ std::optional<session::Session> OpenExisting(const fs::path& folder, const Captu
 void RequireFreeSpace(const fs::path& folder, uint64_t needed, int64_t images, const AcquireOptions& options) {
   const uint64_t available = options.free_space ? options.free_space(folder) : FreeSpaceAt(folder);
   if (available < needed) {
-    ThrowIoError(folder.string(), "has " + Megabytes(available) + " free but the " + std::to_string(images) +
+    common::ThrowIoError(folder.string(), "has " + Megabytes(available) + " free but the " + std::to_string(images) +
                                       " images still to capture need about " + Megabytes(needed),
                  "free some space or choose an --out folder on another disk");
   }
 }
 
-CameraImage ToImage(const Frame& frame, const std::string& camera_id) {
+common::CameraImage ToImage(const Frame& frame, const std::string& camera_id) {
   const size_t expected = static_cast<size_t>(frame.width) * frame.height * frame.channels;
   if (frame.width <= 0 || frame.height <= 0 || (frame.channels != 1 && frame.channels != 3) ||
       frame.pixels.size() != expected) {
-    throw Error(ErrorKind::kHardware, camera_id, "delivered a malformed frame (" + std::to_string(frame.width) + "x" +
+    throw common::Error(common::ErrorKind::kHardware, camera_id, "delivered a malformed frame (" + std::to_string(frame.width) + "x" +
                                                      std::to_string(frame.height) + "x" + std::to_string(frame.channels) + ")");
   }
-  CameraImage image;
+  common::CameraImage image;
   image.width = frame.width;
   image.height = frame.height;
   image.channels = frame.channels;
@@ -106,9 +106,9 @@ class CaptureRun {
         result_(result), info_(camera.Info()), camera_id_(info_.id), windowed_(!info_.window.whole_sensor()) {}
 
   void Run(const std::vector<PlannedCapture>& captures) {
-    std::unique_ptr<ProgressBar> progress;
+    std::unique_ptr<common::ProgressBar> progress;
     if (options_.progress) {
-      progress = std::make_unique<ProgressBar>(options_.progress_label, static_cast<int64_t>(captures.size()), "images");
+      progress = std::make_unique<common::ProgressBar>(options_.progress_label, static_cast<int64_t>(captures.size()), "images");
       progress->SkipAlreadyDone(result_.already);
     }
     for (const PlannedCapture& capture : captures) {
@@ -128,8 +128,8 @@ class CaptureRun {
 
  private:
   void StopIfInterrupted() const {
-    if (!InterruptRequested()) return;
-    throw Error(ErrorKind::kInterrupted, session_.folder().string(),
+    if (!common::InterruptRequested()) return;
+    throw common::Error(common::ErrorKind::kInterrupted, session_.folder().string(),
                 "acquisition interrupted with " + std::to_string(session_.entries().size()) + " of " +
                     std::to_string(session_.planned_keys().size()) + " images captured",
                 "the session is resumable: run the same command again");
@@ -150,14 +150,14 @@ class CaptureRun {
     for (size_t n = 0; !expected && n < session_.entries().size(); ++n) {
       const std::string& key = session_.entries()[n].key;
       if (windowed_ && (key.rfind("board/", 0) == 0) != whole_sensor) continue;
-      const CameraImage first = session_.ReadImage(key);
+      const common::CameraImage first = session_.ReadImage(key);
       expected = {first.width, first.height, first.channels};
     }
     if (expected && *expected != size) {
       const auto text = [](const std::array<int, 3>& s) {
         return std::to_string(s[0]) + "x" + std::to_string(s[1]) + "x" + std::to_string(s[2]);
       };
-      throw Error(ErrorKind::kInvalidInput, camera_id_,
+      throw common::Error(common::ErrorKind::kInvalidInput, camera_id_,
                   "delivers " + text(size) + " frames but " + source + " " + text(*expected),
                   "resume with the camera and format the session was started with");
     }
@@ -184,10 +184,10 @@ class CaptureRun {
     for (int attempt = 0;; ++attempt) {
       try {
         return CaptureOnce(capture, /*reset=*/attempt > 0);
-      } catch (const Error& e) {
-        if (e.kind() != ErrorKind::kHardware) throw;
+      } catch (const common::Error& e) {
+        if (e.kind() != common::ErrorKind::kHardware) throw;
         if (attempt >= options_.retries) {
-          throw Error(ErrorKind::kHardware, camera_id_,
+          throw common::Error(common::ErrorKind::kHardware, camera_id_,
                       "failed " + std::to_string(attempt + 1) + " times in a row at " + capture.key + " (" + e.what() +
                           "); stopped with " + std::to_string(session_.entries().size()) + " of " +
                           std::to_string(session_.planned_keys().size()) + " images captured",
@@ -272,7 +272,7 @@ uint64_t FreeSpaceAt(const fs::path& folder) {
   }
   std::error_code error;
   const fs::space_info space = fs::space(existing, error);
-  if (error) ThrowIoError(existing.string(), "cannot query its free space: " + error.message());
+  if (error) common::ThrowIoError(existing.string(), "cannot query its free space: " + error.message());
   return space.available;
 }
 

@@ -13,7 +13,7 @@ namespace svbtdf::acquire {
 namespace {
 
 [[noreturn]] void ThrowCorrupt(const std::string& subject, const std::string& problem) {
-  throw Error(ErrorKind::kHardware, subject, problem,
+  throw common::Error(common::ErrorKind::kHardware, subject, problem,
               "the camera delivered a damaged frame; check the cable and retry");
 }
 

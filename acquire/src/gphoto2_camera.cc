@@ -45,7 +45,7 @@ std::string HintForGphotoError(int result) {
 }
 
 [[noreturn]] void ThrowGphoto(const std::string& subject, const std::string& call, int result) {
-  throw Error(ErrorKind::kHardware, subject, call + " failed: " + gp_result_as_string(result),
+  throw common::Error(common::ErrorKind::kHardware, subject, call + " failed: " + gp_result_as_string(result),
               HintForGphotoError(result));
 }
 
@@ -70,7 +70,7 @@ class RealGphoto2Session : public Gphoto2Session {
     gp_list_free(detected);
     if (port_.empty()) {
       gp_context_unref(context_);
-      throw Error(ErrorKind::kHardware, "gphoto2:" + port,
+      throw common::Error(common::ErrorKind::kHardware, "gphoto2:" + port,
                   port.empty() ? "no camera detected" : "no camera on this port",
                   "connect the camera by USB, switch it on, and see `svbtdf devices`");
     }
@@ -283,7 +283,7 @@ std::vector<CameraInfo> ListGphoto2Cameras() {
   for (const auto& [name, port] : entries) {
     try {
       cameras.push_back(Gphoto2Camera(OpenGphoto2Session(port), {false, false}).Info());
-    } catch (const Error& error) {
+    } catch (const common::Error& error) {
       CameraInfo unavailable;
       unavailable.id = "gphoto2:" + port;
       unavailable.model = name + " (cannot open: " + error.problem() + ")";
@@ -364,17 +364,17 @@ void Gphoto2Camera::SelectJpeg() {
 void Gphoto2Camera::SetExposure(const ExposureSettings& settings) {
   if (!std::isfinite(settings.exposure_s) || settings.exposure_s <= 0.0 ||
       !std::isfinite(settings.gain) || settings.gain <= 0.0) {
-    ThrowInvalidInput(Subject(), "exposure and gain must be positive numbers");
+    common::ThrowInvalidInput(Subject(), "exposure and gain must be positive numbers");
   }
   const int shutter = NearestInLogSpace(shutter_values_, settings.exposure_s);
   if (shutter < 0) {
-    throw Error(ErrorKind::kHardware, Subject(), "lists no numeric shutter speeds",
+    throw common::Error(common::ErrorKind::kHardware, Subject(), "lists no numeric shutter speeds",
                 "set the mode dial to M (manual)");
   }
   const double third_stop = std::pow(2.0, 1.0 / 3.0);
   if (settings.exposure_s < info_.min_exposure_s / third_stop ||
       settings.exposure_s > info_.max_exposure_s * third_stop) {
-    ThrowInvalidInput(Subject(), "exposure " + std::to_string(settings.exposure_s) +
+    common::ThrowInvalidInput(Subject(), "exposure " + std::to_string(settings.exposure_s) +
                                      " s is outside the listed shutter speeds [" +
                                      std::to_string(info_.min_exposure_s) + ", " +
                                      std::to_string(info_.max_exposure_s) + "] s");
@@ -386,7 +386,7 @@ void Gphoto2Camera::SetExposure(const ExposureSettings& settings) {
     iso_choice = iso_choices_[iso];
     gain = *iso_values_[iso] / base_iso_;
   } else if (std::abs(settings.gain - 1.0) > 1e-9) {
-    ThrowInvalidInput(Subject(), "has no numeric ISO setting; only gain 1.0 is possible");
+    common::ThrowInvalidInput(Subject(), "has no numeric ISO setting; only gain 1.0 is possible");
   }
   if (shutter_choices_[shutter] != applied_shutter_) {
     session_->SetWidget(shutter_widget_, shutter_choices_[shutter]);
@@ -403,14 +403,14 @@ void Gphoto2Camera::SetExposure(const ExposureSettings& settings) {
 Frame Gphoto2Camera::Capture() {
   if (applied_shutter_.empty()) {
     // The camera's current shutter speed is unknown to us; a frame without it is useless.
-    ThrowInvalidInput(Subject(), "Capture() before SetExposure()", "set an exposure first");
+    common::ThrowInvalidInput(Subject(), "Capture() before SetExposure()", "set an exposure first");
   }
   const std::vector<Gphoto2File> files = session_->CaptureAndDownload(options_.delete_from_card);
   const auto jpeg = std::find_if(files.begin(), files.end(), IsJpeg);
   if (jpeg == files.end()) {
     std::string names;
     for (const auto& file : files) names += (names.empty() ? "" : ", ") + file.name + " (" + file.mime + ")";
-    throw Error(ErrorKind::kHardware, Subject(),
+    throw common::Error(common::ErrorKind::kHardware, Subject(),
                 "the capture produced no JPEG, only: " + (names.empty() ? "nothing" : names),
                 "svbtdf does not decode raw files; set the camera's image quality to JPEG");
   }

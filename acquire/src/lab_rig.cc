@@ -32,14 +32,14 @@ std::unique_ptr<Camera> OpenCamera(const std::string& spec, LabRig& rig) {
     rig.display = std::make_unique<SimDisplay>(rig.world, SimDisplayInfo(*setup));
     return std::make_unique<SimCamera>(rig.world, setup, spec);
   }
-  ThrowInvalidInput("--camera", "'" + spec + "' is not a camera",
+  common::ThrowInvalidInput("--camera", "'" + spec + "' is not a camera",
                     "use v4l2:/dev/videoN, libcamera:ID, gphoto2[:PORT] or sim:DIR (see `svbtdf devices`)");
 }
 
 void OpenDisplay(const std::string& spec, LabRig& rig) {
   const auto [kind, target] = SplitSpec(spec);
   if (rig.world) {  // a simulated camera can only look at the simulated monitor
-    if (spec != "sim") ThrowInvalidInput("--display", "a sim: camera needs --display sim, got '" + spec + "'");
+    if (spec != "sim") common::ThrowInvalidInput("--display", "a sim: camera needs --display sim, got '" + spec + "'");
     return;
   }
   if (spec == "sim") {
@@ -56,12 +56,12 @@ void OpenDisplay(const std::string& spec, LabRig& rig) {
     try {
       index = target.empty() ? 0 : std::stoi(target);
     } catch (const std::exception&) {
-      ThrowInvalidInput("--display", "'" + spec + "': the display index must be a number");
+      common::ThrowInvalidInput("--display", "'" + spec + "': the display index must be a number");
     }
     rig.display = OpenSdlDisplay(index);
     return;
   }
-  ThrowInvalidInput("--display", "'" + spec + "' is not a display", "use sdl[:INDEX] or sim");
+  common::ThrowInvalidInput("--display", "'" + spec + "' is not a display", "use sdl[:INDEX] or sim");
 }
 
 std::unique_ptr<Operator> MakeOperator(const std::string& mode_asked, const LabRig& rig) {
@@ -72,7 +72,7 @@ std::unique_ptr<Operator> MakeOperator(const std::string& mode_asked, const LabR
   if (mode == "prompt") return std::make_unique<ConsoleOperator>(std::cin, std::cerr);
   if (mode == "skip") return std::make_unique<UnattendedOperator>(UnattendedPolicy::kSkip);
   if (mode == "as-is") return std::make_unique<UnattendedOperator>(UnattendedPolicy::kAsIs);
-  ThrowInvalidInput("--calibration", "'" + mode + "' is not an operator mode", "use prompt, as-is or skip");
+  common::ThrowInvalidInput("--calibration", "'" + mode + "' is not an operator mode", "use prompt, as-is or skip");
 }
 
 }  // namespace

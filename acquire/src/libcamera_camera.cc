@@ -84,7 +84,7 @@ std::shared_ptr<lc::CameraManager> SharedCameraManager() {
   setenv("LIBCAMERA_LOG_LEVELS", "*:ERROR", /*overwrite=*/0);  // keep `svbtdf` output readable
   auto manager = std::make_shared<lc::CameraManager>();
   if (const int error = manager->start()) {
-    throw Error(ErrorKind::kHardware, "libcamera",
+    throw common::Error(common::ErrorKind::kHardware, "libcamera",
                 std::string("CameraManager::start failed: ") + std::strerror(-error),
                 "check that the libcamera IPA modules are installed");
   }
@@ -145,7 +145,7 @@ class RealLibcameraSession : public LibcameraSession {
     manager_ = SharedCameraManager();
     camera_ = manager_->get(id);
     if (!camera_) {
-      throw Error(ErrorKind::kHardware, "libcamera:" + id, "no such camera",
+      throw common::Error(common::ErrorKind::kHardware, "libcamera:" + id, "no such camera",
                   "`svbtdf devices` lists the connected cameras");
     }
     if (const int error = camera_->acquire()) {
@@ -210,7 +210,7 @@ class RealLibcameraSession : public LibcameraSession {
   };
 
   [[noreturn]] void Fail(const std::string& call, int error, const std::string& hint) const {
-    throw Error(ErrorKind::kHardware, "libcamera:" + id_,
+    throw common::Error(common::ErrorKind::kHardware, "libcamera:" + id_,
                 call + " failed: " + std::strerror(std::abs(error)), hint);
   }
 
@@ -242,7 +242,7 @@ class RealLibcameraSession : public LibcameraSession {
       stream_info_.stride = stream.stride;
       return;
     }
-    throw Error(ErrorKind::kHardware, "libcamera:" + id_,
+    throw common::Error(common::ErrorKind::kHardware, "libcamera:" + id_,
                 "offers neither a raw nor a still stream in a format svbtdf can decode",
                 "`svbtdf devices` lists its formats");
   }
@@ -365,7 +365,7 @@ CameraInfo LibcameraCamera::Info() const { return session_->Info(); }
 
 void LibcameraCamera::Fail(const std::string& call, const std::string& problem,
                            const std::string& hint) const {
-  throw Error(ErrorKind::kHardware, "libcamera:" + id_, call + ": " + problem, hint);
+  throw common::Error(common::ErrorKind::kHardware, "libcamera:" + id_, call + ": " + problem, hint);
 }
 
 void LibcameraCamera::Requeue(int index) {
@@ -381,24 +381,24 @@ void LibcameraCamera::Requeue(int index) {
 void LibcameraCamera::SetExposure(const ExposureSettings& settings) {
   if (!std::isfinite(settings.exposure_s) || settings.exposure_s <= 0.0 ||
       !std::isfinite(settings.gain) || settings.gain <= 0.0) {
-    ThrowInvalidInput("libcamera:" + id_, "exposure and gain must be positive numbers");
+    common::ThrowInvalidInput("libcamera:" + id_, "exposure and gain must be positive numbers");
   }
   const LibcameraRange exposure = session_->ExposureRange();
   if (exposure.present &&
       (settings.exposure_s < exposure.minimum || settings.exposure_s > exposure.maximum)) {
-    ThrowInvalidInput("libcamera:" + id_,
+    common::ThrowInvalidInput("libcamera:" + id_,
                       "exposure " + std::to_string(settings.exposure_s) + " s is outside [" +
                           std::to_string(exposure.minimum) + ", " +
                           std::to_string(exposure.maximum) + "] s");
   }
   const LibcameraRange gain = session_->GainRange();
   if (gain.present && (settings.gain < gain.minimum || settings.gain > gain.maximum)) {
-    ThrowInvalidInput("libcamera:" + id_, "analogue gain " + std::to_string(settings.gain) +
+    common::ThrowInvalidInput("libcamera:" + id_, "analogue gain " + std::to_string(settings.gain) +
                                               " is outside [" + std::to_string(gain.minimum) +
                                               ", " + std::to_string(gain.maximum) + "]");
   }
   if (!gain.present && std::abs(settings.gain - 1.0) > 1e-9) {
-    ThrowInvalidInput("libcamera:" + id_, "has no AnalogueGain control; only gain 1.0 is possible");
+    common::ThrowInvalidInput("libcamera:" + id_, "has no AnalogueGain control; only gain 1.0 is possible");
   }
   if (settings.exposure_s == exposure_s_ && settings.gain == gain_) return;
   exposure_s_ = settings.exposure_s;

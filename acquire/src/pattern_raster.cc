@@ -13,8 +13,8 @@ constexpr int kSupersampling = 16;
 constexpr double kHalfDiagonal = 0.70710678118654752;
 
 void CheckDot(double x, double y, double radius) {
-  if (!std::isfinite(x) || !std::isfinite(y)) ThrowInvalidInput("pattern", "dot position is not finite");
-  if (!(radius > 0.0) || !std::isfinite(radius)) ThrowInvalidInput("pattern", "dot radius must be positive");
+  if (!std::isfinite(x) || !std::isfinite(y)) common::ThrowInvalidInput("pattern", "dot position is not finite");
+  if (!(radius > 0.0) || !std::isfinite(radius)) common::ThrowInvalidInput("pattern", "dot radius must be positive");
 }
 
 // Adds the disk's coverage to `coverage` (saturating at 1: dots of a grid do not overlap).
@@ -39,7 +39,7 @@ struct BoardGeometry {
 
 BoardGeometry Board(const Pattern& pattern, int width, int height) {
   if (pattern.board_cols < 1 || pattern.board_rows < 1 || !(pattern.board_square_px >= 2.0)) {
-    ThrowInvalidInput("pattern", "chessboard needs at least 1x1 inner corners and squares >= 2 px");
+    common::ThrowInvalidInput("pattern", "chessboard needs at least 1x1 inner corners and squares >= 2 px");
   }
   BoardGeometry board;
   board.square = pattern.board_square_px;
@@ -47,7 +47,7 @@ BoardGeometry Board(const Pattern& pattern, int width, int height) {
   board.rows = pattern.board_rows + 1;
   const double board_w = board.cols * board.square, board_h = board.rows * board.square;
   if (board_w + 2 * board.square > width || board_h + 2 * board.square > height) {
-    ThrowInvalidInput("pattern", "chessboard of " + std::to_string(board.cols) + "x" +
+    common::ThrowInvalidInput("pattern", "chessboard of " + std::to_string(board.cols) + "x" +
                                      std::to_string(board.rows) + " squares of " +
                                      std::to_string(board.square) + " px with its margin does not fit " +
                                      std::to_string(width) + "x" + std::to_string(height),
@@ -89,10 +89,10 @@ std::pair<double, double> ChessboardCornerPx(const Pattern& pattern, int width, 
 }
 
 std::vector<uint8_t> RasterizePattern(const Pattern& pattern, int width, int height, double gamma) {
-  if (width <= 0 || height <= 0) ThrowInvalidInput("display", "has no pixels");
-  if (!(gamma > 0.0) || !std::isfinite(gamma)) ThrowInvalidInput("display", "gamma must be positive");
+  if (width <= 0 || height <= 0) common::ThrowInvalidInput("display", "has no pixels");
+  if (!(gamma > 0.0) || !std::isfinite(gamma)) common::ThrowInvalidInput("display", "gamma must be positive");
   if (!(pattern.intensity >= 0.0 && pattern.intensity <= 1.0)) {
-    ThrowInvalidInput("pattern", "intensity must lie in [0, 1] (linear emitted intensity)");
+    common::ThrowInvalidInput("pattern", "intensity must lie in [0, 1] (linear emitted intensity)");
   }
   const size_t count = static_cast<size_t>(width) * height;
   const uint8_t white = EncodeIntensity(pattern.intensity, gamma);

@@ -13,7 +13,7 @@ namespace {
 
 [[noreturn]] void ThrowSdl(const std::string& subject, const std::string& call,
                            const std::string& hint = "") {
-  throw Error(ErrorKind::kHardware, subject, call + " failed: " + SDL_GetError(),
+  throw common::Error(common::ErrorKind::kHardware, subject, call + " failed: " + SDL_GetError(),
               hint.empty() ? "set SDL_VIDEODRIVER (x11, wayland, kmsdrm) to choose a video driver"
                            : hint);
 }
@@ -30,7 +30,7 @@ void InitVideo(const std::string& subject) {
   const char* requested = SDL_getenv("SDL_VIDEODRIVER");
   if ((driver == "offscreen" || driver == "dummy") && (!requested || driver != requested)) {
     SDL_QuitSubSystem(SDL_INIT_VIDEO);
-    throw Error(ErrorKind::kHardware, subject,
+    throw common::Error(common::ErrorKind::kHardware, subject,
                 "SDL found no real display (it fell back to the '" + driver + "' driver)",
                 "run inside X11/Wayland or on a console with access to /dev/dri; set "
                 "SDL_VIDEODRIVER=" + driver + " only for tests");
@@ -73,14 +73,14 @@ std::unique_ptr<Display> OpenSdlDisplay(int index, const SdlDisplayOptions& opti
 
 SdlDisplay::SdlDisplay(int index, SdlDisplayOptions options)
     : index_(index), options_(options) {
-  if (!(options_.gamma > 0.0)) ThrowInvalidInput("sdl:" + std::to_string(index), "gamma must be positive");
+  if (!(options_.gamma > 0.0)) common::ThrowInvalidInput("sdl:" + std::to_string(index), "gamma must be positive");
   // Keep the pattern up when the operator clicks into a terminal on another monitor.
   SDL_SetHint(SDL_HINT_VIDEO_MINIMIZE_ON_FOCUS_LOSS, "0");
   InitVideo("sdl:" + std::to_string(index));
   try {
     const int count = SDL_GetNumVideoDisplays();
     if (index < 0 || index >= count) {
-      throw Error(ErrorKind::kInvalidInput, "sdl:" + std::to_string(index),
+      throw common::Error(common::ErrorKind::kInvalidInput, "sdl:" + std::to_string(index),
                   "no such display (SDL sees " + std::to_string(count) + ")",
                   "`svbtdf devices` lists the displays");
     }
@@ -131,7 +131,7 @@ void SdlDisplay::PumpEvents() {
   SDL_Event event;
   while (SDL_PollEvent(&event)) {
     const bool escape = event.type == SDL_KEYDOWN && event.key.keysym.sym == SDLK_ESCAPE;
-    if (event.type == SDL_QUIT || escape) SetInterruptRequested(true);
+    if (event.type == SDL_QUIT || escape) common::SetInterruptRequested(true);
   }
 }
 
@@ -161,7 +161,7 @@ void SdlDisplay::Show(const Pattern& pattern) {
   SDL_RenderFlush(renderer_);
   if (SDL_RenderReadPixels(renderer_, &probe, SDL_PIXELFORMAT_RGBA32, rgba, 4) == 0 &&
       rgba[0] != *brightest) {
-    throw Error(ErrorKind::kHardware, info_.id,
+    throw common::Error(common::ErrorKind::kHardware, info_.id,
                 "shows code " + std::to_string(rgba[0]) + " where the pattern has " +
                     std::to_string(*brightest),
                 "turn off colour management / night light for this output");

@@ -15,7 +15,7 @@ namespace svbtdf::acquire {
 namespace {
 
 [[noreturn]] void NotSimulated(const std::string& camera, const std::string& what) {
-  throw Error(ErrorKind::kInvalidInput, camera, "cannot simulate " + what,
+  throw common::Error(common::ErrorKind::kInvalidInput, camera, "cannot simulate " + what,
               "the simulated rig renders the captures of docs/capture.md's scenes only");
 }
 
@@ -26,7 +26,7 @@ SimDisplay::SimDisplay(std::shared_ptr<SimWorld> world, DisplayInfo info) : worl
 void SimDisplay::Show(const Pattern& pattern) {
   if (!(pattern.intensity >= 0.0 && pattern.intensity <= 1.0) || !std::isfinite(pattern.x_px) ||
       !std::isfinite(pattern.y_px)) {
-    ThrowInvalidInput(info_.id, "pattern with a non-finite position or an intensity outside [0, 1]");
+    common::ThrowInvalidInput(info_.id, "pattern with a non-finite position or an intensity outside [0, 1]");
   }
   world_->pattern = pattern;
   ++world_->patterns_shown;
@@ -36,8 +36,8 @@ std::vector<uint8_t> SimDisplay::Raster() const {
   return RasterizePattern(world_->pattern, info_.width_px, info_.height_px, info_.gamma);
 }
 
-DisplayInfo SimDisplayInfo(const SimulatedSetup& setup) {
-  const MonitorConfig& m = setup.rig->config().monitor;
+DisplayInfo SimDisplayInfo(const simulate::SimulatedSetup& setup) {
+  const simulate::MonitorConfig& m = setup.rig->config().monitor;
   DisplayInfo info;
   info.id = "sim";
   info.width_px = static_cast<int>(std::floor(m.width / m.pixel_pitch));
@@ -60,15 +60,15 @@ bool SimOperator::Prepare(Scene scene, int view, const std::string& instruction)
 }
 
 struct SimCamera::Identified {
-  CaptureId id;
-  std::optional<Dot> free_dot;  // a dot that is not one of the rig's grid
+  simulate::CaptureId id;
+  std::optional<simulate::Dot> free_dot;  // a dot that is not one of the rig's grid
 };
 
-SimCamera::SimCamera(std::shared_ptr<SimWorld> world, std::shared_ptr<const SimulatedSetup> setup, std::string id)
+SimCamera::SimCamera(std::shared_ptr<SimWorld> world, std::shared_ptr<const simulate::SimulatedSetup> setup, std::string id)
     : world_(std::move(world)), setup_(std::move(setup)), id_(std::move(id)) {}
 
 CameraInfo SimCamera::Info() const {
-  const CameraIntrinsics& k = setup_->rig->config().intrinsics;
+  const simulate::CameraIntrinsics& k = setup_->rig->config().intrinsics;
   CameraInfo info;
   info.id = id_;
   info.model = "svbtdf simulated camera (preset " + setup_->preset.name + ")";
@@ -86,9 +86,9 @@ CameraInfo SimCamera::Info() const {
 
 void SimCamera::SetExposure(const ExposureSettings& settings) {
   if (!(settings.exposure_s > 0) || !std::isfinite(settings.exposure_s)) {
-    ThrowInvalidInput(id_, "exposure must be positive");
+    common::ThrowInvalidInput(id_, "exposure must be positive");
   }
-  if (settings.gain != 1.0) ThrowInvalidInput(id_, "the simulated sensor has only gain 1");
+  if (settings.gain != 1.0) common::ThrowInvalidInput(id_, "the simulated sensor has only gain 1");
   settings_ = settings;
 }
 
@@ -104,7 +104,7 @@ int SimCamera::ExposureIndex() const {
 SimCamera::Identified SimCamera::Identify() const {
   using session::CaptureKey;
   const Pattern& p = world_->pattern;
-  const Rig& rig = *setup_->rig;
+  const simulate::Rig& rig = *setup_->rig;
   // Calibration captures are bracket 0 in `svbtdf simulate` (all_dots/e0, flat_white/e0).
   const int e = std::max(ExposureIndex(), 0);
   const auto known = [&](const CaptureKey& key) { return Identified{{key, settings_.exposure_s}, std::nullopt}; };
@@ -125,7 +125,7 @@ SimCamera::Identified SimCamera::Identify() const {
     const std::vector<int> fiducials = session::FiducialDots(rig.config().dots.cols, rig.config().dots.rows);
     bool same = p.all_dots_px.size() == fiducials.size();
     for (size_t k = 0; same && k < fiducials.size(); ++k) {
-      const Dot& dot = rig.dots()[fiducials[k]];
+      const simulate::Dot& dot = rig.dots()[fiducials[k]];
       same = p.all_dots_px[k] == std::pair<double, double>(dot.monitor_x, dot.monitor_y);
     }
     if (!same) NotSimulated(id_, "a set of lit dots other than the rig's dots or its fiducial dots");
@@ -135,11 +135,11 @@ SimCamera::Identified SimCamera::Identify() const {
     return known(CaptureKey::FlatWhite());
   }
   if (world_->scene == Scene::kSample && p.kind == Pattern::Kind::kDot) {
-    const MonitorConfig& m = rig.config().monitor;
+    const simulate::MonitorConfig& m = rig.config().monitor;
     const bool rig_like = p.dot_radius_px == rig.config().dots.radius_px &&
                           p.intensity == m.Luminance(rig.config().dots.level);
     for (size_t q = 0; rig_like && q < rig.dots().size(); ++q) {
-      const Dot& dot = rig.dots()[q];
+      const simulate::Dot& dot = rig.dots()[q];
       if (p.x_px == dot.monitor_x && p.y_px == dot.monitor_y) return known(CaptureKey::Dot(static_cast<int>(q), e));
     }
     // Any other dot: rendered by the simulator all the same, with a noise stream of its own.
@@ -151,14 +151,14 @@ SimCamera::Identified SimCamera::Identify() const {
 
 Frame SimCamera::Capture() {
   Identified what = Identify();
-  CaptureId& id = what.id;
+  simulate::CaptureId& id = what.id;
   const bool dark = id.key.kind == session::CaptureKind::kDark;
   // The n-th capture of the same thing: dark frame n, or a repeat with its own noise. (All
   // free dots of a bracket share one count.)
-  const std::string scene = what.free_dot ? "free_dot" : SceneOf(id.key);
+  const std::string scene = what.free_dot ? "free_dot" : simulate::SceneOf(id.key);
   int n = taken_[{scene, id.key.bracket}]++;
   const std::optional<session::CaptureKey>& announced = world_->announced;
-  if (!what.free_dot && announced && SceneOf(*announced) == scene && announced->bracket == id.key.bracket) {
+  if (!what.free_dot && announced && simulate::SceneOf(*announced) == scene && announced->bracket == id.key.bracket) {
     n = announced->repeat;
   }
   uint64_t stream;
@@ -166,7 +166,7 @@ Frame SimCamera::Capture() {
     id.key.repeat = n;
     stream = id.Stream();
   } else {
-    const uint64_t base = what.free_dot ? NoiseStream("free_dot", 0, id.key.bracket) : id.Stream();
+    const uint64_t base = what.free_dot ? simulate::NoiseStream("free_dot", 0, id.key.bracket) : id.Stream();
     stream = base ^ (static_cast<uint64_t>(n) * 0xd1b54a32d192ed03ULL);
   }
   // Another plan's dot brackets: noise streams of their own rather than bracket 0's. (The
@@ -175,16 +175,16 @@ Frame SimCamera::Capture() {
   if (bracketed && ExposureIndex() < 0) stream ^= std::hash<double>{}(settings_.exposure_s) * 0x9e3779b97f4a7c15ULL;
   // Brackets and repeats of one scene share its radiance image, as in the simulator.
   if (what.free_dot) {
-    const Dot& dot = *what.free_dot;
+    const simulate::Dot& dot = *what.free_dot;
     stream ^= std::hash<double>{}(dot.position.x()) * 31 + std::hash<double>{}(dot.position.y());
     setup_->renderer->RenderDot(dot, &radiance_);
     rendered_.clear();
   } else if (dark || scene != rendered_) {
-    RenderCaptureRadiance(*setup_->renderer, setup_->plan, id, &radiance_);
+    simulate::RenderCaptureRadiance(*setup_->renderer, setup_->plan, id, &radiance_);
     rendered_ = dark ? std::string() : scene;
   }
-  const CameraImage image = setup_->renderer->Expose(radiance_, settings_.exposure_s, setup_->seed, stream,
-                                                     CaptureWindowOrigin(*setup_->rig, id));
+  const common::CameraImage image = setup_->renderer->Expose(radiance_, settings_.exposure_s, setup_->seed, stream,
+                                                     simulate::CaptureWindowOrigin(*setup_->rig, id));
   Frame frame;
   frame.width = image.width;
   frame.height = image.height;
@@ -197,14 +197,14 @@ Frame SimCamera::Capture() {
   return frame;
 }
 
-std::shared_ptr<const SimulatedSetup> LoadSimulation(const std::filesystem::path& dir) {
-  return LoadSimulatedSetup(dir, /*threads=*/0);
+std::shared_ptr<const simulate::SimulatedSetup> LoadSimulation(const std::filesystem::path& dir) {
+  return simulate::LoadSimulatedSetup(dir, /*threads=*/0);
 }
 
 void FaultInjectingCamera::SetExposure(const ExposureSettings& settings) {
   if (plan_.unplug && plan_.fail_at > 0 && calls_ >= plan_.fail_at) {
     ++failures_;
-    throw Error(ErrorKind::kHardware, inner_.Info().id, "cable pulled");
+    throw common::Error(common::ErrorKind::kHardware, inner_.Info().id, "cable pulled");
   }
   inner_.SetExposure(settings);
 }
@@ -215,7 +215,7 @@ Frame FaultInjectingCamera::Capture() {
                        (plan_.unplug || calls_ < plan_.fail_at + plan_.fail_count);
   if (failing) {
     ++failures_;
-    throw Error(ErrorKind::kHardware, inner_.Info().id, plan_.unplug ? "cable pulled" : "injected capture failure");
+    throw common::Error(common::ErrorKind::kHardware, inner_.Info().id, plan_.unplug ? "cable pulled" : "injected capture failure");
   }
   return inner_.Capture();
 }

@@ -16,11 +16,11 @@ namespace {
 // OUT must be new, empty, or an unfinished simulation (session/ and truth/ only).
 void CheckOutputFolder(const fs::path& out) {
   if (!fs::exists(out)) return;
-  if (!fs::is_directory(out)) ThrowIoError(out.string(), "exists and is not a folder");
+  if (!fs::is_directory(out)) common::ThrowIoError(out.string(), "exists and is not a folder");
   for (const auto& entry : fs::directory_iterator(out)) {
     const std::string name = entry.path().filename().string();
     if (name != "session" && name != "truth") {
-      ThrowInvalidInput(out.string(), "is not empty (it holds '" + name + "')", "choose a new output folder");
+      common::ThrowInvalidInput(out.string(), "is not empty (it holds '" + name + "')", "choose a new output folder");
     }
   }
 }
@@ -31,29 +31,29 @@ void CheckResumable(const fs::path& session_folder) {
   if (!fs::exists(session_folder / "session.json")) return;
   const session::SessionVerification check = session::Session::Open(session_folder).Verify(/*check_crc=*/true);
   if (check.complete()) {
-    ThrowInvalidInput(session_folder.string(), "holds a complete simulated session already; it is never overwritten",
+    common::ThrowInvalidInput(session_folder.string(), "holds a complete simulated session already; it is never overwritten",
                       "choose a new output folder");
   }
   if (!check.corrupt.empty() || !check.duplicated.empty()) {
-    ThrowFormatError(session_folder.string(), "cannot be resumed: " + check.Summary(), "simulate into a new output folder");
+    common::ThrowFormatError(session_folder.string(), "cannot be resumed: " + check.Summary(), "simulate into a new output folder");
   }
 }
 
 // What the manifest records beyond what the lab's acquisition writes: that the session is
 // simulated, of which preset, seed and truth, and the monitor's black level a lab would measure.
-nlohmann::json SimulationNotes(const SimulatedSetup& setup) {
+nlohmann::json SimulationNotes(const simulate::SimulatedSetup& setup) {
   return {{"simulated", {{"preset", setup.preset.name}, {"seed", setup.seed}, {"truth", setup.plan.truth_kind}}},
           {"monitor", {{"black_level", setup.rig->config().monitor.black_level}}}};
 }
 
 }  // namespace
 
-SimulationOutput SimulateSession(const fs::path& out, const SimulationOptions& options) {
+SimulationOutput SimulateSession(const fs::path& out, const simulate::SimulationOptions& options) {
   SimulationOutput output{out / "session", out / "truth"};
-  PresetWithOptions(options);  // bad options are refused before anything is written
+  simulate::PresetWithOptions(options);  // bad options are refused before anything is written
   CheckOutputFolder(out);
   CheckResumable(output.session);
-  const std::shared_ptr<const SimulatedSetup> setup = PrepareSimulation(output.truth, options);
+  const std::shared_ptr<const simulate::SimulatedSetup> setup = simulate::PrepareSimulation(output.truth, options);
 
   auto world = std::make_shared<SimWorld>();
   SimDisplay display(world, SimDisplayInfo(*setup));

@@ -280,7 +280,7 @@ std::unique_ptr<Camera> OpenV4l2Camera(const std::string& device_path,
 V4l2Camera::V4l2Camera(std::shared_ptr<V4l2Device> device, std::string path, V4l2Options options)
     : device_(std::move(device)), path_(std::move(path)), options_(std::move(options)) {
   if (options_.buffer_count < 2) {
-    ThrowInvalidInput(path_, "buffer_count must be at least 2 for streaming");
+    common::ThrowInvalidInput(path_, "buffer_count must be at least 2 for streaming");
   }
   fd_ = device_->Open(path_);
   if (fd_ < 0) {
@@ -301,7 +301,7 @@ V4l2Camera::V4l2Camera(std::shared_ptr<V4l2Device> device, std::string path, V4l
 V4l2Camera::~V4l2Camera() { Release(); }
 
 void V4l2Camera::Fail(const std::string& call, int error) const {
-  throw Error(ErrorKind::kHardware, path_, call + " failed: " + std::strerror(error),
+  throw common::Error(common::ErrorKind::kHardware, path_, call + " failed: " + std::strerror(error),
               HintFor(error));
 }
 
@@ -311,12 +311,12 @@ void V4l2Camera::Negotiate() {
   const uint32_t effective =
       (caps.capabilities & V4L2_CAP_DEVICE_CAPS) ? caps.device_caps : caps.capabilities;
   if (!(effective & V4L2_CAP_VIDEO_CAPTURE)) {
-    throw Error(ErrorKind::kHardware, path_,
+    throw common::Error(common::ErrorKind::kHardware, path_,
                 "is not a single-planar video capture device (capabilities " + Hex(effective) + ")",
                 "pick another /dev/video node; `svbtdf devices` lists the capture-capable ones");
   }
   if (!(effective & V4L2_CAP_STREAMING)) {
-    throw Error(ErrorKind::kHardware, path_, "does not support memory-mapped streaming",
+    throw common::Error(common::ErrorKind::kHardware, path_, "does not support memory-mapped streaming",
                 "read()-only devices are not supported");
   }
   info_ = DescribeOpenDevice(*device_, fd_, path_, caps);
@@ -342,7 +342,7 @@ void V4l2Camera::Negotiate() {
     choices.push_back(choice);
   }
   if (choices.empty()) {
-    throw Error(ErrorKind::kHardware, path_,
+    throw common::Error(common::ErrorKind::kHardware, path_,
                 options_.fourcc.empty() ? "offers no pixel format svbtdf can decode (" + offered + ")"
                                         : "does not offer format " + options_.fourcc + " (" + offered + ")",
                 "svbtdf reads raw Bayer, GREY/Y10/Y12/Y16, RGB24/BGR24, YUYV and MJPEG");
@@ -364,7 +364,7 @@ void V4l2Camera::Negotiate() {
   // The driver may adjust anything; trust only what it returned.
   format_.fourcc = format.fmt.pix.pixelformat;
   if (!DescribeV4l2Format(format_.fourcc, &format_.layout, &format_.rank)) {
-    throw Error(ErrorKind::kHardware, path_,
+    throw common::Error(common::ErrorKind::kHardware, path_,
                 "VIDIOC_S_FMT switched to unsupported format " + FourccToString(format_.fourcc),
                 "request another format with the camera options");
   }
@@ -429,7 +429,7 @@ void V4l2Camera::StartStreaming() {
   request.memory = V4L2_MEMORY_MMAP;
   if (const int error = device_->Ioctl(fd_, VIDIOC_REQBUFS, &request)) Fail("VIDIOC_REQBUFS", error);
   if (request.count < 2) {
-    throw Error(ErrorKind::kHardware, path_,
+    throw common::Error(common::ErrorKind::kHardware, path_,
                 "VIDIOC_REQBUFS granted only " + std::to_string(request.count) + " buffer(s)",
                 "the driver is short of memory; close other camera programs");
   }
@@ -478,16 +478,16 @@ void V4l2Camera::Release() noexcept {
 void V4l2Camera::SetExposure(const ExposureSettings& settings) {
   if (broken_) Fail("VIDIOC_S_CTRL", ENODEV);
   if (!std::isfinite(settings.exposure_s) || settings.exposure_s <= 0.0) {
-    ThrowInvalidInput(path_, "exposure must be a positive number of seconds");
+    common::ThrowInvalidInput(path_, "exposure must be a positive number of seconds");
   }
   if (!exposure_.present) {
-    throw Error(ErrorKind::kHardware, path_, "has no V4L2_CID_EXPOSURE_ABSOLUTE control",
+    throw common::Error(common::ErrorKind::kHardware, path_, "has no V4L2_CID_EXPOSURE_ABSOLUTE control",
                 "this sensor's exposure is not in time units; use the libcamera backend");
   }
   const double lo = exposure_.minimum * kExposureUnitS, hi = exposure_.maximum * kExposureUnitS;
   const double half_unit = 0.5 * kExposureUnitS;
   if (settings.exposure_s < lo - half_unit || settings.exposure_s > hi + half_unit) {
-    ThrowInvalidInput(path_, "exposure " + std::to_string(settings.exposure_s) +
+    common::ThrowInvalidInput(path_, "exposure " + std::to_string(settings.exposure_s) +
                                  " s is outside the camera's range [" + std::to_string(lo) +
                                  ", " + std::to_string(hi) + "] s");
   }
@@ -501,18 +501,18 @@ void V4l2Camera::SetExposure(const ExposureSettings& settings) {
     if (options_.gain_units_per_unity > 0.0) {
       gain_value = std::llround(settings.gain * options_.gain_units_per_unity);
       if (gain_value < gain_.minimum || gain_value > gain_.maximum) {
-        ThrowInvalidInput(path_, "gain " + std::to_string(settings.gain) + " is outside [" +
+        common::ThrowInvalidInput(path_, "gain " + std::to_string(settings.gain) + " is outside [" +
                                      std::to_string(gain_.minimum / options_.gain_units_per_unity) +
                                      ", " + std::to_string(gain_.maximum / options_.gain_units_per_unity) + "]");
       }
     } else if (std::abs(settings.gain - 1.0) > 1e-9) {
-      ThrowInvalidInput(path_, "V4L2 gain units are device specific; only gain 1.0 (base gain) is accepted",
+      common::ThrowInvalidInput(path_, "V4L2 gain units are device specific; only gain 1.0 (base gain) is accepted",
                         "set the gain units per 1.0x in the camera options to use other gains");
     } else {
       gain_value = gain_.minimum;
     }
   } else if (std::abs(settings.gain - 1.0) > 1e-9) {
-    ThrowInvalidInput(path_, "has no gain control; only gain 1.0 is possible");
+    common::ThrowInvalidInput(path_, "has no gain control; only gain 1.0 is possible");
   }
 
   if (units == applied_exposure_units_ && gain_value == applied_gain_value_) return;
@@ -546,7 +546,7 @@ Frame V4l2Camera::DequeueFrame(int64_t* timestamp_ns, bool* monotonic) {
       Fail("poll", -ready);
     }
     if (ready == 0) {
-      throw Error(ErrorKind::kHardware, path_,
+      throw common::Error(common::ErrorKind::kHardware, path_,
                   "no frame within " + std::to_string(timeout_s) + " s (poll before VIDIOC_DQBUF)",
                   HintFor(ETIMEDOUT));
     }
@@ -560,7 +560,7 @@ Frame V4l2Camera::DequeueFrame(int64_t* timestamp_ns, bool* monotonic) {
       Fail("VIDIOC_DQBUF", error);
     }
     if (buffer.index >= buffers_.size()) {
-      throw Error(ErrorKind::kHardware, path_,
+      throw common::Error(common::ErrorKind::kHardware, path_,
                   "VIDIOC_DQBUF returned unknown buffer " + std::to_string(buffer.index));
     }
     Frame frame;
@@ -584,7 +584,7 @@ Frame V4l2Camera::DequeueFrame(int64_t* timestamp_ns, bool* monotonic) {
     if (decode_error) std::rethrow_exception(decode_error);
     if (damaged) {
       if (++damaged_frames > static_cast<int>(buffers_.size()) + 2) {
-        throw Error(ErrorKind::kHardware, path_, "every frame arrives flagged V4L2_BUF_FLAG_ERROR",
+        throw common::Error(common::ErrorKind::kHardware, path_, "every frame arrives flagged V4L2_BUF_FLAG_ERROR",
                     HintFor(EIO));
       }
       continue;

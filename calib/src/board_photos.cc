@@ -14,7 +14,7 @@ namespace {
 
 cv::Mat ReadGray(const std::string& file) {
   cv::Mat image = cv::imread(file, cv::IMREAD_GRAYSCALE | cv::IMREAD_ANYDEPTH);
-  if (image.empty()) ThrowFormatError(file, "cannot be read as an image", "is it a PNG, JPEG or TIFF file?");
+  if (image.empty()) common::ThrowFormatError(file, "cannot be read as an image", "is it a PNG, JPEG or TIFF file?");
   if (image.depth() == CV_16U) {
     // Camera-native 16-bit files often hold fewer bits (12-bit values in 16-bit containers):
     // stretch to the image's own maximum so the detector sees the full contrast.
@@ -31,13 +31,13 @@ CalibrationReport CalibrateFromPhotos(const std::vector<std::string>& files, con
                                       const CalibrationOptions& options, bool progress) {
   std::vector<BoardDetection> detections;
   cv::Size image_size;
-  std::unique_ptr<ProgressBar> bar;
-  if (progress) bar = std::make_unique<ProgressBar>("detecting board", static_cast<int64_t>(files.size()), "images");
+  std::unique_ptr<common::ProgressBar> bar;
+  if (progress) bar = std::make_unique<common::ProgressBar>("detecting board", static_cast<int64_t>(files.size()), "images");
   for (const std::string& file : files) {
     const cv::Mat image = ReadGray(file);
     if (image_size.empty()) image_size = image.size();
     if (image.size() != image_size) {
-      ThrowInvalidInput(file, "is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+      common::ThrowInvalidInput(file, "is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
                                   " but the first image is " + std::to_string(image_size.width) + "x" +
                                   std::to_string(image_size.height),
                         "all views must come from one camera at one resolution");
@@ -54,7 +54,7 @@ void WriteCameraCalibration(const std::filesystem::path& path, const BoardSpec& 
                               {"version", kCameraCalibrationVersion},
                               {"board", board.ToString()},
                               {"camera", ToJson(report)}};
-  WriteTextAtomically(path, out.dump(2) + "\n");
+  common::WriteTextAtomically(path, out.dump(2) + "\n");
 }
 
 }  // namespace svbtdf::calib

@@ -28,11 +28,11 @@ double MaxDn(int bits) { return std::ldexp(1.0, bits) - 1.0; }
 // The mean of the channels as float, checked for size.
 cv::Mat GrayImage(const session::Session& session, const std::string& key, const cv::Size& expected) {
   if (!session.Contains(key)) {
-    ThrowInvalidInput(session.folder().string(), "has no image '" + key + "'", "complete the capture first");
+    common::ThrowInvalidInput(session.folder().string(), "has no image '" + key + "'", "complete the capture first");
   }
-  const CameraImage image = session.ReadImage(key);
+  const common::CameraImage image = session.ReadImage(key);
   if (!expected.empty() && (image.width != expected.width || image.height != expected.height)) {
-    ThrowFormatError(ImageFile(session, key), "is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+    common::ThrowFormatError(ImageFile(session, key), "is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                                                   " pixels but the session's camera is " + std::to_string(expected.width) +
                                                   "x" + std::to_string(expected.height));
   }
@@ -57,8 +57,8 @@ CalibrationReport CalibrateCameraFromBoards(const session::Session& session, con
                                             int bits, const CalibrateSessionOptions& options) {
   const std::vector<std::string> keys = session.PlannedKeys(session::CaptureKind::kBoardView);
   std::vector<BoardDetection> detections;
-  std::unique_ptr<ProgressBar> progress;
-  if (options.progress) progress = std::make_unique<ProgressBar>("detecting boards", static_cast<int64_t>(keys.size()), "images");
+  std::unique_ptr<common::ProgressBar> progress;
+  if (options.progress) progress = std::make_unique<common::ProgressBar>("detecting boards", static_cast<int64_t>(keys.size()), "images");
   for (const std::string& key : keys) {
     detections.push_back(DetectBoard(ToEightBit(GrayImage(session, key, size), bits), board, key));
     if (progress) progress->Advance();
@@ -73,11 +73,11 @@ CalibrationReport CalibrateCameraFromBoards(const session::Session& session, con
 // normal: the camera is on the sample's -y side (docs/calibration-format.md) decides.
 SamplePlane SamplePlaneFromBoard(const session::Session& session, const BoardSpec& board, const CameraModel& camera, int bits) {
   const std::vector<std::string> keys = session.PlannedKeys(session::CaptureKind::kSamplePlaneView);
-  if (keys.empty()) ThrowInvalidInput(session.folder().string(), "plans no sample_plane/ capture (the board in the sample holder)");
+  if (keys.empty()) common::ThrowInvalidInput(session.folder().string(), "plans no sample_plane/ capture (the board in the sample holder)");
   const cv::Size size(camera.width, camera.height);
   const BoardDetection detection = DetectBoard(ToEightBit(GrayImage(session, keys.front(), size), bits), board, keys.front());
   if (!detection.found) {
-    ThrowFormatError(ImageFile(session, keys.front()), "shows no " + board.ToString() + " board: " + detection.failure,
+    common::ThrowFormatError(ImageFile(session, keys.front()), "shows no " + board.ToString() + " board: " + detection.failure,
                      "the board must lie flat in the sample holder, fully in view");
   }
   // Board corner (i, j) -> sample frame (i s - cx, cy - j s, 0), centred on the inner corners.
@@ -97,7 +97,7 @@ SamplePlane SamplePlaneFromBoard(const session::Session& session, const BoardSpe
     cv::Mat rotation;
     cv::Rodrigues(rvec, rotation);
     cv::cv2eigen(rotation, plane.rotation);
-    plane.translation = Vec3(tvec[0], tvec[1], tvec[2]);
+    plane.translation = model::Vec3(tvec[0], tvec[1], tvec[2]);
     std::vector<cv::Point2d> reprojected;
     cv::projectPoints(sample_points, rvec, tvec, camera.CameraMatrix(), camera.DistortionCoefficients(), reprojected);
     double sum = 0;
@@ -105,10 +105,10 @@ SamplePlane SamplePlaneFromBoard(const session::Session& session, const BoardSpe
       sum += std::pow(cv::norm(cv::Point2d(image_points[k]) - reprojected[k]), 2);
     }
     plane.rms_px = std::sqrt(sum / reprojected.size());
-    const Vec3 camera_centre = plane.CameraCentre();
+    const model::Vec3 camera_centre = plane.CameraCentre();
     if (camera_centre.z() > 0 && camera_centre.y() < 0) return plane;
   }
-  ThrowFormatError(ImageFile(session, keys.front()), "gives a sample-plane pose with the camera not above the sample's -y side",
+  common::ThrowFormatError(ImageFile(session, keys.front()), "gives a sample-plane pose with the camera not above the sample's -y side",
                    "lay the board in the holder with its rows along the sample's x axis");
 }
 
@@ -149,25 +149,25 @@ std::vector<Eigen::Vector2d> FindBlobs(const cv::Mat& gray) {
 }
 
 // The direction (sample frame, not unit) of the camera ray through `pixel`.
-Vec3 PixelRay(const Eigen::Vector2d& pixel, const CameraModel& camera, const SamplePlane& plane) {
+model::Vec3 PixelRay(const Eigen::Vector2d& pixel, const CameraModel& camera, const SamplePlane& plane) {
   std::vector<cv::Point2d> in = {{pixel.x(), pixel.y()}}, out;
   cv::undistortPoints(in, out, camera.CameraMatrix(), camera.DistortionCoefficients());
-  return plane.rotation.transpose() * Vec3(out[0].x, out[0].y, 1.0);
+  return plane.rotation.transpose() * model::Vec3(out[0].x, out[0].y, 1.0);
 }
 
 // Where the camera ray through `pixel` meets the plane z = z0 of the sample frame.
-Vec3 BackProject(const Eigen::Vector2d& pixel, const CameraModel& camera, const SamplePlane& plane, double z0) {
-  const Vec3 direction = PixelRay(pixel, camera, plane);
-  const Vec3 origin = plane.CameraCentre();
+model::Vec3 BackProject(const Eigen::Vector2d& pixel, const CameraModel& camera, const SamplePlane& plane, double z0) {
+  const model::Vec3 direction = PixelRay(pixel, camera, plane);
+  const model::Vec3 origin = plane.CameraCentre();
   return origin + direction * ((z0 - origin.z()) / direction.z());
 }
 
 // How far (mm) the ray through a dot's centroid meets the monitor plane (through `position`, with
 // `normal`) from where the fitted grid puts the dot.
-double DotResidualMm(const Eigen::Vector2d& pixel, const Vec3& position, const Vec3& normal, const CameraModel& camera,
+double DotResidualMm(const Eigen::Vector2d& pixel, const model::Vec3& position, const model::Vec3& normal, const CameraModel& camera,
                      const SamplePlane& plane) {
-  const Vec3 centre = plane.CameraCentre();
-  const Vec3 direction = PixelRay(pixel, camera, plane);
+  const model::Vec3 centre = plane.CameraCentre();
+  const model::Vec3 direction = PixelRay(pixel, camera, plane);
   const double t = normal.dot(position - centre) / normal.dot(direction);
   return 1000.0 * (centre + t * direction - position).norm();
 }
@@ -192,7 +192,7 @@ NominalDots ReadNominalDots(const session::Session& session) {
   for (const auto& [x, y] : rig.dots.positions_px) grid.monitor_px.emplace_back(x + 0.5, y + 0.5);
   const std::vector<int> fiducials = rig.dots.fiducials.value_or(std::vector<int>{});
   if (grid.monitor_px.size() < 4 || !(grid.pixel_pitch_m > 0) || !(n.distance_m > 0) || !(n.radius_px > 0)) {
-    ThrowFormatError(source, "does not describe the monitor and dots: it needs at least 4 dots "
+    common::ThrowFormatError(source, "does not describe the monitor and dots: it needs at least 4 dots "
                              "(rig.dots.positions_px), their radius (rig.dots.radius_px), a positive monitor pixel "
                              "pitch (rig.monitor.pixel_pitch_m) and distance (rig.monitor.distance_m)");
   }
@@ -200,7 +200,7 @@ NominalDots ReadNominalDots(const session::Session& session) {
     grid.fiducial.assign(grid.monitor_px.size(), false);
     for (int q : fiducials) {
       if (q < 0 || q >= static_cast<int>(grid.monitor_px.size())) {
-        ThrowFormatError(source, "lists fiducial dot " + std::to_string(q) + " of " +
+        common::ThrowFormatError(source, "lists fiducial dot " + std::to_string(q) + " of " +
                                      std::to_string(grid.monitor_px.size()) + " (rig.dots.fiducials)");
       }
       grid.fiducial[q] = true;
@@ -212,7 +212,7 @@ NominalDots ReadNominalDots(const session::Session& session) {
       grid.spacing_m = std::min(grid.spacing_m, (grid.monitor_px[a] - grid.monitor_px[b]).norm() * grid.pixel_pitch_m);
     }
   }
-  if (!(grid.spacing_m > 0)) ThrowFormatError(source, "lists two dots at the same position (rig.dots.positions_px)");
+  if (!(grid.spacing_m > 0)) common::ThrowFormatError(source, "lists two dots at the same position (rig.dots.positions_px)");
   return n;
 }
 
@@ -273,7 +273,7 @@ constexpr double kMaxResidualRmsMm = 0.5;
 
 MonitorCalibration CalibrateMonitor(const session::Session& session, const CameraModel& camera, const SamplePlane& plane) {
   const std::vector<std::string> keys = session.PlannedKeys(session::CaptureKind::kAllDots);
-  if (keys.empty()) ThrowInvalidInput(session.folder().string(), "plans no all_dots/ capture (every dot lit, sample removed)");
+  if (keys.empty()) common::ThrowInvalidInput(session.folder().string(), "plans no all_dots/ capture (every dot lit, sample removed)");
   const NominalDots nominal = ReadNominalDots(session);
   const DisplayedGrid& grid = nominal.grid;
   const cv::Size size(camera.width, camera.height);
@@ -286,7 +286,7 @@ MonitorCalibration CalibrateMonitor(const session::Session& session, const Camer
   const std::string decider = fiducial_keys.empty() ? (session.folder() / "session.json").string()
                                                     : ImageFile(session, fiducial_keys.front());
   if (!fiducial_keys.empty() && grid.fiducial.empty()) {
-    ThrowFormatError((session.folder() / "session.json").string(),
+    common::ThrowFormatError((session.folder() / "session.json").string(),
                      "plans a fiducials/ capture but does not say which dots it lit (rig.dots.fiducials)");
   }
   const DotIdentification id = IdentifyDots(on_plane, lit, grid, nominal.orientation_deg, decider);
@@ -297,7 +297,7 @@ MonitorCalibration CalibrateMonitor(const session::Session& session, const Camer
   };
   MonitorCalibration monitor;
   Eigen::Matrix3d to_sample;
-  Vec3 origin;
+  model::Vec3 origin;
   int outliers = 0;
   // The monitor's pose from its dots, in the screen's own frame: u right, v down (seen from the
   // front), so its z axis u x v points into the screen, away from the sample. Dots far off the
@@ -311,7 +311,7 @@ MonitorCalibration CalibrateMonitor(const session::Session& session, const Camer
       image.emplace_back(blobs[match[q]].x(), blobs[match[q]].y());
     }
     if (object.size() < std::max<size_t>(4, match.size() / 2)) {
-      ThrowFormatError(ImageFile(session, keys.front()), "shows " + std::to_string(object.size()) + " of the " +
+      common::ThrowFormatError(ImageFile(session, keys.front()), "shows " + std::to_string(object.size()) + " of the " +
                                                              std::to_string(match.size()) + " displayed dots",
                        "check that the sample is removed, the room dark and the exposure right");
     }
@@ -323,10 +323,10 @@ MonitorCalibration CalibrateMonitor(const session::Session& session, const Camer
     Eigen::Matrix3d monitor_rotation;
     cv::cv2eigen(r, monitor_rotation);
     to_sample = plane.rotation.transpose() * monitor_rotation;
-    origin = plane.rotation.transpose() * (Vec3(tvec[0], tvec[1], tvec[2]) - plane.translation);
+    origin = plane.rotation.transpose() * (model::Vec3(tvec[0], tvec[1], tvec[2]) - plane.translation);
     monitor.normal = -to_sample.col(2).normalized();
     if (!(monitor.normal.z() > 0)) {
-      ThrowFormatError(ImageFile(session, keys.front()),
+      common::ThrowFormatError(ImageFile(session, keys.front()),
                        "fits a monitor whose pixel axes, seen from the sample, form a mirror image of a screen "
                        "(u x v toward the sample)",
                        "turn off the display's mirror or flip mode, or check rig.dots.positions_px");
@@ -336,14 +336,14 @@ MonitorCalibration CalibrateMonitor(const session::Session& session, const Camer
     outliers = 0;
     for (size_t q = 0; q < match.size(); ++q) {
       if (match[q] < 0) continue;
-      const Vec3 position = origin + to_sample * Vec3(monitor_point(q).x, monitor_point(q).y, 0.0);
+      const model::Vec3 position = origin + to_sample * model::Vec3(monitor_point(q).x, monitor_point(q).y, 0.0);
       if (DotResidualMm(blobs[match[q]], position, monitor.normal, camera, plane) > kOutlierResidualMm) {
         match[q] = -1;
         ++outliers;
       }
     }
     if (outliers > kMaxOutlierFraction * match.size()) {
-      ThrowFormatError(ImageFile(session, keys.front()),
+      common::ThrowFormatError(ImageFile(session, keys.front()),
                        "shows " + std::to_string(outliers) + " of the " + std::to_string(match.size()) +
                            " dots more than 1 mm off any flat grid of the layout rig.dots.positions_px describes",
                        "check rig.dots.positions_px and rig.monitor.pixel_pitch_m against what the display showed");
@@ -356,8 +356,8 @@ MonitorCalibration CalibrateMonitor(const session::Session& session, const Camer
   // Checked by CalibrateSession: empty (not noted) or a known profile.
   monitor.emission = session.rig().monitor.emission.empty() ? "isotropic" : session.rig().monitor.emission;
   // The screen's u axis in the sample plane, as measured by the pose.
-  const Vec3 right = to_sample.col(0);
-  monitor.orientation_deg = std::fmod(360.0 + std::atan2(right.y(), right.x()) * 180.0 / kPi, 360.0);
+  const model::Vec3 right = to_sample.col(0);
+  monitor.orientation_deg = std::fmod(360.0 + std::atan2(right.y(), right.x()) * 180.0 / model::kPi, 360.0);
   monitor.identified_by = id.identified_by == "fiducials" ? fiducial_keys.front() : id.identified_by;
   monitor.fiducial_agreement = id.chosen.fiducial_agreement;
   monitor.fiducial_runner_up = id.runner_up_agreement;
@@ -366,7 +366,7 @@ MonitorCalibration CalibrateMonitor(const session::Session& session, const Camer
   for (size_t q = 0; q < match.size(); ++q) {
     DotPosition dot;
     dot.monitor_px = grid.monitor_px[q] - Eigen::Vector2d(0.5, 0.5);
-    dot.position = origin + to_sample * Vec3(monitor_point(q).x, monitor_point(q).y, 0.0);
+    dot.position = origin + to_sample * model::Vec3(monitor_point(q).x, monitor_point(q).y, 0.0);
     dot.image_px = match[q] >= 0 ? blobs[match[q]] : Eigen::Vector2d(-1.0, -1.0);  // -1: not found
     if (match[q] >= 0) {
       dot.residual_mm = DotResidualMm(blobs[match[q]], dot.position, monitor.normal, camera, plane);
@@ -380,7 +380,7 @@ MonitorCalibration CalibrateMonitor(const session::Session& session, const Camer
   }
   monitor.residual_rms_mm = std::sqrt(sum / found);
   if (monitor.residual_rms_mm > kMaxResidualRmsMm) {
-    ThrowFormatError(ImageFile(session, keys.front()),
+    common::ThrowFormatError(ImageFile(session, keys.front()),
                      "shows dots " + std::to_string(monitor.residual_rms_mm) +
                          " mm RMS off the fitted grid, far above the blob noise",
                      "check rig.dots.positions_px, rig.monitor.pixel_pitch_m, and that the monitor is flat");
@@ -404,7 +404,7 @@ Radiometry RadiometryOf(const session::Session& session, int bits, const cv::Siz
       r.inverse_response.push_back(linear * MaxDn(bits));
     }
   } else if (response != "linear") {
-    ThrowFormatError((session.folder() / "session.json").string(), "has camera response '" + response + "'",
+    common::ThrowFormatError((session.folder() / "session.json").string(), "has camera response '" + response + "'",
                      "use 'linear' or 'srgb' (docs/calibration-format.md)");
   }
   // The black offset: the median of the first dark frame (dark current adds little to it).
@@ -430,7 +430,7 @@ SensorWindow WindowOnSensor(const session::SensorWindow& described, const cv::Si
   const SensorWindow w{{described.sensor_width, described.sensor_height}, {described.offset_x, described.offset_y}};
   if (w.offset.x < 0 || w.offset.y < 0 || w.offset.x + window.width > w.sensor.width ||
       w.offset.y + window.height > w.sensor.height) {
-    ThrowFormatError(manifest, "has a " + std::to_string(window.width) + "x" + std::to_string(window.height) +
+    common::ThrowFormatError(manifest, "has a " + std::to_string(window.width) + "x" + std::to_string(window.height) +
                                    " window at (" + std::to_string(w.offset.x) + ", " + std::to_string(w.offset.y) +
                                    ") that does not lie on its " + std::to_string(w.sensor.width) + "x" +
                                    std::to_string(w.sensor.height) + " sensor (rig.camera.sensor)");
@@ -455,13 +455,13 @@ SessionCalibration CalibrateSession(const session::Session& session, const Calib
   const int bits = rig.camera.bit_depth, width = rig.camera.width, height = rig.camera.height;
   const double sample_width = rig.sample.width_m, sample_height = rig.sample.height_m;
   if (bits <= 0 || width <= 0 || height <= 0 || rig.board.spec.empty() || !(sample_width > 0) || !(sample_height > 0)) {
-    ThrowFormatError(manifest, "does not describe the rig",
+    common::ThrowFormatError(manifest, "does not describe the rig",
                      "calibration needs rig.camera (width, height, bit_depth), rig.board.spec and rig.sample "
                      "(width_m, height_m)");
   }
   const std::string& emission = rig.monitor.emission;
   if (!emission.empty() && emission != "isotropic" && emission != "lambertian" && emission != "lcd") {
-    ThrowFormatError(manifest, "has rig.monitor.emission '" + emission + "'",
+    common::ThrowFormatError(manifest, "has rig.monitor.emission '" + emission + "'",
                      "use isotropic, lambertian or lcd (docs/calibration-format.md)");
   }
   const BoardSpec board = BoardSpec::Parse(rig.board.spec, manifest + " rig.board.spec");

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/statistics.h"
 
 namespace svbtdf::calib {
 namespace {
@@ -31,12 +32,6 @@ cv::Ptr<cv::aruco::CharucoBoard> MakeCharucoBoard(const BoardSpec& board) {
   const auto dictionary = cv::aruco::getPredefinedDictionary(ArucoDictionaries().at(board.dictionary));
   return cv::aruco::CharucoBoard::create(board.cols, board.rows, static_cast<float>(board.square_mm),
                                          static_cast<float>(board.marker_mm), dictionary);
-}
-
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
 }
 
 // Square pixels, the principal point at the image centre (OpenCV starts it there), k1 only.
@@ -71,23 +66,23 @@ BoardSpec BoardSpec::Parse(const std::string& text, const std::string& argument)
       board.marker_mm = std::stod(m[4]);
       if (m[5].matched) board.dictionary = m[5];
     } else {
-      ThrowInvalidInput(argument, "cannot parse board '" + text + "'",
+      common::ThrowInvalidInput(argument, "cannot parse board '" + text + "'",
                         "use chessboard:COLSxROWS:SQUARE_MM (inner corners) or "
                         "charuco:COLSxROWS:SQUARE_MM:MARKER_MM[:DICT]");
     }
   } catch (const std::out_of_range&) {
-    ThrowInvalidInput(argument, "a number in board '" + text + "' is out of range");
+    common::ThrowInvalidInput(argument, "a number in board '" + text + "' is out of range");
   }
   if (board.cols < 2 || board.rows < 2 || board.cols > 200 || board.rows > 200) {
-    ThrowInvalidInput(argument, "the board needs 2 to 200 corners or squares per side, got '" + text + "'");
+    common::ThrowInvalidInput(argument, "the board needs 2 to 200 corners or squares per side, got '" + text + "'");
   }
-  if (!(board.square_mm > 0)) ThrowInvalidInput(argument, "the square size must be > 0 mm");
+  if (!(board.square_mm > 0)) common::ThrowInvalidInput(argument, "the square size must be > 0 mm");
   if (board.kind == Kind::kCharuco) {
     if (!(board.marker_mm > 0 && board.marker_mm < board.square_mm)) {
-      ThrowInvalidInput(argument, "the marker must be smaller than the square");
+      common::ThrowInvalidInput(argument, "the marker must be smaller than the square");
     }
     if (!ArucoDictionaries().count(board.dictionary)) {
-      ThrowInvalidInput(argument, "unknown ArUco dictionary '" + board.dictionary + "'", "e.g. DICT_5X5_100");
+      common::ThrowInvalidInput(argument, "unknown ArUco dictionary '" + board.dictionary + "'", "e.g. DICT_5X5_100");
     }
   }
   return board;
@@ -213,7 +208,7 @@ CalibrationReport CalibrateCamera(const std::vector<BoardDetection>& detections,
   int flags = options.fix_k3 ? cv::CALIB_FIX_K3 : 0;
   for (int round = 0;; ++round) {
     if (static_cast<int>(candidates.size()) < options.min_views) {
-      ThrowInvalidInput("calibration images",
+      common::ThrowInvalidInput("calibration images",
                         "only " + std::to_string(candidates.size()) + " usable board views, " +
                             std::to_string(options.min_views) + " needed",
                         "add views of the board at varied angles filling the frame");
@@ -229,7 +224,7 @@ CalibrationReport CalibrateCamera(const std::vector<BoardDetection>& detections,
     report.rms_px = cv::calibrateCamera(object_points, image_points, image_size, camera_matrix, distortion, rvecs,
                                         tvecs, std_intrinsics, std_extrinsics, per_view_errors, flags);
     std::vector<double> errors(per_view_errors.begin<double>(), per_view_errors.end<double>());
-    const double threshold = std::max(options.outlier_factor * Median(errors), options.outlier_floor_px);
+    const double threshold = std::max(options.outlier_factor * common::Median(errors), options.outlier_floor_px);
     std::vector<int> kept;
     for (size_t j = 0; j < candidates.size(); ++j) {
       ViewReport& view = report.views[candidates[j]];

@@ -24,7 +24,7 @@ constexpr double kMinFiducialMargin = 0.2;
 // quarter turn; the screen is never turned by half of one).
 constexpr double kMaxOrientationDisagreementDeg = 30.0;
 
-double Degrees(double radians) { return radians * 180.0 / kPi; }
+double Degrees(double radians) { return radians * 180.0 / model::kPi; }
 
 double NormalisedDegrees(double degrees) {
   const double d = std::fmod(degrees, 360.0);
@@ -161,7 +161,7 @@ std::vector<GridCandidate> MatchGridCandidates(const std::vector<Eigen::Vector2d
   const double lattice = LatticeAngle(blob_xy);
   for (bool mirrored : {false, true}) {
     for (int quarter = 0; quarter < 4; ++quarter) {
-      candidates.push_back(MatchCandidate(blob_xy, blob_lit, grid, lattice + quarter * kPi / 2.0, mirrored));
+      candidates.push_back(MatchCandidate(blob_xy, blob_lit, grid, lattice + quarter * model::kPi / 2.0, mirrored));
     }
   }
   std::stable_sort(candidates.begin(), candidates.end(), [](const GridCandidate& a, const GridCandidate& b) {
@@ -194,19 +194,19 @@ DotIdentification IdentifyDots(const std::vector<Eigen::Vector2d>& blob_xy, cons
     id.identified_by = "fiducials";
     if (viable.size() > 1) id.runner_up_agreement = viable[1].fiducial_agreement;
     if (id.chosen.fiducial_agreement < kMinFiducialAgreement) {
-      ThrowFormatError(source, "lights dots that match no way the grid can lie (at best " +
+      common::ThrowFormatError(source, "lights dots that match no way the grid can lie (at best " +
                                    Percent(id.chosen.fiducial_agreement) + " of the dots agree)",
                        "check rig.dots.fiducials against what the display showed, and that nothing moved between the "
                        "all-dots and the fiducial captures");
     }
     if (id.runner_up_agreement > id.chosen.fiducial_agreement - kMinFiducialMargin) {
-      ThrowFormatError(source, "cannot tell which way the grid lies: " + Percent(id.chosen.fiducial_agreement) +
+      common::ThrowFormatError(source, "cannot tell which way the grid lies: " + Percent(id.chosen.fiducial_agreement) +
                                    " of the dots agree with one orientation and " + Percent(id.runner_up_agreement) +
                                    " with another",
                        "light fiducial dots that no turn or mirror of the grid maps onto themselves");
     }
     if (id.chosen.mirrored) {
-      ThrowFormatError(source, "shows the dot grid mirrored: seen from the sample, the screen's pixel axes run right "
+      common::ThrowFormatError(source, "shows the dot grid mirrored: seen from the sample, the screen's pixel axes run right "
                                "and up instead of right and down, which no monitor seen from its front does "
                                "(the dots would all be given the wrong positions)",
                        "turn off the display's mirror or flip mode, or check that rig.dots.positions_px are the "
@@ -214,7 +214,7 @@ DotIdentification IdentifyDots(const std::vector<Eigen::Vector2d>& blob_xy, cons
     }
     if (declared_orientation_deg &&
         AngularDistanceDeg(id.chosen.orientation_deg, *declared_orientation_deg) > kMaxOrientationDisagreementDeg) {
-      ThrowFormatError(source, "shows the screen turned by " + FormatDegrees(id.chosen.orientation_deg) +
+      common::ThrowFormatError(source, "shows the screen turned by " + FormatDegrees(id.chosen.orientation_deg) +
                                    " degrees, but rig.monitor.orientation_deg says " +
                                    FormatDegrees(*declared_orientation_deg),
                        "check how the monitor lies and correct rig.monitor.orientation_deg (or remove it)");
@@ -222,7 +222,7 @@ DotIdentification IdentifyDots(const std::vector<Eigen::Vector2d>& blob_xy, cons
     return id;
   }
   if (!declared_orientation_deg) {
-    ThrowFormatError(source, "has no fiducial capture and no rig.monitor.orientation_deg: a dot grid looks the same "
+    common::ThrowFormatError(source, "has no fiducial capture and no rig.monitor.orientation_deg: a dot grid looks the same "
                              "turned by half a turn, so which blob is which dot cannot be told",
                      "capture fiducials/e0 (svbtdf acquire plans it), or state the screen's orientation in "
                      "rig.monitor.orientation_deg (docs/calibration-format.md)");
@@ -237,7 +237,7 @@ DotIdentification IdentifyDots(const std::vector<Eigen::Vector2d>& blob_xy, cons
   }
   if (!nearest ||
       AngularDistanceDeg(nearest->orientation_deg, *declared_orientation_deg) > kMaxOrientationDisagreementDeg) {
-    ThrowFormatError(source, "shows no dot grid turned by about rig.monitor.orientation_deg = " +
+    common::ThrowFormatError(source, "shows no dot grid turned by about rig.monitor.orientation_deg = " +
                                  FormatDegrees(*declared_orientation_deg) + " degrees",
                      "check how the monitor lies, or capture fiducials/e0");
   }

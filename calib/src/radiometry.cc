@@ -21,14 +21,14 @@ int CameraValue(const cv::Mat& image, int y, int x, int c) {
 Radiometry RecoverResponse(const std::vector<cv::Mat>& images, const std::vector<double>& exposures_s,
                            ResponseMethod method, const std::string& source) {
   if (images.size() < 2 || images.size() != exposures_s.size()) {
-    ThrowInvalidInput(source, "a response needs at least 2 images, each with its exposure time");
+    common::ThrowInvalidInput(source, "a response needs at least 2 images, each with its exposure time");
   }
   std::vector<cv::Mat> colour;
   for (const cv::Mat& image : images) {
     if (image.depth() != CV_8U) {
-      ThrowInvalidInput(source, "response recovery needs 8-bit images", "16-bit raw frames are linear already");
+      common::ThrowInvalidInput(source, "response recovery needs 8-bit images", "16-bit raw frames are linear already");
     }
-    if (image.size() != images.front().size()) ThrowInvalidInput(source, "the images differ in size");
+    if (image.size() != images.front().size()) common::ThrowInvalidInput(source, "the images differ in size");
     cv::Mat bgr;
     if (image.channels() == 1) {
       cv::Mat planes[] = {image, image, image};
@@ -40,7 +40,7 @@ Radiometry RecoverResponse(const std::vector<cv::Mat>& images, const std::vector
   }
   std::vector<float> times;
   for (double t : exposures_s) {
-    if (!(t > 0)) ThrowInvalidInput(source, "exposure times must be > 0");
+    if (!(t > 0)) common::ThrowInvalidInput(source, "exposure times must be > 0");
     times.push_back(static_cast<float>(t));
   }
   cv::Mat curve;  // 256 x 1, CV_32FC3: linear value for each 8-bit value
@@ -106,20 +106,20 @@ std::vector<float> HdrAccumulator::Rates() const {
 
 
 HdrResult MergeExposures(const std::vector<Exposure>& brackets, const cv::Mat& dark, const Radiometry& radiometry) {
-  if (brackets.empty()) ThrowInvalidInput("exposure brackets", "no images to merge");
+  if (brackets.empty()) common::ThrowInvalidInput("exposure brackets", "no images to merge");
   const cv::Mat& first = brackets.front().image;
   for (const Exposure& e : brackets) {
-    if (e.image.empty()) ThrowInvalidInput(e.source, "empty image");
+    if (e.image.empty()) common::ThrowInvalidInput(e.source, "empty image");
     if (e.image.size() != first.size() || e.image.type() != first.type()) {
-      ThrowInvalidInput(e.source, "size or type differs from " + brackets.front().source);
+      common::ThrowInvalidInput(e.source, "size or type differs from " + brackets.front().source);
     }
     if (e.image.depth() != CV_8U && e.image.depth() != CV_16U) {
-      ThrowInvalidInput(e.source, "camera frames must be 8- or 16-bit integers");
+      common::ThrowInvalidInput(e.source, "camera frames must be 8- or 16-bit integers");
     }
-    if (!(e.exposure_s > 0) || !(e.gain > 0)) ThrowInvalidInput(e.source, "exposure time and gain must be > 0");
+    if (!(e.exposure_s > 0) || !(e.gain > 0)) common::ThrowInvalidInput(e.source, "exposure time and gain must be > 0");
   }
   if (!dark.empty() && (dark.size() != first.size() || dark.type() != first.type())) {
-    ThrowInvalidInput("dark frame", "size or type differs from the exposures");
+    common::ThrowInvalidInput("dark frame", "size or type differs from the exposures");
   }
   const int channels = first.channels();
   const int64_t pixels = static_cast<int64_t>(first.rows) * first.cols;

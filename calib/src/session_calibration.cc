@@ -11,10 +11,10 @@
 namespace svbtdf::calib {
 namespace {
 
-nlohmann::json ToJson(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
+nlohmann::json ToJson(const model::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 nlohmann::json ToJson(const Eigen::Vector2d& v) { return {v.x(), v.y()}; }
 
-Vec3 Vec3FromJson(const nlohmann::json& j) { return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()}; }
+model::Vec3 Vec3FromJson(const nlohmann::json& j) { return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()}; }
 Eigen::Vector2d Vec2FromJson(const nlohmann::json& j) { return {j.at(0).get<double>(), j.at(1).get<double>()}; }
 
 CalibrationReport CameraFromJson(const nlohmann::json& j) {
@@ -51,7 +51,7 @@ CalibrationReport CameraFromJson(const nlohmann::json& j) {
 
 void RequirePositiveFinite(double value, const std::string& source, const std::string& key) {
   if (!(value > 0.0) || !std::isfinite(value)) {
-    ThrowFormatError(source, "has " + key + " = " + std::to_string(value) + "; it must be positive and finite");
+    common::ThrowFormatError(source, "has " + key + " = " + std::to_string(value) + "; it must be positive and finite");
   }
 }
 
@@ -116,10 +116,10 @@ nlohmann::json ToJson(const SessionCalibration& calibration) {
 SessionCalibration SessionCalibrationFromJson(const nlohmann::json& json, const std::string& source) {
   SessionCalibration c;
   try {
-    if (json.at("format") != "svbtdf-calibration") ThrowFormatError(source, "is not an svbtdf calibration");
+    if (json.at("format") != "svbtdf-calibration") common::ThrowFormatError(source, "is not an svbtdf calibration");
     c.version = json.at("version").get<int>();
     if (c.version != kCalibrationFormatVersion) {
-      ThrowFormatError(source, "has calibration format version " + std::to_string(c.version) +
+      common::ThrowFormatError(source, "has calibration format version " + std::to_string(c.version) +
                                    "; this svbtdf reads version " + std::to_string(kCalibrationFormatVersion),
                        "re-run 'svbtdf calibrate' on the session");
     }
@@ -164,7 +164,7 @@ SessionCalibration SessionCalibrationFromJson(const nlohmann::json& json, const 
     c.radiometry.black_offset_dn = r.value("black_offset_dn", 0.0);
     c.provenance = json.value("provenance", nlohmann::json::object());
   } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(source, std::string("is malformed: ") + e.what(), "re-run 'svbtdf calibrate' on the session");
+    common::ThrowFormatError(source, std::string("is malformed: ") + e.what(), "re-run 'svbtdf calibrate' on the session");
   }
   const CameraModel& cam = c.camera.camera;
   RequirePositiveFinite(cam.fx, source, "camera.fx");
@@ -175,39 +175,39 @@ SessionCalibration SessionCalibrationFromJson(const nlohmann::json& json, const 
   RequirePositiveFinite(c.monitor.dot_radius_m, source, "monitor.dot_radius_m");
   RequirePositiveFinite(c.sample_plane.width_m, source, "sample_plane.width_m");
   RequirePositiveFinite(c.sample_plane.height_m, source, "sample_plane.height_m");
-  if (c.monitor.dots.empty()) ThrowFormatError(source, "lists no dots");
+  if (c.monitor.dots.empty()) common::ThrowFormatError(source, "lists no dots");
   if (c.radiometry.response != "linear" && c.radiometry.response != "table") {
-    ThrowFormatError(source, "has an unknown radiometry.response '" + c.radiometry.response + "'");
+    common::ThrowFormatError(source, "has an unknown radiometry.response '" + c.radiometry.response + "'");
   }
   if (c.monitor.emission != "isotropic" && c.monitor.emission != "lambertian" && c.monitor.emission != "lcd") {
-    ThrowFormatError(source, "has an unknown monitor.emission '" + c.monitor.emission + "'");
+    common::ThrowFormatError(source, "has an unknown monitor.emission '" + c.monitor.emission + "'");
   }
   if (c.sample_plane.CameraCentre().z() <= 0.0) {
-    ThrowFormatError(source, "puts the camera behind the sample plane (sample_plane pose is wrong)");
+    common::ThrowFormatError(source, "puts the camera behind the sample plane (sample_plane pose is wrong)");
   }
   return c;
 }
 
 SessionCalibration ReadSessionCalibration(const std::filesystem::path& path) {
-  const std::string text = ReadTextFile(path);
+  const std::string text = common::ReadTextFile(path);
   nlohmann::json json;
   try {
     json = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(path.string(), std::string("is not valid JSON: ") + e.what());
+    common::ThrowFormatError(path.string(), std::string("is not valid JSON: ") + e.what());
   }
   return SessionCalibrationFromJson(json, path.string());
 }
 
 void WriteSessionCalibration(const std::filesystem::path& path, const SessionCalibration& calibration) {
-  WriteTextAtomically(path, ToJson(calibration).dump(2) + "\n", /*overwrite=*/true);
+  common::WriteTextAtomically(path, ToJson(calibration).dump(2) + "\n", /*overwrite=*/true);
 }
 
-std::vector<Eigen::Vector2d> ProjectToImage(const SessionCalibration& calibration, const std::vector<Vec3>& points) {
+std::vector<Eigen::Vector2d> ProjectToImage(const SessionCalibration& calibration, const std::vector<model::Vec3>& points) {
   if (points.empty()) return {};
   std::vector<cv::Point3d> object(points.size());
   for (size_t k = 0; k < points.size(); ++k) {
-    const Vec3 c = calibration.sample_plane.ToCamera(points[k]);
+    const model::Vec3 c = calibration.sample_plane.ToCamera(points[k]);
     object[k] = {c.x(), c.y(), c.z()};
   }
   std::vector<cv::Point2d> image;

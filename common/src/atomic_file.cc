@@ -11,7 +11,7 @@
 
 #include "svbtdf/common/error.h"
 
-namespace svbtdf {
+namespace svbtdf::common {
 namespace fs = std::filesystem;
 namespace {
 
@@ -84,4 +84,4 @@ std::string ReadTextFile(const fs::path& path) {
   return buffer.str();
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

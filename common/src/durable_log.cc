@@ -11,7 +11,7 @@
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 
-namespace svbtdf {
+namespace svbtdf::common {
 namespace fs = std::filesystem;
 namespace {
 
@@ -82,4 +82,4 @@ void DurableLog::Append(std::string_view line) {
   AppendBytesDurably(path_, bytes);
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

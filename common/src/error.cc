@@ -2,7 +2,7 @@
 
 #include <utility>
 
-namespace svbtdf {
+namespace svbtdf::common {
 namespace {
 
 std::string Compose(const std::string& subject, const std::string& problem,
@@ -51,4 +51,4 @@ int ExitCodeFor(ErrorKind kind) {
   return 1;
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

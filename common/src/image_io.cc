@@ -9,7 +9,7 @@
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 
-namespace svbtdf {
+namespace svbtdf::common {
 namespace fs = std::filesystem;
 namespace {
 
@@ -143,4 +143,4 @@ void RequireFinite(const FloatImage& image, const std::string& source) {
   }
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

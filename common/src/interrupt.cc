@@ -5,7 +5,7 @@
 
 #include "svbtdf/common/error.h"
 
-namespace svbtdf {
+namespace svbtdf::common {
 namespace {
 
 std::atomic<bool> g_interrupt_requested{false};
@@ -36,4 +36,4 @@ void ThrowIfInterrupted(const char* what) {
   }
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-namespace svbtdf {
+namespace svbtdf::common {
 
 double GoldenSectionSearch(const std::function<double(double)>& f, double lo, double hi, double tolerance) {
   const double inv_phi = (std::sqrt(5.0) - 1.0) / 2.0;
@@ -27,4 +27,4 @@ double GoldenSectionSearch(const std::function<double(double)>& f, double lo, do
   return 0.5 * (a + b);
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

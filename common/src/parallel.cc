@@ -7,7 +7,7 @@
 #include <thread>
 #include <vector>
 
-namespace svbtdf {
+namespace svbtdf::common {
 
 int ThreadCount(int requested) {
   if (requested > 0) return requested;
@@ -41,4 +41,4 @@ void ParallelFor(int64_t n, int threads, int64_t chunk, const std::function<void
   if (error) std::rethrow_exception(error);
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

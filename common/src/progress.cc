@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <utility>
 
-namespace svbtdf {
+namespace svbtdf::common {
 namespace {
 
 std::atomic<bool> g_progress_enabled{true};
@@ -92,4 +92,4 @@ void ProgressBar::MaybeDraw(bool force) {
   std::fflush(stderr);
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

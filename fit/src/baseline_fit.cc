@@ -16,7 +16,7 @@ namespace svbtdf::fit {
 namespace {
 
 // Parameters: ln alpha_x, ln alpha_y, azimuth, ln k.
-double BaselineRho(const double* p, double eta, const Vec3& i, const Vec3& o) {
+double BaselineRho(const double* p, double eta, const model::Vec3& i, const model::Vec3& o) {
   return std::exp(p[3]) * BaselineShape({std::exp(p[0]), std::exp(p[1]), p[2]}, eta, i, o);
 }
 
@@ -46,9 +46,9 @@ struct BaselineResidual {
       const double rho = BaselineRho(parameters[0], eta, slice->light[k], slice->view);
       // A direction the single refraction cannot reach costs as much as a 1000x miss, so the
       // optimiser is pulled toward covering every bright sample.
-      const double model = rho > 0 ? rho : 1e-3 * slice->rho[k];
+      const double predicted = rho > 0 ? rho : 1e-3 * slice->rho[k];
       const double weight = slice->weight.empty() ? 1.0 : slice->weight[k];
-      residuals[j] = std::sqrt(weight) * (std::log(model) - std::log(slice->rho[k]));
+      residuals[j] = std::sqrt(weight) * (std::log(predicted) - std::log(slice->rho[k]));
     }
     return true;
   }
@@ -56,15 +56,15 @@ struct BaselineResidual {
 
 }  // namespace
 
-double BaselineShape(const BaselineLobe& lobe, double eta, const Vec3& i, const Vec3& o) {
-  const GgxNdf ndf(lobe.alpha_x, lobe.alpha_y);
-  const Eigen::AngleAxisd unrotate(-lobe.azimuth, Vec3::UnitZ());
-  return WalterBtdf(ndf, unrotate * i, unrotate * o, 1.0, eta);
+double BaselineShape(const BaselineLobe& lobe, double eta, const model::Vec3& i, const model::Vec3& o) {
+  const model::GgxNdf ndf(lobe.alpha_x, lobe.alpha_y);
+  const Eigen::AngleAxisd unrotate(-lobe.azimuth, model::Vec3::UnitZ());
+  return model::WalterBtdf(ndf, unrotate * i, unrotate * o, 1.0, eta);
 }
 
-std::vector<double> BaselineLnD(const Hemicube& grid, const BaselineLobe& lobe) {
-  const GgxNdf ndf(lobe.alpha_x, lobe.alpha_y);
-  const Eigen::AngleAxisd unrotate(-lobe.azimuth, Vec3::UnitZ());
+std::vector<double> BaselineLnD(const model::Hemicube& grid, const BaselineLobe& lobe) {
+  const model::GgxNdf ndf(lobe.alpha_x, lobe.alpha_y);
+  const Eigen::AngleAxisd unrotate(-lobe.azimuth, model::Vec3::UnitZ());
   std::vector<double> ln_d(grid.num_cells());
   for (int c = 0; c < grid.num_cells(); ++c) {
     ln_d[c] = std::log(std::max(ndf.D(unrotate * grid.CellCenter(c)), 1e-300));
@@ -76,31 +76,31 @@ BaselineLobe BlendBaselineLobes(const std::vector<std::pair<BaselineLobe, double
   Eigen::Matrix2d moments = Eigen::Matrix2d::Zero();
   for (const auto& [lobe, weight] : weighted) {
     const Eigen::Rotation2Dd rotation(lobe.azimuth);
-    const Eigen::Vector2d scales(Square(lobe.alpha_x), Square(lobe.alpha_y));
+    const Eigen::Vector2d scales(model::Square(lobe.alpha_x), model::Square(lobe.alpha_y));
     moments += weight * (rotation.toRotationMatrix() * scales.asDiagonal() * rotation.toRotationMatrix().transpose());
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(moments);
   // Negative affine weights can undershoot: keep the lobe at least as narrow as the fit's bound.
-  const double floor = Square(1e-3);
+  const double floor = model::Square(1e-3);
   const Eigen::Vector2d axis = eigen.eigenvectors().col(1);  // the larger eigenvalue: alpha_x
   BaselineLobe blended;
   blended.alpha_x = std::sqrt(std::max(eigen.eigenvalues()[1], floor));
   blended.alpha_y = std::sqrt(std::max(eigen.eigenvalues()[0], floor));
-  blended.azimuth = std::remainder(std::atan2(axis.y(), axis.x()), kPi);
+  blended.azimuth = std::remainder(std::atan2(axis.y(), axis.x()), model::kPi);
   return blended;
 }
 
 BaselineFitter::BaselineFitter(double eta, double dark_fraction) : eta_(eta), dark_fraction_(dark_fraction) {
-  DualMicrofacetModel validate_eta(eta);
+  model::DualMicrofacetModel validate_eta(eta);
 }
 
-double BaselineFitter::Rho(const BaselineFitResult& fit, const Vec3& i, const Vec3& o) const {
+double BaselineFitter::Rho(const BaselineFitResult& fit, const model::Vec3& i, const model::Vec3& o) const {
   const double p[4] = {std::log(fit.alpha_x), std::log(fit.alpha_y), fit.azimuth, std::log(fit.k_s)};
   return BaselineRho(p, eta_, i, o);
 }
 
 BaselineFitResult BaselineFitter::Fit(const TexelSlice& slice) const {
-  if (slice.rho.size() != slice.light.size()) ThrowInvalidInput("texel slice", "rho and light sizes differ");
+  if (slice.rho.size() != slice.light.size()) common::ThrowInvalidInput("texel slice", "rho and light sizes differ");
   double brightest = 0;
   for (size_t k = 0; k < slice.rho.size(); ++k) {
     if (slice.weight.empty() || slice.weight[k] > 0) brightest = std::max(brightest, slice.rho[k]);
@@ -111,15 +111,15 @@ BaselineFitResult BaselineFitter::Fit(const TexelSlice& slice) const {
     if (weighted && slice.rho[k] > 0 && slice.rho[k] >= dark_fraction_ * brightest) rows.push_back(static_cast<int>(k));
   }
   if (rows.size() < 8) {
-    throw Error(ErrorKind::kNumerical, "texel slice", "too few bright samples for the baseline fit");
+    throw common::Error(common::ErrorKind::kNumerical, "texel slice", "too few bright samples for the baseline fit");
   }
   // Start from a moderate isotropic lobe with the scale matching the brightest sample.
   double p[4] = {std::log(0.2), std::log(0.2), 0.0, 0.0};
   double sum_log_ratio = 0;
   int counted = 0;
   for (int k : rows) {
-    const double model = BaselineRho(p, eta_, slice.light[k], slice.view);
-    if (model > 0) sum_log_ratio += std::log(slice.rho[k] / model), ++counted;
+    const double predicted = BaselineRho(p, eta_, slice.light[k], slice.view);
+    if (predicted > 0) sum_log_ratio += std::log(slice.rho[k] / predicted), ++counted;
   }
   if (counted > 0) p[3] = sum_log_ratio / counted;
 
@@ -140,19 +140,19 @@ BaselineFitResult BaselineFitter::Fit(const TexelSlice& slice) const {
   BaselineFitResult result;
   result.alpha_x = std::exp(p[0]);
   result.alpha_y = std::exp(p[1]);
-  result.azimuth = std::remainder(p[2], kPi);
+  result.azimuth = std::remainder(p[2], model::kPi);
   result.k_s = std::exp(p[3]);
   result.converged = summary.IsSolutionUsable();
   double squared_error = 0, squared_rho = 0, squared_log = 0;
   for (size_t k = 0; k < slice.rho.size(); ++k) {
     if (!(slice.weight.empty() || slice.weight[k] > 0)) continue;
-    const double model = Rho(result, slice.light[k], slice.view);
-    squared_error += Square(model - slice.rho[k]);
-    squared_rho += Square(slice.rho[k]);
+    const double predicted = Rho(result, slice.light[k], slice.view);
+    squared_error += model::Square(predicted - slice.rho[k]);
+    squared_rho += model::Square(slice.rho[k]);
   }
   for (int k : rows) {
-    const double model = Rho(result, slice.light[k], slice.view);
-    if (model > 0) squared_log += Square(std::log(model / slice.rho[k]));
+    const double predicted = Rho(result, slice.light[k], slice.view);
+    if (predicted > 0) squared_log += model::Square(std::log(predicted / slice.rho[k]));
   }
   result.relative_rmse = squared_rho > 0 ? std::sqrt(squared_error / squared_rho) : 0.0;
   result.log_rms = std::sqrt(squared_log / rows.size());

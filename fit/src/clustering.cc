@@ -76,7 +76,7 @@ Pca ComputePca(const SliceSource& source, const ClusteringOptions& options, std:
 MatrixF ProjectAll(const SliceSource& source, const Pca& pca, int threads) {
   const int p = static_cast<int>(pca.components.cols());
   MatrixF z(source.num_texels, p);
-  ParallelFor(source.num_texels, threads, (source.num_texels + threads - 1) / threads, [&](int64_t begin, int64_t end) {
+  common::ParallelFor(source.num_texels, threads, (source.num_texels + threads - 1) / threads, [&](int64_t begin, int64_t end) {
     VectorF slice(source.dimension);
     for (int64_t t = begin; t < end; ++t) {
       source.read(t, slice.data());
@@ -130,7 +130,7 @@ void Assign(const MatrixF& z, const MatrixF& centres, int threads, std::vector<i
   distance->resize(z.rows());
   constexpr int64_t kBlock = 2048;
   const int64_t blocks = (z.rows() + kBlock - 1) / kBlock;
-  ParallelFor(blocks, threads, (blocks + threads - 1) / threads, [&](int64_t block_begin, int64_t block_end) {
+  common::ParallelFor(blocks, threads, (blocks + threads - 1) / threads, [&](int64_t block_begin, int64_t block_end) {
     for (int64_t b = block_begin; b < block_end; ++b) {
       const int64_t begin = b * kBlock, end = std::min<int64_t>(z.rows(), begin + kBlock);
       const MatrixF d = BlockDistances(z, begin, end, centres, centre_norms);
@@ -148,11 +148,11 @@ void Assign(const MatrixF& z, const MatrixF& centres, int threads, std::vector<i
 std::vector<double> SolveAffineWeights(const std::vector<std::vector<float>>& basis,
                                        const std::vector<float>& target, double regularization) {
   const int m = static_cast<int>(basis.size());
-  if (m == 0) ThrowInvalidInput("affine weights", "no basis slices");
+  if (m == 0) common::ThrowInvalidInput("affine weights", "no basis slices");
   const int d = static_cast<int>(target.size());
   Eigen::MatrixXd b(d, m);
   for (int j = 0; j < m; ++j) {
-    if (static_cast<int>(basis[j].size()) != d) ThrowInvalidInput("affine weights", "basis sizes differ");
+    if (static_cast<int>(basis[j].size()) != d) common::ThrowInvalidInput("affine weights", "basis sizes differ");
     for (int r = 0; r < d; ++r) b(r, j) = basis[j][r];
   }
   Eigen::VectorXd t(d);
@@ -173,12 +173,12 @@ std::vector<double> SolveAffineWeights(const std::vector<std::vector<float>>& ba
 
 Clustering ClusterSlices(const SliceSource& source, const ClusteringOptions& options) {
   if (source.num_texels <= 0 || source.dimension <= 0 || !source.read) {
-    ThrowInvalidInput("clustering", "no slices to cluster");
+    common::ThrowInvalidInput("clustering", "no slices to cluster");
   }
   if (!(options.representative_fraction > 0 && options.representative_fraction <= 1)) {
-    ThrowInvalidInput("--representatives", "the fraction must lie in (0, 1]");
+    common::ThrowInvalidInput("--representatives", "the fraction must lie in (0, 1]");
   }
-  const int threads = ThreadCount(options.threads);
+  const int threads = common::ThreadCount(options.threads);
   std::mt19937_64 rng(options.seed);
   const int64_t n = source.num_texels;
   const int k = static_cast<int>(std::clamp<int64_t>(
@@ -186,7 +186,7 @@ Clustering ClusterSlices(const SliceSource& source, const ClusteringOptions& opt
 
   const Pca pca = ComputePca(source, options, rng);
   const MatrixF z = ProjectAll(source, pca, threads);
-  ThrowIfInterrupted("clustering");
+  common::ThrowIfInterrupted("clustering");
 
   MatrixF centres = SeedKMeansPlusPlus(z, k, options, rng);
   std::vector<int> label;
@@ -208,7 +208,7 @@ Clustering ClusterSlices(const SliceSource& source, const ClusteringOptions& opt
         distance[worst] = 0.0f;
       }
     }
-    ThrowIfInterrupted("clustering");
+    common::ThrowIfInterrupted("clustering");
   }
   Assign(z, centres, threads, &label, &distance);
 
@@ -240,7 +240,7 @@ Clustering ClusterSlices(const SliceSource& source, const ClusteringOptions& opt
   const VectorF rep_norms = rep_z.rowwise().squaredNorm();
   constexpr int64_t kBlock = 1024;
   const int64_t blocks = (n + kBlock - 1) / kBlock;
-  ParallelFor(blocks, threads, (blocks + threads - 1) / threads, [&](int64_t block_begin, int64_t block_end) {
+  common::ParallelFor(blocks, threads, (blocks + threads - 1) / threads, [&](int64_t block_begin, int64_t block_end) {
     std::vector<int> order(r);
     for (int64_t b = block_begin; b < block_end; ++b) {
       const int64_t begin = b * kBlock, end = std::min<int64_t>(n, begin + kBlock);

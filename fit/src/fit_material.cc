@@ -25,28 +25,28 @@ namespace {
 
 void CheckOptions(const FitMaterialOptions& options, double eta) {
   if (!(eta > 1.0) || !std::isfinite(eta)) {
-    ThrowInvalidInput("--eta", "must be > 1 (the sample's relative index of refraction), got " + std::to_string(eta),
+    common::ThrowInvalidInput("--eta", "must be > 1 (the sample's relative index of refraction), got " + std::to_string(eta),
                       "give --eta; the session does not record it");
   }
   if (!(options.representative_fraction > 0.0)) {
-    ThrowInvalidInput("--representatives", "must be a fraction in (0, 1] or 'all'");
+    common::ThrowInvalidInput("--representatives", "must be a fraction in (0, 1] or 'all'");
   }
   if (!(options.holdout >= 0.0 && options.holdout < 0.9)) {
-    ThrowInvalidInput("--holdout", "must be in [0, 0.9), got " + std::to_string(options.holdout));
+    common::ThrowInvalidInput("--holdout", "must be in [0, 0.9), got " + std::to_string(options.holdout));
   }
   const int r = options.ndf_resolution;
-  if (r < 4 || r > 128) ThrowInvalidInput("--ndf-resolution", "must be in [4, 128], got " + std::to_string(r));
+  if (r < 4 || r > 128) common::ThrowInvalidInput("--ndf-resolution", "must be in [4, 128], got " + std::to_string(r));
 }
 
 // The texels the fit can use (mask = 1).
 std::vector<int64_t> ValidTexels(const SliceStore& store) {
   std::vector<int64_t> valid;
-  const FloatImage& mask = store.mask();
+  const common::FloatImage& mask = store.mask();
   for (int64_t t = 0; t < static_cast<int64_t>(mask.pixels.size()); ++t) {
     if (mask.pixels[t] > 0) valid.push_back(t);
   }
   if (valid.empty()) {
-    ThrowInvalidInput(store.folder().string(), "has no texel with enough valid samples to fit",
+    common::ThrowInvalidInput(store.folder().string(), "has no texel with enough valid samples to fit",
                       "check the session's exposures and the calibration");
   }
   return valid;
@@ -139,7 +139,7 @@ class Checkpoint {
  public:
   Checkpoint(const fs::path& path, const nlohmann::json& identity) {
     if (path.empty()) return;
-    log_ = DurableLog::Open(path, IsJsonObjectLine);
+    log_ = common::DurableLog::Open(path, common::IsJsonObjectLine);
     const std::vector<std::string>& lines = log_->lines();
     if (lines.empty()) {
       log_->Append(nlohmann::json{{"fit", identity}}.dump());
@@ -151,7 +151,7 @@ class Checkpoint {
     } catch (const nlohmann::json::exception&) {
     }
     if (header != nlohmann::json{{"fit", identity}}) {
-      ThrowInvalidInput(path.string(), "is the checkpoint of a fit with other inputs or options",
+      common::ThrowInvalidInput(path.string(), "is the checkpoint of a fit with other inputs or options",
                         "re-run with the same options, or delete it to start over");
     }
     for (size_t n = 1; n < lines.size(); ++n) {
@@ -173,7 +173,7 @@ class Checkpoint {
   }
 
  private:
-  std::optional<DurableLog> log_;  // none when no checkpoint was asked for
+  std::optional<common::DurableLog> log_;  // none when no checkpoint was asked for
   std::map<int, nlohmann::json> done_;
   std::mutex mutex_;
 };
@@ -287,25 +287,25 @@ std::vector<uint8_t> FitPending(const SliceStore& store, const std::vector<int64
       todo.push_back(static_cast<int>(r));
     }
   }
-  std::unique_ptr<ProgressBar> progress;
+  std::unique_ptr<common::ProgressBar> progress;
   if (options.progress) {
-    progress = std::make_unique<ProgressBar>("fit", static_cast<int64_t>(reps.size()), "texels");
+    progress = std::make_unique<common::ProgressBar>("fit", static_cast<int64_t>(reps.size()), "texels");
     progress->SkipAlreadyDone(static_cast<int64_t>(reps.size() - todo.size()));
   }
   // Bytes, not vector<bool>: workers write neighbouring flags at the same time.
   std::vector<uint8_t> failed(reps.size(), 0);
   WorkspacePool workspaces;
-  ParallelFor(static_cast<int64_t>(todo.size()), options.threads, 1, [&](int64_t a, int64_t b) {
+  common::ParallelFor(static_cast<int64_t>(todo.size()), options.threads, 1, [&](int64_t a, int64_t b) {
     FitWorkspace workspace = workspaces.Take();
     for (int64_t k = a; k < b; ++k) {
-      ThrowIfInterrupted("fitting");
+      common::ThrowIfInterrupted("fitting");
       const int r = todo[k];
       try {
         nlohmann::json result = fits->Fit(store.MakeTexelSlice(reps[r], use_dot), &workspace);
         checkpoint->Record(r, result);
         fits->Set(r, std::move(result));
-      } catch (const Error& e) {
-        if (e.kind() != ErrorKind::kNumerical) throw;
+      } catch (const common::Error& e) {
+        if (e.kind() != common::ErrorKind::kNumerical) throw;
         failed[r] = 1;  // not journalled: a rerun tries it again
       }
       if (progress) progress->Advance();
@@ -357,7 +357,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
   const double fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fit_start).count();
   const int64_t failures = std::count(failed.begin(), failed.end(), 1);
   if (failures == static_cast<int64_t>(reps.size())) {
-    throw Error(ErrorKind::kNumerical, store.folder().string(), "no representative could be fitted (too few usable samples)");
+    throw common::Error(common::ErrorKind::kNumerical, store.folder().string(), "no representative could be fitted (too few usable samples)");
   }
   std::vector<double> residuals;
   for (size_t r = 0; r < reps.size(); ++r) {
@@ -392,7 +392,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
         {"failed_fits", failures},
         {"failed_representatives", FailedTexels(reps, failed)},
         {"resumed_fits", resumed},
-        {"median_relative_rmse", Median(residuals)},
+        {"median_relative_rmse", common::Median(residuals)},
         {"refined_representatives", refined.representatives},
         // The interpolated texels' residuals on their own samples, before and after refinement.
         {"refined_texels", refined.texels},
@@ -403,7 +403,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
         {"fit_seconds", fit_seconds},
         // Wall time per representative fitted in this run (all threads together).
         {"seconds_per_fit", reps.size() > resumed ? fit_seconds / (reps.size() - resumed) : 0.0},
-        {"threads", ThreadCount(options.threads)}}},
+        {"threads", common::ThreadCount(options.threads)}}},
   };
   // `svbtdf compare` measures the held-out error on exactly these dots.
   if (!held_out.empty()) {

@@ -15,7 +15,7 @@ namespace {
 struct MapSpec {
   const char* key;
   const char* file;
-  FloatImage Material::*image;
+  common::FloatImage Material::*image;
   int channels;  // 0: any (the weights' K)
 };
 
@@ -54,12 +54,12 @@ const char* ModelFormula(MaterialModel model) {
 MaterialModel ParseModel(const std::string& name, const std::string& source) {
   if (name == "dual-microfacet") return MaterialModel::kDualMicrofacet;
   if (name == "walter-ggx") return MaterialModel::kWalterGgx;
-  ThrowFormatError(source, "has an unknown btdf '" + name + "' (expected dual-microfacet or walter-ggx)");
+  common::ThrowFormatError(source, "has an unknown btdf '" + name + "' (expected dual-microfacet or walter-ggx)");
 }
 
-void CheckShape(const FloatImage& image, int width, int height, int channels, const std::string& source) {
+void CheckShape(const common::FloatImage& image, int width, int height, int channels, const std::string& source) {
   if (image.width != width || image.height != height || (channels > 0 && image.channels != channels)) {
-    ThrowFormatError(source, "is " + std::to_string(image.width) + "x" + std::to_string(image.height) + "x" +
+    common::ThrowFormatError(source, "is " + std::to_string(image.width) + "x" + std::to_string(image.height) + "x" +
                                  std::to_string(image.channels) + ", expected " + std::to_string(width) + "x" +
                                  std::to_string(height) + (channels > 0 ? "x" + std::to_string(channels) : ""));
   }
@@ -68,10 +68,10 @@ void CheckShape(const FloatImage& image, int width, int height, int channels, co
 }  // namespace
 
 Material AssembleMaterial(int width, int height, double eta, int ndf_resolution, const Clustering& clustering,
-                          const std::vector<TexelFitResult>& representative_fits, const FloatImage& rho_d) {
+                          const std::vector<TexelFitResult>& representative_fits, const common::FloatImage& rho_d) {
   const size_t texels = static_cast<size_t>(width) * height;
   if (clustering.weights.size() != texels || representative_fits.size() != clustering.representatives.size()) {
-    ThrowInvalidInput("material", "the clustering, the fits and the material size disagree");
+    common::ThrowInvalidInput("material", "the clustering, the fits and the material size disagree");
   }
   CheckShape(rho_d, width, height, 3, "rho_d map");
   Material m;
@@ -84,14 +84,14 @@ Material AssembleMaterial(int width, int height, double eta, int ndf_resolution,
   size_t max_terms = 1;
   for (const AffineWeights& w : clustering.weights) max_terms = std::max(max_terms, w.terms.size());
   const int k = static_cast<int>(max_terms);
-  m.alpha = FloatImage(width, height, 1);
-  m.shadowing_roughness = FloatImage(width, height, 1);
-  m.k_s = FloatImage(width, height, 3);
+  m.alpha = common::FloatImage(width, height, 1);
+  m.shadowing_roughness = common::FloatImage(width, height, 1);
+  m.k_s = common::FloatImage(width, height, 3);
   m.rho_d = rho_d;
-  m.residual = FloatImage(width, height, 1, -1.0f);
-  m.cluster = FloatImage(width, height, 1);
-  m.weight_index = FloatImage(width, height, k);
-  m.weight_value = FloatImage(width, height, k);
+  m.residual = common::FloatImage(width, height, 1, -1.0f);
+  m.cluster = common::FloatImage(width, height, 1);
+  m.weight_index = common::FloatImage(width, height, k);
+  m.weight_value = common::FloatImage(width, height, k);
   for (size_t r = 0; r < clustering.representatives.size(); ++r) {
     const int64_t t = clustering.representatives[r];
     m.residual.pixels[t] = static_cast<float>(representative_fits[r].relative_rmse);
@@ -123,9 +123,9 @@ const char* MaterialModelName(MaterialModel model) {
 }
 
 Material AssembleBaselineMaterial(int width, int height, double eta, int ndf_resolution, const Clustering& clustering,
-                                  const std::vector<BaselineFitResult>& representative_fits, const FloatImage& rho_d) {
+                                  const std::vector<BaselineFitResult>& representative_fits, const common::FloatImage& rho_d) {
   // The shared maps (k_s, residual, weights, NDF tables of the lobes) through the dual path.
-  const Hemicube grid(ndf_resolution);
+  const model::Hemicube grid(ndf_resolution);
   std::vector<TexelFitResult> as_dual(representative_fits.size());
   for (size_t r = 0; r < representative_fits.size(); ++r) {
     const BaselineFitResult& b = representative_fits[r];
@@ -144,9 +144,9 @@ Material AssembleBaselineMaterial(int width, int height, double eta, int ndf_res
   for (size_t t = 0; t < by_cluster.weights.size(); ++t) by_cluster.weights[t].terms = {{by_cluster.cluster[t], 1.0f}};
   Material m = AssembleMaterial(width, height, eta, ndf_resolution, by_cluster, as_dual, rho_d);
   m.model = MaterialModel::kWalterGgx;
-  m.baseline_alpha_x = FloatImage(width, height, 1);
-  m.baseline_alpha_y = FloatImage(width, height, 1);
-  m.baseline_azimuth = FloatImage(width, height, 1);
+  m.baseline_alpha_x = common::FloatImage(width, height, 1);
+  m.baseline_alpha_y = common::FloatImage(width, height, 1);
+  m.baseline_azimuth = common::FloatImage(width, height, 1);
   for (int64_t t = 0; t < static_cast<int64_t>(width) * height; ++t) {
     std::vector<std::pair<BaselineLobe, double>> weighted;
     for (const auto& [rep, w] : by_cluster.weights[t].terms) weighted.emplace_back(representative_fits[rep].lobe(), w);
@@ -160,29 +160,29 @@ Material AssembleBaselineMaterial(int width, int height, double eta, int ndf_res
 
 void WriteMaterial(const fs::path& folder, const Material& m) {
   if (fs::exists(folder) && (!fs::is_directory(folder) || !fs::is_empty(folder))) {
-    ThrowInvalidInput(folder.string(), "exists and is not empty; a material is never overwritten",
+    common::ThrowInvalidInput(folder.string(), "exists and is not empty; a material is never overwritten",
                       "choose a new --out folder");
   }
   std::error_code error;
   fs::create_directories(folder, error);
-  if (error) ThrowIoError(folder.string(), "cannot create: " + error.message());
-  const Hemicube grid(m.ndf_resolution);
+  if (error) common::ThrowIoError(folder.string(), "cannot create: " + error.message());
+  const model::Hemicube grid(m.ndf_resolution);
   if (m.representative_ln_d.size() != m.representative_texels.size() || m.representative_texels.empty()) {
-    ThrowInvalidInput("material", "needs one ln D table per representative, and at least one representative");
+    common::ThrowInvalidInput("material", "needs one ln D table per representative, and at least one representative");
   }
-  FloatImage tables(grid.num_cells(), static_cast<int>(m.representative_ln_d.size()), 1);
+  common::FloatImage tables(grid.num_cells(), static_cast<int>(m.representative_ln_d.size()), 1);
   for (size_t r = 0; r < m.representative_ln_d.size(); ++r) {
     if (static_cast<int>(m.representative_ln_d[r].size()) != grid.num_cells()) {
-      ThrowInvalidInput("material", "representative " + std::to_string(r) + " has a table of the wrong size");
+      common::ThrowInvalidInput("material", "representative " + std::to_string(r) + " has a table of the wrong size");
     }
     for (int c = 0; c < grid.num_cells(); ++c) tables.at(c, static_cast<int>(r)) = static_cast<float>(m.representative_ln_d[r][c]);
   }
-  WriteFloatImage(folder / "ndf_ln_d.exr", tables, /*half_precision=*/false, false);
+  common::WriteFloatImage(folder / "ndf_ln_d.exr", tables, /*half_precision=*/false, false);
   nlohmann::json maps = nlohmann::json::object();
   for (const MapSpec& spec : MapsOf(m.model)) {
     CheckShape(m.*spec.image, m.width, m.height, spec.channels, std::string("material map ") + spec.key);
     // Parameters in full float: k_s and rho_d would survive half, indices would not.
-    WriteFloatImage(folder / spec.file, m.*spec.image, /*half_precision=*/false, false);
+    common::WriteFloatImage(folder / spec.file, m.*spec.image, /*half_precision=*/false, false);
     maps[spec.key] = spec.file;
   }
   const nlohmann::json manifest = {
@@ -202,23 +202,23 @@ void WriteMaterial(const fs::path& folder, const Material& m) {
       {"maps", maps},
       {"provenance", m.provenance},
   };
-  WriteTextAtomically(folder / "material.json", manifest.dump(2) + "\n", false);
+  common::WriteTextAtomically(folder / "material.json", manifest.dump(2) + "\n", false);
 }
 
 Material ReadMaterial(const fs::path& folder) {
   const fs::path manifest_path = folder / "material.json";
   nlohmann::json manifest;
   try {
-    manifest = nlohmann::json::parse(ReadTextFile(manifest_path));
+    manifest = nlohmann::json::parse(common::ReadTextFile(manifest_path));
   } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(manifest_path.string(), std::string("is not valid JSON: ") + e.what());
+    common::ThrowFormatError(manifest_path.string(), std::string("is not valid JSON: ") + e.what());
   }
   Material m;
   try {
-    if (manifest.at("format") != "svbtdf-material") ThrowFormatError(manifest_path.string(), "is not an svbtdf material");
+    if (manifest.at("format") != "svbtdf-material") common::ThrowFormatError(manifest_path.string(), "is not an svbtdf material");
     const int version = manifest.at("version").get<int>();
     if (version < 1 || version > kMaterialFormatVersion) {
-      ThrowFormatError(manifest_path.string(), "has material format version " + std::to_string(version) +
+      common::ThrowFormatError(manifest_path.string(), "has material format version " + std::to_string(version) +
                                                    "; this svbtdf reads version " + std::to_string(kMaterialFormatVersion));
     }
     m.model = ParseModel(manifest.value("btdf", "dual-microfacet"), manifest_path.string());
@@ -229,12 +229,12 @@ Material ReadMaterial(const fs::path& folder) {
     m.representative_texels = manifest.at("representatives").at("texels").get<std::vector<int64_t>>();
     m.provenance = manifest.value("provenance", nlohmann::json::object());
   } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(manifest_path.string(), std::string("misses a field or has a wrong type: ") + e.what());
+    common::ThrowFormatError(manifest_path.string(), std::string("misses a field or has a wrong type: ") + e.what());
   }
-  if (m.width <= 0 || m.height <= 0 || !(m.eta > 1.0)) ThrowFormatError(manifest_path.string(), "has an invalid size or eta");
-  const Hemicube grid(m.ndf_resolution);
-  const FloatImage tables = ReadFloatImage(folder / "ndf_ln_d.exr");
-  RequireFinite(tables, (folder / "ndf_ln_d.exr").string());
+  if (m.width <= 0 || m.height <= 0 || !(m.eta > 1.0)) common::ThrowFormatError(manifest_path.string(), "has an invalid size or eta");
+  const model::Hemicube grid(m.ndf_resolution);
+  const common::FloatImage tables = common::ReadFloatImage(folder / "ndf_ln_d.exr");
+  common::RequireFinite(tables, (folder / "ndf_ln_d.exr").string());
   CheckShape(tables, grid.num_cells(), static_cast<int>(m.representative_texels.size()), 1,
              (folder / "ndf_ln_d.exr").string());
   for (int r = 0; r < tables.height; ++r) {
@@ -244,25 +244,25 @@ Material ReadMaterial(const fs::path& folder) {
   }
   for (const MapSpec& spec : MapsOf(m.model)) {
     const fs::path file = folder / spec.file;
-    m.*spec.image = ReadFloatImage(file);
-    RequireFinite(m.*spec.image, file.string());
+    m.*spec.image = common::ReadFloatImage(file);
+    common::RequireFinite(m.*spec.image, file.string());
     CheckShape(m.*spec.image, m.width, m.height, spec.channels, file.string());
   }
   if (m.weight_index.channels != m.weight_value.channels) {
-    ThrowFormatError((folder / "weight_value.exr").string(), "has a different channel count than weight_index.exr");
+    common::ThrowFormatError((folder / "weight_value.exr").string(), "has a different channel count than weight_index.exr");
   }
   const int reps = static_cast<int>(m.representative_texels.size());
   if (m.model == MaterialModel::kWalterGgx) {
-    for (const FloatImage* map : {&m.baseline_alpha_x, &m.baseline_alpha_y}) {
+    for (const common::FloatImage* map : {&m.baseline_alpha_x, &m.baseline_alpha_y}) {
       if (*std::min_element(map->pixels.begin(), map->pixels.end()) <= 0.0f) {
-        ThrowFormatError((folder / (map == &m.baseline_alpha_x ? "baseline_alpha_x.exr" : "baseline_alpha_y.exr")).string(),
+        common::ThrowFormatError((folder / (map == &m.baseline_alpha_x ? "baseline_alpha_x.exr" : "baseline_alpha_y.exr")).string(),
                          "holds a GGX roughness <= 0");
       }
     }
   }
   for (float index : m.weight_index.pixels) {
     if (index < 0 || index >= reps || index != std::floor(index)) {
-      ThrowFormatError((folder / "weight_index.exr").string(), "holds an index that is not a representative");
+      common::ThrowFormatError((folder / "weight_index.exr").string(), "holds an index that is not a representative");
     }
   }
   return m;
@@ -286,10 +286,10 @@ MaterialEvaluator::MaterialEvaluator(const Material& material) : material_(mater
   }
 }
 
-Rgb TexelBtdf::Evaluate(const Vec3& i, const Vec3& o) const {
-  if (!baseline_) return EvaluateMaterial(ndf_, params_, i, o);
+model::Rgb TexelBtdf::Evaluate(const model::Vec3& i, const model::Vec3& o) const {
+  if (!baseline_) return model::EvaluateMaterial(ndf_, params_, i, o);
   const double shape = BaselineShape(*baseline_, params_.eta, i, o);
-  Rgb value;
+  model::Rgb value;
   for (int c = 0; c < 3; ++c) value[c] = params_.k_s[c] * shape + params_.rho_d[c];
   return value;
 }
@@ -300,9 +300,9 @@ std::optional<BaselineLobe> MaterialEvaluator::Lobe(int x, int y) const {
                       material_.baseline_azimuth.at(x, y)};
 }
 
-TabulatedNdf MaterialEvaluator::TexelNdf(int x, int y) const {
+model::TabulatedNdf MaterialEvaluator::TexelNdf(int x, int y) const {
   // The baseline's texel NDF is its own interpolated lobe, the one Evaluate uses.
-  if (const std::optional<BaselineLobe> lobe = Lobe(x, y)) return TabulatedNdf(grid_, BaselineLnD(grid_, *lobe));
+  if (const std::optional<BaselineLobe> lobe = Lobe(x, y)) return model::TabulatedNdf(grid_, BaselineLnD(grid_, *lobe));
   // The representatives' D are blended scaled by their k_s, so that k_s D (what the data
   // constrain) is blended rather than each factor on its own: a representative whose fit put
   // much of D's mass where no dot looks, and a large k_s to compensate, then weighs in by what it
@@ -331,22 +331,22 @@ TabulatedNdf MaterialEvaluator::TexelNdf(int x, int y) const {
   // Affine weights may be negative: keep D positive where the combination undershoots.
   std::vector<double> ln_d(cells);
   for (int c = 0; c < cells; ++c) ln_d[c] = std::log(std::max(d[c], 1e-12 * std::max(total_scale, 1.0)));
-  TabulatedNdf ndf(grid_, std::move(ln_d));
+  model::TabulatedNdf ndf(grid_, std::move(ln_d));
   ndf.Normalize();
   return ndf;
 }
 
 TexelBtdf MaterialEvaluator::Texel(int x, int y) const {
   if (x < 0 || y < 0 || x >= material_.width || y >= material_.height) {
-    ThrowInvalidInput("--texel", "(" + std::to_string(x) + ", " + std::to_string(y) + ") is outside the " +
+    common::ThrowInvalidInput("--texel", "(" + std::to_string(x) + ", " + std::to_string(y) + ") is outside the " +
                                      std::to_string(material_.width) + "x" + std::to_string(material_.height) +
                                      " material");
   }
-  DualMicrofacetParams params;
+  model::DualMicrofacetParams params;
   params.eta = material_.eta;
   params.alpha = std::clamp<double>(material_.alpha.at(x, y), 0.0, 1.0);
   const double roughness = material_.shadowing_roughness.at(x, y);
-  params.shadowing = roughness > 0 ? SmithShadowing::Ggx(roughness) : SmithShadowing::None();
+  params.shadowing = roughness > 0 ? model::SmithShadowing::Ggx(roughness) : model::SmithShadowing::None();
   for (int c = 0; c < 3; ++c) {
     params.k_s[c] = material_.k_s.at(x, y, c);
     params.rho_d[c] = material_.rho_d.at(x, y, c);

@@ -43,7 +43,7 @@ std::string QualityWarning::Line() const {
 std::vector<QualityWarning> CheckSliceStore(const fs::path& processed) {
   std::vector<QualityWarning> warnings;
   const fs::path mask_file = processed / "mask.exr";
-  const FloatImage mask = ReadFloatImage(mask_file);
+  const common::FloatImage mask = common::ReadFloatImage(mask_file);
   const int64_t texels = static_cast<int64_t>(mask.width) * mask.height;
   int64_t valid = 0;
   for (int64_t t = 0; t < texels; ++t) valid += mask.pixels[static_cast<size_t>(t) * mask.channels] > 0.5f;
@@ -60,21 +60,21 @@ std::vector<QualityWarning> CheckSliceStore(const fs::path& processed) {
   int64_t without = -1, counted = 0;
   fs::path named = reach_file;
   if (fs::exists(reach_file)) {
-    const FloatImage reach = ReadFloatImage(reach_file);
+    const common::FloatImage reach = common::ReadFloatImage(reach_file);
     counted = static_cast<int64_t>(reach.width) * reach.height;
     without = 0;
     for (int64_t t = 0; t < counted; ++t) without += !(reach.pixels[static_cast<size_t>(t) * reach.channels] > 0.5f);
   } else {
     named = processed / "processed.json";
     try {
-      const nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(named));
+      const nlohmann::json manifest = nlohmann::json::parse(common::ReadTextFile(named));
       const nlohmann::json statistics = manifest.value("statistics", nlohmann::json::object());
       if (statistics.contains("texels_without_dot_beneath")) {
         without = statistics.at("texels_without_dot_beneath").get<int64_t>();
         counted = statistics.value("texels", texels);
       }
     } catch (const nlohmann::json::exception& e) {
-      ThrowFormatError(named.string(), std::string("cannot be read for its statistics: ") + e.what());
+      common::ThrowFormatError(named.string(), std::string("cannot be read for its statistics: ") + e.what());
     }
   }
   if (without >= 0 && counted > 0 && without > kMaxTexelsWithoutDotFraction * counted) {
@@ -215,10 +215,10 @@ nlohmann::json QualityToJson(const std::vector<QualityWarning>& warnings) {
 std::vector<QualityWarning> QualityFromJson(const nlohmann::json& json, const std::string& source) {
   std::vector<QualityWarning> warnings;
   try {
-    if (json.at("format") != "svbtdf-quality") ThrowFormatError(source, "is not an svbtdf quality file");
+    if (json.at("format") != "svbtdf-quality") common::ThrowFormatError(source, "is not an svbtdf quality file");
     const int version = json.at("version").get<int>();
     if (version < 1 || version > kQualityFormatVersion) {
-      ThrowFormatError(source, "has quality format version " + std::to_string(version) + "; this svbtdf reads version " +
+      common::ThrowFormatError(source, "has quality format version " + std::to_string(version) + "; this svbtdf reads version " +
                                    std::to_string(kQualityFormatVersion));
     }
     for (const nlohmann::json& w : json.at("warnings")) {
@@ -227,13 +227,13 @@ std::vector<QualityWarning> QualityFromJson(const nlohmann::json& json, const st
                           w.value("figures", std::string()), w.value("likely_cause", std::string())});
     }
   } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(source, std::string("misses a field or has a wrong type: ") + e.what());
+    common::ThrowFormatError(source, std::string("misses a field or has a wrong type: ") + e.what());
   }
   return warnings;
 }
 
 void WriteQuality(const fs::path& material_folder, const std::vector<QualityWarning>& warnings) {
-  WriteTextAtomically(material_folder / "quality.json", QualityToJson(warnings).dump(2) + "\n");
+  common::WriteTextAtomically(material_folder / "quality.json", QualityToJson(warnings).dump(2) + "\n");
 }
 
 bool ReadQuality(const fs::path& material_folder, std::vector<QualityWarning>* warnings) {
@@ -241,9 +241,9 @@ bool ReadQuality(const fs::path& material_folder, std::vector<QualityWarning>* w
   if (!fs::exists(path)) return false;
   nlohmann::json json;
   try {
-    json = nlohmann::json::parse(ReadTextFile(path));
+    json = nlohmann::json::parse(common::ReadTextFile(path));
   } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(path.string(), std::string("is not valid JSON: ") + e.what());
+    common::ThrowFormatError(path.string(), std::string("is not valid JSON: ") + e.what());
   }
   *warnings = QualityFromJson(json, path.string());
   return true;

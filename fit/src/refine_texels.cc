@@ -56,21 +56,21 @@ class ScalarRefiner {
   ScalarRefiner(const TexelBtdf& texel, const TexelSlice& slice) : slice_(slice), sum_rho_squared_(SumOfSquares(slice.rho)) {
     const size_t n = slice_.light.size();
     if (texel.model() == MaterialModel::kWalterGgx) {
-      DualMicrofacetParams unit = texel.params();
+      model::DualMicrofacetParams unit = texel.params();
       unit.k_s = {1.0, 1.0, 1.0};
       unit.rho_d = {0.0, 0.0, 0.0};
       const TexelBtdf shape(texel.ndf(), unit, texel.baseline());
       for (size_t k = 0; k < n; ++k) fixed_shape_.push_back(shape.Evaluate(slice_.light[k], slice_.view)[0]);
       return;
     }
-    const DualMicrofacetModel model(texel.params().eta, texel.params().shadowing);
+    const model::DualMicrofacetModel btdf(texel.params().eta, texel.params().shadowing);
     rho_t_.resize(n);
     rho_b_.resize(n);
     ln_t_.resize(n);
     ln_b_.resize(n);
     for (size_t k = 0; k < n; ++k) {
-      rho_t_[k] = model.RhoT(texel.ndf(), slice_.light[k], slice_.view);
-      rho_b_[k] = model.RhoB(texel.ndf(), slice_.light[k], slice_.view);
+      rho_t_[k] = btdf.RhoT(texel.ndf(), slice_.light[k], slice_.view);
+      rho_b_[k] = btdf.RhoB(texel.ndf(), slice_.light[k], slice_.view);
       ln_t_[k] = rho_t_[k] > 0 ? std::log(rho_t_[k]) : 0.0;
       ln_b_[k] = rho_b_[k] > 0 ? std::log(rho_b_[k]) : 0.0;
     }
@@ -100,7 +100,7 @@ class ScalarRefiner {
   double RelativeRmse(double alpha, double scale) {
     const std::vector<double>& shape = Shape(alpha);
     double squared_error = 0;
-    for (size_t k = 0; k < shape.size(); ++k) squared_error += Square(scale * shape[k] - slice_.rho[k]);
+    for (size_t k = 0; k < shape.size(); ++k) squared_error += model::Square(scale * shape[k] - slice_.rho[k]);
     return std::sqrt(squared_error / sum_rho_squared_);
   }
 
@@ -139,7 +139,7 @@ RefinedScalars RefineScalars(ScalarRefiner* refiner, double start_alpha, bool re
   RefinedScalars result;
   result.alpha = start_alpha;
   if (refine_alpha) {
-    const double searched = GoldenSectionSearch([&](double a) { return refiner->FitAt(a).relative_squared_error; },
+    const double searched = common::GoldenSectionSearch([&](double a) { return refiner->FitAt(a).relative_squared_error; },
                                                 0.0, 1.0, tolerance);
     if (refiner->FitAt(searched).relative_squared_error < refiner->FitAt(result.alpha).relative_squared_error) {
       result.alpha = searched;
@@ -160,18 +160,18 @@ struct RepresentativeTerms {
   std::vector<std::vector<double>> t, b;
 };
 
-RepresentativeTerms TermsOf(const Material& material, const Hemicube& grid, const std::vector<int>& reps,
-                            const DualMicrofacetModel& model, const TexelSlice& slice) {
+RepresentativeTerms TermsOf(const Material& material, const model::Hemicube& grid, const std::vector<int>& reps,
+                            const model::DualMicrofacetModel& btdf, const TexelSlice& slice) {
   RepresentativeTerms terms;
   terms.t.assign(reps.size(), std::vector<double>(slice.light.size(), 0.0));
   terms.b = terms.t;
   for (size_t k = 0; k < slice.light.size(); ++k) {
     // The configurations (half vector, factor) do not depend on D: one per sample for all.
-    const VirtualConfiguration entry = model.RoughEntry(slice.light[k], slice.view);
-    const VirtualConfiguration exit = model.RoughExit(slice.light[k], slice.view);
-    const auto add = [&](const VirtualConfiguration& c, std::vector<std::vector<double>>* into) {
+    const model::VirtualConfiguration entry = btdf.RoughEntry(slice.light[k], slice.view);
+    const model::VirtualConfiguration exit = btdf.RoughExit(slice.light[k], slice.view);
+    const auto add = [&](const model::VirtualConfiguration& c, std::vector<std::vector<double>>* into) {
       if (!c.valid || c.factor <= 0) return;
-      const Hemicube::Weights weights = grid.Interpolation(c.h);
+      const model::Hemicube::Weights weights = grid.Interpolation(c.h);
       for (size_t j = 0; j < reps.size(); ++j) {
         const std::vector<double>& ln_d = material.representative_ln_d[reps[j]];
         double ln = 0;
@@ -267,7 +267,7 @@ constexpr double kExtrapolation = 3.0;
 // representatives, and alpha, to its samples, starting from the clustering's weights; returns the
 // weights w_j (sum 1) that make TexelNdf blend a_j D_j, or nothing when the fit does not run.
 std::optional<TexelWeights> RefitWeights(const Material& material, const MaterialEvaluator& evaluator,
-                                         const Hemicube& grid, const TexelBtdf& blended, const TexelWeights& start,
+                                         const model::Hemicube& grid, const TexelBtdf& blended, const TexelWeights& start,
                                          const TexelSlice& slice) {
   const size_t m = start.reps.size();
   if (m < 2) return std::nullopt;
@@ -276,14 +276,14 @@ std::optional<TexelWeights> RefitWeights(const Material& material, const Materia
     scale[j] = evaluator.RepresentativeScale(start.reps[j]);
     if (!(scale[j] > 0)) return std::nullopt;
   }
-  const DualMicrofacetModel model(blended.params().eta, blended.params().shadowing);
-  const RepresentativeTerms terms = TermsOf(material, grid, start.reps, model, slice);
+  const model::DualMicrofacetModel btdf(blended.params().eta, blended.params().shadowing);
+  const RepresentativeTerms terms = TermsOf(material, grid, start.reps, btdf, slice);
   // TexelNdf blends w_j s_j D_j; start there (negative weights clipped), at the texel's k_s.
   std::vector<double> amount(m);
   for (size_t j = 0; j < m; ++j) amount[j] = std::max(0.0, start.weights[j]) * scale[j];
   double total = std::accumulate(amount.begin(), amount.end(), 0.0);
   if (!(total > 0)) return std::nullopt;
-  const double total_amount = Luminance(blended.params().k_s);
+  const double total_amount = model::Luminance(blended.params().k_s);
   for (double& a : amount) a *= total_amount / total;
   double alpha = blended.params().alpha;
 
@@ -319,7 +319,7 @@ struct RefineContext {
 // Refines one texel in place; returns its relative RMSE on its own samples before and after, or
 // nothing when it has no usable samples (it then keeps the blend).
 std::optional<std::pair<double, double>> RefineTexel(const RefineContext& context, const MaterialEvaluator& evaluator,
-                                                     const Hemicube& grid, bool refit_weights, int64_t t,
+                                                     const model::Hemicube& grid, bool refit_weights, int64_t t,
                                                      const TexelSlice& slice, Material* material) {
   const int x = static_cast<int>(t % material->width), y = static_cast<int>(t / material->width);
   if (!(SumOfSquares(slice.rho) > 0)) return std::nullopt;
@@ -327,7 +327,7 @@ std::optional<std::pair<double, double>> RefineTexel(const RefineContext& contex
   const TexelBtdf blended = evaluator.Texel(x, y);
   const double start_alpha = blended.params().alpha;
   ScalarRefiner refiner(blended, slice);
-  const double before = refiner.RelativeRmse(start_alpha, Luminance(blended.params().k_s));
+  const double before = refiner.RelativeRmse(start_alpha, model::Luminance(blended.params().k_s));
   const double tolerance = context.options.alpha_tolerance;
   RefinedScalars best = RefineScalars(&refiner, start_alpha, context.refine_alpha, tolerance);
   if (refit_weights) {
@@ -356,11 +356,11 @@ std::vector<std::pair<double, double>> RefineAll(const RefineContext& context, c
   // Constructed here, after any earlier pass changed the representatives' k_s: the blend scales
   // it reads are then the ones a reader of the saved material computes.
   const MaterialEvaluator evaluator(*material);
-  const Hemicube grid(material->ndf_resolution);
+  const model::Hemicube grid(material->ndf_resolution);
   std::vector<std::optional<std::pair<double, double>>> results(texels.size());
-  std::unique_ptr<ProgressBar> progress;
+  std::unique_ptr<common::ProgressBar> progress;
   if (context.options.progress) {
-    progress = std::make_unique<ProgressBar>(label, static_cast<int64_t>(texels.size()), "texels");
+    progress = std::make_unique<common::ProgressBar>(label, static_cast<int64_t>(texels.size()), "texels");
   }
   // Tile by tile: one read per tile rather than one per dot and texel (slice_store.h).
   const int64_t tile_texels = context.store.info().tile_texels;
@@ -373,9 +373,9 @@ std::vector<std::pair<double, double>> RefineAll(const RefineContext& context, c
     size_t end = begin;
     while (end < order.size() && texels[order[end]] / tile_texels == tile) ++end;
     context.store.ReadTile(tile, &tile_samples);
-    ParallelFor(static_cast<int64_t>(end - begin), context.options.threads, 16, [&](int64_t a, int64_t b) {
+    common::ParallelFor(static_cast<int64_t>(end - begin), context.options.threads, 16, [&](int64_t a, int64_t b) {
       for (int64_t k = a; k < b; ++k) {
-        ThrowIfInterrupted("refining");
+        common::ThrowIfInterrupted("refining");
         const size_t index = order[begin + k];
         const TexelSlice slice = context.store.MakeTexelSlice(texels[index], tile_samples, context.use_dot);
         results[index] = RefineTexel(context, evaluator, grid, refit_weights, texels[index], slice, material);
@@ -398,7 +398,7 @@ RefineStatistics RefineTexels(const SliceStore& store, const std::vector<bool>& 
                               const std::vector<int64_t>& texels, const RefineOptions& options, Material* material) {
   const int width = material->width;
   if (store.info().texels_x != width || store.info().texels_y != material->height) {
-    ThrowInvalidInput(store.folder().string(), "does not match the material's texel grid");
+    common::ThrowInvalidInput(store.folder().string(), "does not match the material's texel grid");
   }
   std::vector<uint8_t> is_representative(static_cast<size_t>(width) * material->height, 0);
   for (int64_t t : material->representative_texels) is_representative[t] = 1;
@@ -406,7 +406,7 @@ RefineStatistics RefineTexels(const SliceStore& store, const std::vector<bool>& 
   std::vector<int64_t> representatives, interpolated;
   for (int64_t t : texels) {
     if (t < 0 || t >= static_cast<int64_t>(is_representative.size())) {
-      ThrowInvalidInput("refinement", "texel " + std::to_string(t) + " is outside the material");
+      common::ThrowInvalidInput("refinement", "texel " + std::to_string(t) + " is outside the material");
     }
     if (!is_representative[t]) {
       interpolated.push_back(t);
@@ -428,8 +428,8 @@ RefineStatistics RefineTexels(const SliceStore& store, const std::vector<bool>& 
     after.push_back(a);
   }
   statistics.texels = static_cast<int64_t>(refined.size());
-  statistics.median_rmse_blended = Median(before);
-  statistics.median_rmse_refined = Median(after);
+  statistics.median_rmse_blended = common::Median(before);
+  statistics.median_rmse_refined = common::Median(after);
   return statistics;
 }
 

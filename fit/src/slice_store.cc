@@ -19,14 +19,14 @@ using namespace store;
 // ---------------------------------------------------------------------------------------------
 // Geometry
 
-Vec3 TexelGeometry::TexelCentre(int64_t texel) const {
+model::Vec3 TexelGeometry::TexelCentre(int64_t texel) const {
   const int64_t col = texel % texels_x, row = texel / texels_x;
   return {-0.5 * width_m + (col + 0.5) * width_m / texels_x, 0.5 * height_m - (row + 0.5) * height_m / texels_y, 0.0};
 }
 
-Vec3 TexelGeometry::View(int64_t texel) const { return (camera_centre - TexelCentre(texel)).normalized(); }
+model::Vec3 TexelGeometry::View(int64_t texel) const { return (camera_centre - TexelCentre(texel)).normalized(); }
 
-Vec3 TexelGeometry::Light(int64_t texel, int dot) const { return (dots[dot] - TexelCentre(texel)).normalized(); }
+model::Vec3 TexelGeometry::Light(int64_t texel, int dot) const { return (dots[dot] - TexelCentre(texel)).normalized(); }
 
 double TexelGeometry::DotCellArea() const {
   if (dots.size() < 2) return 1e-4;
@@ -54,7 +54,7 @@ struct SliceStore::Files {
 
 SliceStore SliceStore::Open(const fs::path& folder) {
   if (!fs::is_directory(folder)) {
-    ThrowInvalidInput(folder.string(), "is not a folder", "give the output folder of 'svbtdf process'");
+    common::ThrowInvalidInput(folder.string(), "is not a folder", "give the output folder of 'svbtdf process'");
   }
   const nlohmann::json manifest = ReadManifest(folder);
   SliceStore store;
@@ -62,29 +62,29 @@ SliceStore SliceStore::Open(const fs::path& folder) {
   try {
     store.info_ = InfoFromManifest(manifest);
   } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError((folder / kManifest).string(), std::string("is malformed: ") + e.what());
+    common::ThrowFormatError((folder / kManifest).string(), std::string("is malformed: ") + e.what());
   }
   CheckInfo(store.info_, (folder / kManifest).string());
   if (!manifest.value("complete", false)) {
-    ThrowInvalidInput(folder.string(), "holds an unfinished processing", "re-run 'svbtdf process' to finish it");
+    common::ThrowInvalidInput(folder.string(), "holds an unfinished processing", "re-run 'svbtdf process' to finish it");
   }
   store.geometry_ = GeometryFromManifest(manifest, (folder / kManifest).string());
   if (static_cast<int>(store.geometry_.dots.size()) != store.info_.num_dots) {
-    ThrowFormatError((folder / kManifest).string(), "lists a different number of dots in its geometry than num_dots");
+    common::ThrowFormatError((folder / kManifest).string(), "lists a different number of dots in its geometry than num_dots");
   }
-  store.light_grid_ = Hemicube(store.info_.light_resolution);
+  store.light_grid_ = model::Hemicube(store.info_.light_resolution);
   store.files_ = std::make_shared<Files>(folder);
   store.files_->dot_cell_area = store.geometry_.DotCellArea();
   if (store.files_->samples.Size() != NumTiles(store.info_) * TileBytes(store.info_)) {
-    ThrowFormatError((folder / kSamples).string(), "has the wrong size for its manifest");
+    common::ThrowFormatError((folder / kSamples).string(), "has the wrong size for its manifest");
   }
   if (store.files_->slices.Size() != store.geometry_.num_texels() * SliceBytes(store.light_grid_)) {
-    ThrowFormatError((folder / kSlices).string(), "has the wrong size for its manifest");
+    common::ThrowFormatError((folder / kSlices).string(), "has the wrong size for its manifest");
   }
   const auto read_map = [&](const char* name, int channels) {
-    FloatImage map = ReadFloatImage(folder / name);
+    common::FloatImage map = common::ReadFloatImage(folder / name);
     if (map.width != store.info_.texels_x || map.height != store.info_.texels_y || map.channels != channels) {
-      ThrowFormatError((folder / name).string(), "does not match the texel grid of processed.json");
+      common::ThrowFormatError((folder / name).string(), "does not match the texel grid of processed.json");
     }
     return map;
   };
@@ -95,7 +95,7 @@ SliceStore SliceStore::Open(const fs::path& folder) {
 }
 
 void SliceStore::ReadTile(int64_t tile, std::vector<float>* out) const {
-  if (tile < 0 || tile >= NumTiles(info_)) ThrowInvalidInput("tile", std::to_string(tile) + " is outside the store");
+  if (tile < 0 || tile >= NumTiles(info_)) common::ThrowInvalidInput("tile", std::to_string(tile) + " is outside the store");
   std::vector<Half> raw(TileBytes(info_) / sizeof(Half));
   files_->samples.ReadAt(raw.data(), TileBytes(info_), static_cast<uint64_t>(tile) * TileBytes(info_));
   out->resize(raw.size());
@@ -104,7 +104,7 @@ void SliceStore::ReadTile(int64_t tile, std::vector<float>* out) const {
 
 void SliceStore::ReadSamples(int64_t texel, std::vector<float>* out) const {
   if (texel < 0 || texel >= geometry_.num_texels()) {
-    ThrowInvalidInput("texel", std::to_string(texel) + " is outside the store");
+    common::ThrowInvalidInput("texel", std::to_string(texel) + " is outside the store");
   }
   const int64_t tile = texel / info_.tile_texels, k = texel % info_.tile_texels;
   const uint64_t base = static_cast<uint64_t>(tile) * TileBytes(info_);
@@ -119,7 +119,7 @@ void SliceStore::ReadSamples(int64_t texel, std::vector<float>* out) const {
 
 void SliceStore::ReadSlice(int64_t texel, float* out) const {
   if (texel < 0 || texel >= geometry_.num_texels()) {
-    ThrowInvalidInput("texel", std::to_string(texel) + " is outside the store");
+    common::ThrowInvalidInput("texel", std::to_string(texel) + " is outside the store");
   }
   std::vector<Half> raw(light_grid_.num_cells());
   files_->slices.ReadAt(raw.data(), SliceBytes(light_grid_), static_cast<uint64_t>(texel) * SliceBytes(light_grid_));
@@ -135,11 +135,11 @@ TexelSlice SliceStore::MakeTexelSlice(int64_t texel, const std::vector<bool>& us
 TexelSlice SliceStore::MakeTexelSlice(int64_t texel, const std::vector<float>& tile_samples,
                                       const std::vector<bool>& use_dot) const {
   if (texel < 0 || texel >= geometry_.num_texels()) {
-    ThrowInvalidInput("texel", std::to_string(texel) + " is outside the store");
+    common::ThrowInvalidInput("texel", std::to_string(texel) + " is outside the store");
   }
   const size_t tile_values = static_cast<size_t>(info_.num_dots) * info_.tile_texels * 3;
   if (tile_samples.size() != tile_values) {
-    ThrowInvalidInput("tile samples", std::to_string(tile_samples.size()) + " values where a tile has " +
+    common::ThrowInvalidInput("tile samples", std::to_string(tile_samples.size()) + " values where a tile has " +
                                           std::to_string(tile_values));
   }
   const size_t k = static_cast<size_t>(texel % info_.tile_texels);
@@ -148,21 +148,21 @@ TexelSlice SliceStore::MakeTexelSlice(int64_t texel, const std::vector<float>& t
 
 TexelSlice SliceStore::SliceFromSamples(int64_t texel, const float* rgb, size_t dot_stride,
                                         const std::vector<bool>& use_dot) const {
-  const Vec3 x = geometry_.TexelCentre(texel);
+  const model::Vec3 x = geometry_.TexelCentre(texel);
   const int col = static_cast<int>(texel % info_.texels_x), row = static_cast<int>(texel / info_.texels_x);
-  const Rgb rho_d = {rho_d_.at(col, row, 0), rho_d_.at(col, row, 1), rho_d_.at(col, row, 2)};
+  const model::Rgb rho_d = {rho_d_.at(col, row, 0), rho_d_.at(col, row, 1), rho_d_.at(col, row, 2)};
   TexelSlice slice;
   slice.view = geometry_.View(texel);
   for (int q = 0; q < info_.num_dots; ++q) {
     if (!use_dot.empty() && !use_dot[q]) continue;
     const float* r = rgb + q * dot_stride;
     if (!std::isfinite(r[0]) || !std::isfinite(r[1]) || !std::isfinite(r[2])) continue;
-    const Vec3 to_dot = geometry_.dots[q] - x;
-    const Vec3 i = to_dot.normalized();
-    const Rgb refractive = {std::max(0.0, r[0] - rho_d[0]), std::max(0.0, r[1] - rho_d[1]),
+    const model::Vec3 to_dot = geometry_.dots[q] - x;
+    const model::Vec3 i = to_dot.normalized();
+    const model::Rgb refractive = {std::max(0.0, r[0] - rho_d[0]), std::max(0.0, r[1] - rho_d[1]),
                             std::max(0.0, r[2] - rho_d[2])};
     slice.light.push_back(i);
-    slice.rho.push_back(Luminance(refractive));
+    slice.rho.push_back(model::Luminance(refractive));
     slice.rho_rgb.push_back(refractive);
     slice.solid_angle.push_back(files_->dot_cell_area * std::abs(i.z()) / to_dot.squaredNorm());
   }

@@ -20,16 +20,16 @@ nlohmann::json InfoToJson(const SliceStoreInfo& info) {
           {"tile_texels", info.tile_texels}, {"eta", info.eta}};
 }
 
-nlohmann::json VectorToJson(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
+nlohmann::json VectorToJson(const model::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
-Vec3 VectorFromJson(const nlohmann::json& j) {
+model::Vec3 VectorFromJson(const nlohmann::json& j) {
   if (!j.is_array() || j.size() != 3) throw nlohmann::json::type_error::create(302, "a vector is 3 numbers", &j);
   return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
 }
 
 nlohmann::json GeometryToJson(const TexelGeometry& g) {
   nlohmann::json dots = nlohmann::json::array();
-  for (const Vec3& p : g.dots) dots.push_back(VectorToJson(p));
+  for (const model::Vec3& p : g.dots) dots.push_back(VectorToJson(p));
   return {{"width_m", g.width_m},
           {"height_m", g.height_m},
           {"camera_centre", VectorToJson(g.camera_centre)},
@@ -40,7 +40,7 @@ nlohmann::json GeometryToJson(const TexelGeometry& g) {
 }  // namespace
 
 File::File(const fs::path& path, int flags) : path_(path), fd_(::open(path.c_str(), flags | O_CLOEXEC, 0644)) {
-  if (fd_ < 0) ThrowIoError(path.string(), std::string("cannot open: ") + std::strerror(errno));
+  if (fd_ < 0) common::ThrowIoError(path.string(), std::string("cannot open: ") + std::strerror(errno));
 }
 
 File::~File() {
@@ -52,7 +52,7 @@ void File::ReadAt(void* data, size_t bytes, uint64_t offset) const {
   while (bytes > 0) {
     const ssize_t n = ::pread(fd_, p, bytes, static_cast<off_t>(offset));
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) ThrowIoError(path_.string(), n == 0 ? "is shorter than its manifest says" : std::strerror(errno));
+    if (n <= 0) common::ThrowIoError(path_.string(), n == 0 ? "is shorter than its manifest says" : std::strerror(errno));
     p += n, bytes -= n, offset += n;
   }
 }
@@ -62,24 +62,24 @@ void File::WriteAt(const void* data, size_t bytes, uint64_t offset) const {
   while (bytes > 0) {
     const ssize_t n = ::pwrite(fd_, p, bytes, static_cast<off_t>(offset));
     if (n < 0 && errno == EINTR) continue;
-    if (n < 0) ThrowIoError(path_.string(), std::string("cannot write: ") + std::strerror(errno), "is the disk full?");
+    if (n < 0) common::ThrowIoError(path_.string(), std::string("cannot write: ") + std::strerror(errno), "is the disk full?");
     p += n, bytes -= n, offset += n;
   }
 }
 
 void File::Resize(uint64_t bytes) const {
   if (::ftruncate(fd_, static_cast<off_t>(bytes)) != 0) {
-    ThrowIoError(path_.string(), std::string("cannot allocate: ") + std::strerror(errno), "is the disk full?");
+    common::ThrowIoError(path_.string(), std::string("cannot allocate: ") + std::strerror(errno), "is the disk full?");
   }
 }
 
 void File::Sync() const {
-  if (::fdatasync(fd_) != 0) ThrowIoError(path_.string(), std::string("cannot sync: ") + std::strerror(errno));
+  if (::fdatasync(fd_) != 0) common::ThrowIoError(path_.string(), std::string("cannot sync: ") + std::strerror(errno));
 }
 
 uint64_t File::Size() const {
   struct stat st {};
-  if (::fstat(fd_, &st) != 0) ThrowIoError(path_.string(), std::strerror(errno));
+  if (::fstat(fd_, &st) != 0) common::ThrowIoError(path_.string(), std::strerror(errno));
   return static_cast<uint64_t>(st.st_size);
 }
 
@@ -92,7 +92,7 @@ uint64_t TileBytes(const SliceStoreInfo& info) {
   return static_cast<uint64_t>(info.num_dots) * info.tile_texels * 3 * sizeof(Half);
 }
 
-uint64_t SliceBytes(const Hemicube& grid) { return static_cast<uint64_t>(grid.num_cells()) * sizeof(Half); }
+uint64_t SliceBytes(const model::Hemicube& grid) { return static_cast<uint64_t>(grid.num_cells()) * sizeof(Half); }
 
 SliceStoreInfo InfoFromManifest(const nlohmann::json& j) {
   SliceStoreInfo info;
@@ -108,11 +108,11 @@ SliceStoreInfo InfoFromManifest(const nlohmann::json& j) {
 
 void CheckInfo(const SliceStoreInfo& info, const std::string& source) {
   if (info.texels_x <= 0 || info.texels_y <= 0 || info.num_dots <= 0 || info.tile_texels <= 0) {
-    ThrowInvalidInput(source, "needs a positive texel grid, dot count and tile size");
+    common::ThrowInvalidInput(source, "needs a positive texel grid, dot count and tile size");
   }
   const int r = info.light_resolution;
   if (r < 2 || (r & (r - 1)) != 0) {
-    ThrowInvalidInput(source, "light hemicube resolution " + std::to_string(r) + " is not a power of two >= 2");
+    common::ThrowInvalidInput(source, "light hemicube resolution " + std::to_string(r) + " is not a power of two >= 2");
   }
 }
 
@@ -127,21 +127,21 @@ void WriteManifest(const fs::path& folder, const SliceStoreInfo& info, const Tex
   manifest["statistics"] = statistics;
   manifest["files"] = {{"samples", kSamples}, {"slices", kSlices}, {"calibration", kCalibration},
                        {"rho_d", kRhoD}, {"mask", kMask}, {"reach", kReach}};
-  WriteTextAtomically(folder / kManifest, manifest.dump(2) + "\n");
+  common::WriteTextAtomically(folder / kManifest, manifest.dump(2) + "\n");
 }
 
 nlohmann::json ReadManifest(const fs::path& folder) {
   const fs::path path = folder / kManifest;
   try {
-    nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(path));
-    if (manifest.at("format") != "svbtdf-processed") ThrowFormatError(path.string(), "is not a processed session");
+    nlohmann::json manifest = nlohmann::json::parse(common::ReadTextFile(path));
+    if (manifest.at("format") != "svbtdf-processed") common::ThrowFormatError(path.string(), "is not a processed session");
     if (manifest.at("version") != kSliceStoreFormatVersion) {
-      ThrowFormatError(path.string(), "has version " + manifest.at("version").dump() + "; this svbtdf reads version " +
+      common::ThrowFormatError(path.string(), "has version " + manifest.at("version").dump() + "; this svbtdf reads version " +
                                           std::to_string(kSliceStoreFormatVersion), "re-run 'svbtdf process'");
     }
     return manifest;
   } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(path.string(), std::string("is malformed: ") + e.what());
+    common::ThrowFormatError(path.string(), std::string("is malformed: ") + e.what());
   }
 }
 
@@ -159,7 +159,7 @@ TexelGeometry GeometryFromManifest(const nlohmann::json& manifest, const std::st
     for (const nlohmann::json& p : j.at("dots")) g.dots.push_back(VectorFromJson(p));
     return g;
   } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(source, std::string("has a malformed geometry: ") + e.what());
+    common::ThrowFormatError(source, std::string("has a malformed geometry: ") + e.what());
   }
 }
 

@@ -35,7 +35,7 @@ struct TexelFitter::GridSystem {
 namespace {
 
 struct Sample {
-  Vec3 light;
+  model::Vec3 light;
   double rho = 0.0;
   double weight = 1.0;
   double solid_angle = 1.0;
@@ -49,8 +49,8 @@ struct SparseRows {
 };
 
 // Accumulates coefficient * ln D(h) into `row`, moving fixed horizon values to the right side.
-void AddInterpolatedTerm(const Hemicube& grid, const std::vector<int>& column, double horizon_ln_d,
-                         const Vec3& h, double coefficient, int row, SparseRows* rows) {
+void AddInterpolatedTerm(const model::Hemicube& grid, const std::vector<int>& column, double horizon_ln_d,
+                         const model::Vec3& h, double coefficient, int row, SparseRows* rows) {
   for (const auto& [cell, weight] : grid.Interpolation(h)) {
     if (weight == 0.0) continue;
     const int col = column[cell];
@@ -73,7 +73,7 @@ SparseMatrix NormalMatrix(const SparseRows& rows, int num_unknowns, Eigen::Vecto
 // Golden-section search that also considers the interval's ends: alpha = 0 or 1 (one rough side
 // only) are legitimate answers that an interior search only approaches.
 double MinimumIncludingEnds(const std::function<double(double)>& f, double lo, double hi, double tolerance) {
-  double best_x = GoldenSectionSearch(f, lo, hi, tolerance), best_f = f(best_x);
+  double best_x = common::GoldenSectionSearch(f, lo, hi, tolerance), best_f = f(best_x);
   for (const double x : {lo, hi}) {
     const double fx = f(x);
     if (fx < best_f) best_f = fx, best_x = x;
@@ -119,7 +119,7 @@ Eigen::VectorXd SolveNormalEquations(const SparseMatrix& normal, const Eigen::Ve
   state->solver.factorize(normal);
   ++state->factorizations;
   if (state->solver.info() != Eigen::Success) {
-    throw Error(ErrorKind::kNumerical, "NDF solve", "the normal equations are singular",
+    throw common::Error(common::ErrorKind::kNumerical, "NDF solve", "the normal equations are singular",
                 "increase the smoothness weight");
   }
   return state->solver.solve(rhs);
@@ -131,12 +131,12 @@ Eigen::VectorXd SolveNormalEquations(const SparseMatrix& normal, const Eigen::Ve
 
 TexelFitter::TexelFitter(double eta, const TexelFitOptions& options)
     : eta_(eta), options_(options), grid_(options.ndf_resolution) {
-  DualMicrofacetModel validate_eta(eta);  // throws for eta <= 1
+  model::DualMicrofacetModel validate_eta(eta);  // throws for eta <= 1
   if (!(options.smoothness_weight > 0)) {
-    ThrowInvalidInput("smoothness weight", "must be > 0 (it keeps cells without data determined)");
+    common::ThrowInvalidInput("smoothness weight", "must be > 0 (it keeps cells without data determined)");
   }
   if (!(options.alpha_tolerance > 0) || options.max_alternations < 1) {
-    ThrowInvalidInput("alpha search", "needs a positive tolerance and at least one alternation");
+    common::ThrowInvalidInput("alpha search", "needs a positive tolerance and at least one alternation");
   }
   auto system = std::make_shared<GridSystem>();
   const int cells = grid_.num_cells();
@@ -186,14 +186,14 @@ namespace {
 std::vector<Sample> PrepareSamples(const TexelSlice& slice, double dark_fraction) {
   const size_t n = slice.light.size();
   const auto size_error = [](const char* what) {
-    ThrowInvalidInput("texel slice", std::string(what) + " has a different length than the light directions");
+    common::ThrowInvalidInput("texel slice", std::string(what) + " has a different length than the light directions");
   };
   if (slice.rho.size() != n) size_error("rho");
   if (!slice.solid_angle.empty() && slice.solid_angle.size() != n) size_error("solid_angle");
   if (!slice.weight.empty() && slice.weight.size() != n) size_error("weight");
   if (!slice.rho_rgb.empty() && slice.rho_rgb.size() != n) size_error("rho_rgb");
   if (!(slice.view.z() > 0) || std::abs(slice.view.norm() - 1) > 1e-6) {
-    ThrowInvalidInput("texel slice", "the view direction must be a unit vector with z > 0");
+    common::ThrowInvalidInput("texel slice", "the view direction must be a unit vector with z > 0");
   }
   std::vector<Sample> samples(n);
   double brightest = 0.0;
@@ -204,10 +204,10 @@ std::vector<Sample> PrepareSamples(const TexelSlice& slice, double dark_fraction
     s.weight = slice.weight.empty() ? 1.0 : slice.weight[k];
     s.solid_angle = slice.solid_angle.empty() ? 1.0 : slice.solid_angle[k];
     if (!(s.light.z() < 0) || std::abs(s.light.norm() - 1) > 1e-6) {
-      ThrowInvalidInput("texel slice", "light direction " + std::to_string(k) + " is not a unit vector with z < 0");
+      common::ThrowInvalidInput("texel slice", "light direction " + std::to_string(k) + " is not a unit vector with z < 0");
     }
     if (!std::isfinite(s.rho) || !std::isfinite(s.weight) || s.weight < 0) {
-      ThrowInvalidInput("texel slice", "sample " + std::to_string(k) + " has a non-finite value or negative weight");
+      common::ThrowInvalidInput("texel slice", "sample " + std::to_string(k) + " has a non-finite value or negative weight");
     }
     if (s.weight > 0) brightest = std::max(brightest, s.rho);
   }
@@ -217,8 +217,8 @@ std::vector<Sample> PrepareSamples(const TexelSlice& slice, double dark_fraction
 
 // Mean incident direction weighted by rho times solid angle (paper eq. 18).
 template <typename RhoOf>
-Vec3 WeightedMeanDirection(const std::vector<Sample>& samples, RhoOf rho_of) {
-  Vec3 sum = Vec3::Zero();
+model::Vec3 WeightedMeanDirection(const std::vector<Sample>& samples, RhoOf rho_of) {
+  model::Vec3 sum = model::Vec3::Zero();
   double total = 0.0;
   for (size_t k = 0; k < samples.size(); ++k) {
     if (samples[k].weight <= 0) continue;
@@ -226,43 +226,43 @@ Vec3 WeightedMeanDirection(const std::vector<Sample>& samples, RhoOf rho_of) {
     sum += w * samples[k].light;
     total += w;
   }
-  return total > 0 ? Vec3(sum / total) : Vec3::Zero();
+  return total > 0 ? model::Vec3(sum / total) : model::Vec3::Zero();
 }
 
 }  // namespace
 
 namespace {
 
-SmithShadowing ShadowingFor(double roughness) {
-  return roughness > 0 ? SmithShadowing::Ggx(roughness) : SmithShadowing::None();
+model::SmithShadowing ShadowingFor(double roughness) {
+  return roughness > 0 ? model::SmithShadowing::Ggx(roughness) : model::SmithShadowing::None();
 }
 
 // The two virtual configurations of every sample, without D.
 struct Configurations {
-  std::vector<VirtualConfiguration> entry, exit;
+  std::vector<model::VirtualConfiguration> entry, exit;
 };
 
-Configurations ComputeConfigurations(const DualMicrofacetModel& model, const std::vector<Sample>& samples,
-                                     const Vec3& view) {
+Configurations ComputeConfigurations(const model::DualMicrofacetModel& btdf, const std::vector<Sample>& samples,
+                                     const model::Vec3& view) {
   Configurations c;
   c.entry.reserve(samples.size());
   c.exit.reserve(samples.size());
   for (const Sample& s : samples) {
-    c.entry.push_back(model.RoughEntry(s.light, view));
-    c.exit.push_back(model.RoughExit(s.light, view));
+    c.entry.push_back(btdf.RoughEntry(s.light, view));
+    c.exit.push_back(btdf.RoughExit(s.light, view));
   }
   return c;
 }
 
 // Does the blend with this alpha have a finite logarithm for this sample's configurations?
-bool RowDefined(const VirtualConfiguration& entry, const VirtualConfiguration& exit, double alpha) {
+bool RowDefined(const model::VirtualConfiguration& entry, const model::VirtualConfiguration& exit, double alpha) {
   if (alpha >= 1.0) return entry.valid && entry.factor > 0;
   if (alpha <= 0.0) return exit.valid && exit.factor > 0;
   return entry.valid && exit.valid && entry.factor > 0 && exit.factor > 0;
 }
 
 // Per-sample model values for a fixed D: rho_T and rho_B.
-void EvaluateConfigurations(const Ndf& ndf, const Configurations& configs, std::vector<double>* rho_t,
+void EvaluateConfigurations(const model::Ndf& ndf, const Configurations& configs, std::vector<double>* rho_t,
                             std::vector<double>* rho_b) {
   const size_t n = configs.entry.size();
   rho_t->assign(n, 0.0);
@@ -277,8 +277,8 @@ void EvaluateConfigurations(const Ndf& ndf, const Configurations& configs, std::
 struct ShadowingResidual {
   const std::vector<Sample>* samples;
   const std::vector<int>* rows;  // indices of the samples used
-  const TabulatedNdf* ndf;
-  Vec3 view;
+  const model::TabulatedNdf* ndf;
+  model::Vec3 view;
   double eta;
   double alpha;
 
@@ -286,10 +286,10 @@ struct ShadowingResidual {
     const double roughness = parameters[0][0];
     const double ln_k = parameters[0][1];
     if (!(roughness > 0)) return false;
-    const DualMicrofacetModel model(eta, SmithShadowing::Ggx(roughness));
+    const model::DualMicrofacetModel btdf(eta, model::SmithShadowing::Ggx(roughness));
     for (size_t j = 0; j < rows->size(); ++j) {
       const Sample& s = (*samples)[(*rows)[j]];
-      const double rho = model.Rho(*ndf, alpha, s.light, view);
+      const double rho = btdf.Rho(*ndf, alpha, s.light, view);
       if (!(rho > 0)) return false;
       residuals[j] = std::sqrt(s.weight) * (std::log(rho) + ln_k - std::log(s.rho));
     }
@@ -303,18 +303,18 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
   FitWorkspace local_workspace;
   FitWorkspace::State* state = (workspace ? workspace : &local_workspace)->state_.get();
   const std::vector<Sample> samples = PrepareSamples(slice, options_.dark_fraction);
-  const Vec3& view = slice.view;
+  const model::Vec3& view = slice.view;
   const int used = static_cast<int>(std::count_if(samples.begin(), samples.end(), [](const Sample& s) { return s.used; }));
   if (used < 8) {
-    throw Error(ErrorKind::kNumerical, "texel slice",
+    throw common::Error(common::ErrorKind::kNumerical, "texel slice",
                 "only " + std::to_string(used) + " samples are bright enough to fit",
                 "check the exposure and the validity mask of this texel");
   }
   const GridSystem& system = *system_;
-  const Vec3 measured_mean = WeightedMeanDirection(samples, [&](size_t k) { return samples[k].rho; });
+  const model::Vec3 measured_mean = WeightedMeanDirection(samples, [&](size_t k) { return samples[k].rho; });
 
   double shadowing_roughness = options_.initial_shadowing_roughness;
-  const DualMicrofacetModel initial_model(eta_, ShadowingFor(shadowing_roughness));
+  const model::DualMicrofacetModel initial_model(eta_, ShadowingFor(shadowing_roughness));
   const Configurations configs = ComputeConfigurations(initial_model, samples, view);
 
   // (1) ln D for a fixed alpha.
@@ -348,7 +348,7 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
     normal += system.smoothness_normal;
     rhs += system.smoothness_rhs;
     // Added with weight zero in the final pass so that both passes share one pattern.
-    normal += (with_symmetry ? 1.0 : Square(options_.final_symmetry_weight)) * system.symmetry_normal;
+    normal += (with_symmetry ? 1.0 : model::Square(options_.final_symmetry_weight)) * system.symmetry_normal;
     const Eigen::VectorXd x = SolveNormalEquations(normal, rhs, state);
     std::vector<double> ln_d(grid_.num_cells(), options_.horizon_ln_d);
     for (int c = 0; c < grid_.num_cells(); ++c) {
@@ -359,12 +359,12 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
 
   // (2) alpha for a fixed D, by the paper's mean-direction criterion.
   const auto search_alpha = [&](const std::vector<double>& ln_d) {
-    const TabulatedNdf ndf(grid_, ln_d);
+    const model::TabulatedNdf ndf(grid_, ln_d);
     std::vector<double> rho_t, rho_b;
     EvaluateConfigurations(ndf, configs, &rho_t, &rho_b);
     return MinimumIncludingEnds(
         [&](double alpha) {
-          const Vec3 mean = WeightedMeanDirection(samples, [&](size_t k) { return LogBlend(rho_t[k], rho_b[k], alpha); });
+          const model::Vec3 mean = WeightedMeanDirection(samples, [&](size_t k) { return model::LogBlend(rho_t[k], rho_b[k], alpha); });
           return (mean - measured_mean).squaredNorm();
         },
         0.0, 1.0, 1e-4);
@@ -384,7 +384,7 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
   ln_d = solve_ln_d(alpha, /*with_symmetry=*/false);
 
   // (3) Normalise D; its scale is the transmission scale k_s.
-  TabulatedNdf ndf(grid_, ln_d);
+  model::TabulatedNdf ndf(grid_, ln_d);
   const double scale = ndf.Normalize();
   result.alpha = alpha;
   result.ln_d = ndf.ln_d();
@@ -423,10 +423,10 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
     const Sample& s = samples[k];
     if (s.weight <= 0) continue;
     const double predicted = fitted.Rho(s.light, view);
-    squared_error += Square(predicted - s.rho);
-    squared_rho += Square(s.rho);
+    squared_error += model::Square(predicted - s.rho);
+    squared_rho += model::Square(s.rho);
     if (s.used && predicted > 0) {
-      squared_log += Square(std::log(predicted) - std::log(s.rho));
+      squared_log += model::Square(std::log(predicted) - std::log(s.rho));
       ++result.samples_used;
     }
     if (!slice.rho_rgb.empty()) {
@@ -445,12 +445,12 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
 
 FittedTexel TexelFitter::Model(const TexelFitResult& fit) const { return FittedTexel(grid_, eta_, fit); }
 
-FittedTexel::FittedTexel(const Hemicube& grid, double eta, const TexelFitResult& fit)
-    : ndf_(std::make_shared<TabulatedNdf>(grid, fit.ln_d)),
+FittedTexel::FittedTexel(const model::Hemicube& grid, double eta, const TexelFitResult& fit)
+    : ndf_(std::make_shared<model::TabulatedNdf>(grid, fit.ln_d)),
       model_(eta, ShadowingFor(fit.shadowing_roughness)),
       alpha_(fit.alpha),
       k_s_(fit.k_s) {}
 
-double FittedTexel::Rho(const Vec3& i, const Vec3& o) const { return k_s_ * model_.Rho(*ndf_, alpha_, i, o); }
+double FittedTexel::Rho(const model::Vec3& i, const model::Vec3& o) const { return k_s_ * model_.Rho(*ndf_, alpha_, i, o); }
 
 }  // namespace svbtdf::fit

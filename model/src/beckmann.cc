@@ -6,7 +6,7 @@
 
 #include "svbtdf/model/ndf_validation.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 namespace {
 
 constexpr double kInvSqrtPi = 0.56418958354775628695;
@@ -132,4 +132,4 @@ double BeckmannNdf::VisibleNormalPdf(const Vec3& v, const Vec3& h) const {
   return G1(v, h) * std::max(0.0, v.dot(h)) * D(h) / v.z();
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

@@ -6,7 +6,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/model/fresnel.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 namespace {
 
 // eta times the in-slab direction whose tangential component is `tangential` (Snell at a flat
@@ -20,7 +20,7 @@ Vec3 ScaledSlabDirection(double tx, double ty, double eta) {
 DualMicrofacetModel::DualMicrofacetModel(double eta, SmithShadowing shadowing)
     : eta_(eta), shadowing_(shadowing) {
   if (!(eta > 1.0) || !std::isfinite(eta)) {
-    ThrowInvalidInput("eta", "the relative index of refraction must be > 1, got " + std::to_string(eta),
+    common::ThrowInvalidInput("eta", "the relative index of refraction must be > 1, got " + std::to_string(eta),
                       "eta = n_slab / n_air, e.g. 1.5 for glass");
   }
 }
@@ -116,4 +116,4 @@ Rgb EvaluateMaterial(const Ndf& ndf, const DualMicrofacetParams& params, const V
           params.k_s[2] * rho + params.rho_d[2]};
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

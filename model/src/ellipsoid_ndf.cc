@@ -7,12 +7,12 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/model/ndf_validation.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 EllipsoidNdf::EllipsoidNdf(double alpha_x, double alpha_y, double theta_x, double theta_y, double theta_z) {
   RequirePositiveRoughness("ellipsoid", alpha_x, alpha_y);
   for (const double angle : {theta_x, theta_y, theta_z}) {
-    if (!std::isfinite(angle)) ThrowInvalidInput("ellipsoid angles", "must be finite numbers (radians)");
+    if (!std::isfinite(angle)) common::ThrowInvalidInput("ellipsoid angles", "must be finite numbers (radians)");
   }
   const Mat3 s = Vec3(alpha_x, alpha_y, 1.0).asDiagonal();
   const Mat3 r = (Eigen::AngleAxisd(theta_x, Vec3::UnitX()) * Eigen::AngleAxisd(theta_y, Vec3::UnitY()) *
@@ -68,4 +68,4 @@ NormalSample EllipsoidNdf::SampleVisibleNormal(const Vec3& v, const Vec2& u) con
   return {m, pdf, std::min(1.0, k) / k};
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 double FresnelDielectric(double cos_theta_i, double eta) {
   cos_theta_i = std::clamp(cos_theta_i, -1.0, 1.0);
@@ -20,4 +20,4 @@ double FresnelDielectric(double cos_theta_i, double eta) {
   return 0.5 * (r_parallel * r_parallel + r_perpendicular * r_perpendicular);
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

@@ -6,7 +6,7 @@
 
 #include "svbtdf/model/ndf_validation.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 GgxNdf::GgxNdf(double alpha_x, double alpha_y) : alpha_x_(alpha_x), alpha_y_(alpha_y) {
   RequirePositiveRoughness("ggx", alpha_x, alpha_y);
@@ -48,4 +48,4 @@ double GgxNdf::VisibleNormalPdf(const Vec3& v, const Vec3& h) const {
   return G1(v, h) * std::max(0.0, v.dot(h)) * D(h) / v.z();
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

@@ -6,7 +6,7 @@
 
 #include "svbtdf/common/error.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 namespace {
 
 // Integral of the solid angle over [0, a] x [0, b] of a plane at unit distance, signed: the
@@ -17,7 +17,7 @@ double RectangleSolidAnglePrimitive(double a, double b) { return std::atan(a * b
 
 Hemicube::Hemicube(int resolution) : n_(resolution) {
   if (resolution < 4 || resolution % 2 != 0 || resolution > 4096) {
-    ThrowInvalidInput("hemicube resolution", "must be an even number from 4 to 4096, got " + std::to_string(resolution));
+    common::ThrowInvalidInput("hemicube resolution", "must be an even number from 4 to 4096, got " + std::to_string(resolution));
   }
   const int cells = num_cells();
   centers_.resize(cells);
@@ -193,4 +193,4 @@ Hemicube::Weights Hemicube::Interpolation(const Vec3& dir) const {
   return result;
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

@@ -8,7 +8,7 @@
 #include "svbtdf/model/ggx.h"
 #include "svbtdf/model/vmf_ndf.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 std::vector<std::string> AnalyticNdfNames() { return {"ggx", "beckmann", "ellipsoid", "vmf"}; }
 
@@ -21,7 +21,7 @@ std::unique_ptr<Ndf> MakeAnalyticNdf(std::string_view name, const AnalyticNdfPar
   if (name == "vmf") return std::make_unique<VmfNdf>(params.mean, params.kappa);
   std::string known;
   for (const std::string& n : AnalyticNdfNames()) known += (known.empty() ? "" : ", ") + n;
-  ThrowInvalidInput("ndf", "unknown NDF '" + std::string(name) + "'", "known: " + known);
+  common::ThrowInvalidInput("ndf", "unknown NDF '" + std::string(name) + "'", "known: " + known);
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

@@ -4,16 +4,16 @@
 
 #include "svbtdf/common/error.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 void RequirePositiveRoughness(const std::string& ndf_name, double alpha_x, double alpha_y) {
   for (const double alpha : {alpha_x, alpha_y}) {
     if (!(alpha > 0) || !std::isfinite(alpha)) {
-      ThrowInvalidInput("roughness", ndf_name + " roughness must be a finite number > 0, got " +
+      common::ThrowInvalidInput("roughness", ndf_name + " roughness must be a finite number > 0, got " +
                                          std::to_string(alpha),
                         "a perfectly smooth interface is the limit of small roughness, e.g. 1e-3");
     }
   }
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

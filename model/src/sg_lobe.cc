@@ -5,7 +5,7 @@
 
 #include "svbtdf/common/error.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 namespace {
 
 // Parameters: axis as (theta, phi), ln lambda, ln a: unconstrained, and the axis stays unit.
@@ -29,7 +29,7 @@ SphericalGaussianFit FitSphericalGaussian(const std::vector<Vec3>& directions, c
                                           const std::vector<double>& weights) {
   const size_t n = directions.size();
   if (values.size() != n || weights.size() != n || n < 4) {
-    ThrowInvalidInput("spherical Gaussian fit", "needs at least 4 samples with one value and one weight each");
+    common::ThrowInvalidInput("spherical Gaussian fit", "needs at least 4 samples with one value and one weight each");
   }
   // Moments: the value-weighted mean direction gives the axis; its length R the sharpness
   // (Banerjee et al.'s approximation for a vMF lobe, lambda ~ R (3 - R^2) / (1 - R^2)).
@@ -40,7 +40,7 @@ SphericalGaussianFit FitSphericalGaussian(const std::vector<Vec3>& directions, c
     mass += weights[k] * values[k];
     norm += weights[k] * Square(values[k]);
   }
-  if (!(mass > 0)) ThrowInvalidInput("spherical Gaussian fit", "the slice has no positive value");
+  if (!(mass > 0)) common::ThrowInvalidInput("spherical Gaussian fit", "the slice has no positive value");
   const double r = std::min(mean.norm() / mass, 0.999);
   const Vec3 axis = mean.normalized();
   Params p;
@@ -99,4 +99,4 @@ SphericalGaussianFit FitSphericalGaussian(const std::vector<Vec3>& directions, c
   return fit;
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

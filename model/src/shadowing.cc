@@ -5,11 +5,11 @@
 
 #include "svbtdf/common/error.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 SmithShadowing SmithShadowing::Ggx(double roughness) {
   if (!(roughness > 0) || !std::isfinite(roughness)) {
-    ThrowInvalidInput("shadowing roughness", "must be a finite number > 0, got " + std::to_string(roughness),
+    common::ThrowInvalidInput("shadowing roughness", "must be a finite number > 0, got " + std::to_string(roughness),
                       "use no shadowing instead of a zero roughness");
   }
   return SmithShadowing(roughness);
@@ -25,4 +25,4 @@ double SmithShadowing::G1(const Vec3& v, const Vec3& h) const {
   return 2.0 / (1.0 + std::sqrt(1.0 + roughness_ * roughness_ * tan2));
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

@@ -7,7 +7,7 @@
 
 #include "svbtdf/common/error.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 namespace {
 
 constexpr int kSubCells = 4;        // quadrature points per cell side for the integrals
@@ -66,11 +66,11 @@ struct TabulatedNdf::AreaTable {
 
 TabulatedNdf::TabulatedNdf(const Hemicube& grid, std::vector<double> ln_d) : grid_(grid), ln_d_(std::move(ln_d)) {
   if (static_cast<int>(ln_d_.size()) != grid_.num_cells()) {
-    ThrowInvalidInput("tabulated NDF", "has " + std::to_string(ln_d_.size()) + " values for " +
+    common::ThrowInvalidInput("tabulated NDF", "has " + std::to_string(ln_d_.size()) + " values for " +
                                            std::to_string(grid_.num_cells()) + " hemicube cells");
   }
   for (double value : ln_d_) {
-    if (!std::isfinite(value)) ThrowInvalidInput("tabulated NDF", "holds a non-finite ln D value");
+    if (!std::isfinite(value)) common::ThrowInvalidInput("tabulated NDF", "holds a non-finite ln D value");
   }
 }
 
@@ -122,7 +122,7 @@ double TabulatedNdf::ProjectedIntegral() const {
 double TabulatedNdf::Normalize() {
   const double integral = ProjectedIntegral();
   if (!(integral > 0) || !std::isfinite(integral)) {
-    throw Error(ErrorKind::kNumerical, "tabulated NDF", "cannot be normalised (its integral is " +
+    throw common::Error(common::ErrorKind::kNumerical, "tabulated NDF", "cannot be normalised (its integral is " +
                                                            std::to_string(integral) + ")");
   }
   const double shift = std::log(integral);
@@ -212,7 +212,7 @@ NormalSample TabulatedNdf::SampleVisibleNormal(const Vec3& v, const Vec2& u) con
       return {h, pdf, weight};
     }
   }
-  throw Error(ErrorKind::kNumerical, "tabulated NDF", "visible-normal sampling did not accept a sample");
+  throw common::Error(common::ErrorKind::kNumerical, "tabulated NDF", "visible-normal sampling did not accept a sample");
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

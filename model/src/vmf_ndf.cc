@@ -7,7 +7,7 @@
 
 #include "svbtdf/common/error.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 namespace {
 
 constexpr int kThetaSteps = 32, kPhiSteps = 32;
@@ -40,8 +40,8 @@ Nodes NodesAround(const Vec3& centre, int radial, int azimuth) {
 }  // namespace
 
 VmfNdf::VmfNdf(const Vec3& mean, double kappa) : mean_(mean.normalized()), kappa_(kappa) {
-  if (!(kappa > 0 && kappa <= 1e5)) ThrowInvalidInput("kappa", "the vMF concentration must lie in (0, 1e5]");
-  if (!mean.allFinite() || !(mean_.z() > 0)) ThrowInvalidInput("mean", "the vMF mean normal must have z > 0");
+  if (!(kappa > 0 && kappa <= 1e5)) common::ThrowInvalidInput("kappa", "the vMF concentration must lie in (0, 1e5]");
+  if (!mean.allFinite() || !(mean_.z() > 0)) common::ThrowInvalidInput("mean", "the vMF mean normal must have z > 0");
   // Normalisation on fine nodes; the projected-area table (for G1 and the sampler's pdf) on
   // coarser ones with D and the weights folded together.
   ln_norm_ = 0.0;  // D() below returns the unnormalised lobe until this is set
@@ -114,7 +114,7 @@ NormalSample VmfNdf::SampleVisibleNormal(const Vec3& v, const Vec2& u) const {
       return {h, pdf, std::min(1.0, ProjectedArea(v) / v.z())};
     }
   }
-  throw Error(ErrorKind::kNumerical, "vmf NDF", "visible-normal sampling did not accept a sample");
+  throw common::Error(common::ErrorKind::kNumerical, "vmf NDF", "visible-normal sampling did not accept a sample");
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

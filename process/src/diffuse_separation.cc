@@ -9,7 +9,7 @@
 
 namespace svbtdf::process {
 
-std::vector<std::array<int, 2>> OppositeNeighbours(const std::vector<Vec3>& dots) {
+std::vector<std::array<int, 2>> OppositeNeighbours(const std::vector<model::Vec3>& dots) {
   std::vector<std::array<int, 2>> pairs(dots.size(), {-1, -1});
   for (size_t q = 0; q < dots.size(); ++q) {
     double nearest = std::numeric_limits<double>::infinity();
@@ -19,7 +19,7 @@ std::vector<std::array<int, 2>> OppositeNeighbours(const std::vector<Vec3>& dots
     // Among the nearest dots (there are four on a square grid), the first whose opposite exists.
     for (size_t a = 0; a < dots.size() && pairs[q][0] < 0; ++a) {
       if (a == q || (dots[a] - dots[q]).norm() > 1.05 * nearest) continue;
-      const Vec3 mirror = 2.0 * dots[q] - dots[a];
+      const model::Vec3 mirror = 2.0 * dots[q] - dots[a];
       for (size_t b = 0; b < dots.size(); ++b) {
         if (b != q && b != a && (dots[b] - mirror).norm() < 0.25 * nearest) {
           pairs[q] = {static_cast<int>(a), static_cast<int>(b)};
@@ -31,10 +31,10 @@ std::vector<std::array<int, 2>> OppositeNeighbours(const std::vector<Vec3>& dots
   return pairs;
 }
 
-DiffuseEstimate EstimateDiffuse(const std::vector<Rgb>& r, const std::vector<double>& noise_scale,
+DiffuseEstimate EstimateDiffuse(const std::vector<model::Rgb>& r, const std::vector<double>& noise_scale,
                                 const std::vector<std::array<int, 2>>& neighbours, double clip) {
   if (r.size() != noise_scale.size() || r.size() != neighbours.size()) {
-    ThrowInvalidInput("EstimateDiffuse", std::to_string(r.size()) + " samples but " +
+    common::ThrowInvalidInput("EstimateDiffuse", std::to_string(r.size()) + " samples but " +
                                              std::to_string(noise_scale.size()) + " noise scales and " +
                                              std::to_string(neighbours.size()) + " neighbour pairs");
   }
@@ -43,7 +43,7 @@ DiffuseEstimate EstimateDiffuse(const std::vector<Rgb>& r, const std::vector<dou
   if (n == 0) return estimate;
   std::vector<double> y(n), scale(n);
   for (size_t q = 0; q < n; ++q) {
-    y[q] = Luminance(r[q]);
+    y[q] = model::Luminance(r[q]);
     scale[q] = std::max(noise_scale[q], 1e-300);
   }
   // The shot noise's constant c (Var(y_q) = c s_q E[y_q]) from the second differences across
@@ -98,7 +98,7 @@ DiffuseEstimate EstimateDiffuse(const std::vector<Rgb>& r, const std::vector<dou
     floor = mean_of(set);
     c = noise_constant(set);
   }
-  Rgb sum = {0, 0, 0};
+  model::Rgb sum = {0, 0, 0};
   double weights = 0;
   for (size_t q = 0; q < n; ++q) {
     if (!set[q]) continue;

@@ -34,7 +34,7 @@ void Warn(const PipelineListener& listener, const std::vector<fit::QualityWarnin
 
 void RequireNewOrEmpty(const fs::path& out) {
   if (fs::exists(out) && (!fs::is_directory(out) || !fs::is_empty(out))) {
-    ThrowInvalidInput(out.string(), "exists and is not empty; a material is never overwritten", "choose a new --out folder");
+    common::ThrowInvalidInput(out.string(), "exists and is not empty; a material is never overwritten", "choose a new --out folder");
   }
 }
 
@@ -83,7 +83,7 @@ void ProcessUnlessDone(const session::Session& session, const calib::SessionCali
     fit::SliceStore::Open(processed);
     Say(listener, "== 2/3 processing: using " + processed.string());
     return;
-  } catch (const Error&) {
+  } catch (const common::Error&) {
     // Not there or unfinished: process (an unfinished store resumes).
   }
   Say(listener, "== 2/3 processing into " + processed.string());
@@ -134,7 +134,7 @@ PipelineOutcome RunPipeline(const PipelineOptions& options, const PipelineListen
   const session::Session session = session::Session::Open(options.session);
   const session::SessionVerification verification = session.Verify(/*check_crc=*/false);
   if (!verification.complete()) {
-    ThrowInvalidInput(options.session.string(), "is not a complete session: " + verification.Summary(),
+    common::ThrowInvalidInput(options.session.string(), "is not a complete session: " + verification.Summary(),
                       "finish the capture (re-run 'svbtdf acquire' with the same --out) or check it with 'svbtdf "
                       "session verify'");
   }

@@ -45,7 +45,7 @@ CapturePlan ParsePlan(const session::Session& session, int num_dots) {
     if (!capture) continue;
     if (capture->kind == session::CaptureKind::kDot) {
       if (capture->dot >= num_dots) {
-        ThrowInvalidInput(session.folder().string(), "plans dot " + std::to_string(capture->dot) + " but the calibration has " +
+        common::ThrowInvalidInput(session.folder().string(), "plans dot " + std::to_string(capture->dot) + " but the calibration has " +
                                                          std::to_string(num_dots) + " dots",
                           "re-run 'svbtdf calibrate' on this session");
       }
@@ -57,10 +57,10 @@ CapturePlan ParsePlan(const session::Session& session, int num_dots) {
     }
   }
   if (plan.flat_key.empty()) {
-    ThrowInvalidInput(session.folder().string(), "plans no flat_white capture", "the dots' intensity L_q is measured from it");
+    common::ThrowInvalidInput(session.folder().string(), "plans no flat_white capture", "the dots' intensity L_q is measured from it");
   }
   for (int q = 0; q < num_dots; ++q) {
-    if (plan.dot_keys[q].empty()) ThrowInvalidInput(session.folder().string(), "plans no image of dot " + std::to_string(q));
+    if (plan.dot_keys[q].empty()) common::ThrowInvalidInput(session.folder().string(), "plans no image of dot " + std::to_string(q));
   }
   return plan;
 }
@@ -72,16 +72,16 @@ class Rectifier {
   Rectifier(const calib::SessionCalibration& calibration, const TexelGeometry& geometry, int samples) {
     const int64_t texels = geometry.num_texels();
     const double pitch_x = geometry.width_m / geometry.texels_x, pitch_y = geometry.height_m / geometry.texels_y;
-    std::vector<Vec3> points;
+    std::vector<model::Vec3> points;
     points.reserve(texels * samples * samples);
     for (int64_t t = 0; t < texels; ++t) {
-      const Vec3 centre = geometry.TexelCentre(t);
+      const model::Vec3 centre = geometry.TexelCentre(t);
       for (int a = 0; a < samples; ++a) {
         for (int b = 0; b < samples; ++b) {
           // Points at 0.2 .. 0.8 of the texel: at least a fifth of a texel from its edges.
           const double u = samples == 1 ? 0.0 : -0.3 + 0.6 * a / (samples - 1);
           const double v = samples == 1 ? 0.0 : -0.3 + 0.6 * b / (samples - 1);
-          points.push_back(centre + Vec3(u * pitch_x, v * pitch_y, 0.0));
+          points.push_back(centre + model::Vec3(u * pitch_x, v * pitch_y, 0.0));
         }
       }
     }
@@ -111,7 +111,7 @@ class Rectifier {
              std::vector<float>* out, std::vector<uint8_t>* saturated) const {
     out->assign(3 * texels(), kNaN);
     saturated->assign(texels(), 0);
-    ParallelFor(texels(), threads, 4096, [&](int64_t a, int64_t b) {
+    common::ParallelFor(texels(), threads, 4096, [&](int64_t a, int64_t b) {
       for (int64_t t = a; t < b; ++t) {
         if (!Covers(t)) continue;
         double sum[3] = {0, 0, 0};
@@ -161,11 +161,11 @@ class ImageReader {
   };
 
   Linear Read(const std::string& key, const std::vector<float>* dark) {
-    const CameraImage image = session_.ReadImage(key);
+    const common::CameraImage image = session_.ReadImage(key);
     const calib::CameraModel& camera = calibration_.camera.camera;
     const std::string file = (session_.folder() / session_.Entry(key).file).string();
     if (image.width != camera.width || image.height != camera.height) {
-      ThrowFormatError(file, "is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+      common::ThrowFormatError(file, "is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                                  " pixels but the calibrated camera is " + std::to_string(camera.width) + "x" +
                                  std::to_string(camera.height));
     }
@@ -173,10 +173,10 @@ class ImageReader {
     out.channels = image.channels;
     out.exposure_s = session_.Entry(key).exposure_s;
     if (!(out.exposure_s > 0) || !std::isfinite(out.exposure_s)) {
-      ThrowFormatError((session_.folder() / "journal.jsonl").string(), "records no positive exposure for '" + key + "'");
+      common::ThrowFormatError((session_.folder() / "journal.jsonl").string(), "records no positive exposure for '" + key + "'");
     }
     const size_t values = image.pixels.size();
-    if (dark && dark->size() != values) ThrowFormatError(file, "has a different number of channels than its dark frame");
+    if (dark && dark->size() != values) common::ThrowFormatError(file, "has a different number of channels than its dark frame");
     out.values.resize(values);
     out.saturated.assign(static_cast<size_t>(image.width) * image.height, 0);
     const double saturation = calibration_.radiometry.saturation_dn;
@@ -196,7 +196,7 @@ class ImageReader {
       const Linear dark = Read(key, nullptr);
       if (mean.empty()) mean.assign(dark.values.size(), 0.0f);
       if (dark.values.size() != mean.size()) {
-        ThrowFormatError((session_.folder() / session_.Entry(key).file).string(), "differs in size from the other dark frames");
+        common::ThrowFormatError((session_.folder() / session_.Entry(key).file).string(), "differs in size from the other dark frames");
       }
       for (size_t k = 0; k < mean.size(); ++k) mean[k] += dark.values[k] / keys.size();
     }
@@ -254,7 +254,7 @@ void ResolveTexelGrid(const session::Session& session, const calib::SessionCalib
   // About two camera pixels per texel along the sample's wider side.
   const double w = calibration.sample_plane.width_m, h = calibration.sample_plane.height_m;
   const std::vector<Eigen::Vector2d> corners =
-      ProjectToImage(calibration, {Vec3(-w / 2, 0, 0), Vec3(w / 2, 0, 0)});
+      ProjectToImage(calibration, {model::Vec3(-w / 2, 0, 0), model::Vec3(w / 2, 0, 0)});
   const double pixels = (corners[1] - corners[0]).norm();
   options->texels_x = std::max(1, static_cast<int>(pixels / 2));
   options->texels_y = std::max(1, static_cast<int>(std::lround(options->texels_x * h / w)));
@@ -300,9 +300,9 @@ void ToBtdf(const TexelGeometry& geometry, const calib::MonitorCalibration& moni
             const std::vector<float>& exitance, std::vector<float>* values) {
   const double dot_area = std::numbers::pi * monitor.dot_radius_m * monitor.dot_radius_m;
   for (int64_t t = 0; t < geometry.num_texels(); ++t) {
-    const Vec3 to_dot = geometry.dots[dot] - geometry.TexelCentre(t);
+    const model::Vec3 to_dot = geometry.dots[dot] - geometry.TexelCentre(t);
     const double r2 = to_dot.squaredNorm();
-    const Vec3 i = to_dot / std::sqrt(r2);
+    const model::Vec3 i = to_dot / std::sqrt(r2);
     const double emission = monitor.Emission(-i.dot(monitor.normal));
     for (int c = 0; c < 3; ++c) {
       const double l_q = exitance[3 * t + c] * dot_area * emission;
@@ -348,15 +348,15 @@ ProcessReport ProcessSession(const session::Session& session, const calib::Sessi
   }
   ReadAhead images(reader, darks, std::move(order));
   ProcessReport report;
-  std::unique_ptr<ProgressBar> progress;
-  if (options.progress) progress = std::make_unique<ProgressBar>("process", num_dots, "dots");
+  std::unique_ptr<common::ProgressBar> progress;
+  if (options.progress) progress = std::make_unique<common::ProgressBar>("process", num_dots, "dots");
   for (int q = 0; q < num_dots; ++q) {
     if (writer.HasDot(q)) {
       ++report.dots_resumed;
       if (progress) progress->SkipAlreadyDone(1);
       continue;
     }
-    ThrowIfInterrupted("processing");
+    common::ThrowIfInterrupted("processing");
     std::vector<float> values =
         MergeBrackets(images, static_cast<int>(plan.dot_keys[q].size()), rectifier, options.threads);
     ToBtdf(geometry, calibration.monitor, q, exitance, &values);

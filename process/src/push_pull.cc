@@ -12,7 +12,7 @@ namespace {
 // Position of a direction (z >= 0) in the unfolded 2N x 2N cross, in cell units (continuous).
 // Top face: the square [N/2, 3N/2)^2; the side faces are its arms, each N/2 deep, with the
 // horizon at the outer edge of the image.
-Vec2 UnfoldedPosition(const Vec3& d, int n) {
+model::Vec2 UnfoldedPosition(const model::Vec3& d, int n) {
   const double half = 0.5 * n;
   const double ax = std::abs(d.x()), ay = std::abs(d.y()), az = d.z();
   if (az >= ax && az >= ay) {  // top face: (x/z, y/z) in [-1, 1]^2
@@ -28,25 +28,25 @@ Vec2 UnfoldedPosition(const Vec3& d, int n) {
 
 }  // namespace
 
-PushPullResampler::PushPullResampler(const Hemicube& light_grid) : grid_(light_grid), size_(2 * light_grid.resolution()) {
+PushPullResampler::PushPullResampler(const model::Hemicube& light_grid) : grid_(light_grid), size_(2 * light_grid.resolution()) {
   const int n = grid_.resolution();
   if ((n & (n - 1)) != 0) {
-    ThrowInvalidInput("light hemicube resolution", "must be a power of two for push-pull, got " + std::to_string(n));
+    common::ThrowInvalidInput("light hemicube resolution", "must be a power of two for push-pull, got " + std::to_string(n));
   }
   pixel_of_cell_.resize(grid_.num_cells());
   for (int c = 0; c < grid_.num_cells(); ++c) {
-    const Vec2 p = UnfoldedPosition(grid_.CellCenter(c), n);
+    const model::Vec2 p = UnfoldedPosition(grid_.CellCenter(c), n);
     const int col = std::clamp(static_cast<int>(std::floor(p.x())), 0, size_ - 1);
     const int row = std::clamp(static_cast<int>(std::floor(p.y())), 0, size_ - 1);
     pixel_of_cell_[c] = row * size_ + col;
   }
 }
 
-void PushPullResampler::Resample(const std::vector<Vec3>& light, const std::vector<float>& values,
+void PushPullResampler::Resample(const std::vector<model::Vec3>& light, const std::vector<float>& values,
                                  const std::vector<float>& weights, std::vector<float>* cell_values,
                                  std::vector<float>* cell_confidence) const {
   if (values.size() != light.size() || weights.size() != light.size()) {
-    ThrowInvalidInput("push-pull", "light, values and weights differ in length");
+    common::ThrowInvalidInput("push-pull", "light, values and weights differ in length");
   }
   // Level 0: splat every sample with the hemicube's bilinear weights into the unfolded image.
   std::vector<std::vector<float>> sum(1), weight(1);
@@ -54,7 +54,7 @@ void PushPullResampler::Resample(const std::vector<Vec3>& light, const std::vect
   weight[0].assign(static_cast<size_t>(size_) * size_, 0.0f);
   for (size_t k = 0; k < light.size(); ++k) {
     if (!(weights[k] > 0) || !std::isfinite(values[k])) continue;
-    for (const auto& [cell, w] : grid_.Interpolation(FlipZ(light[k]))) {
+    for (const auto& [cell, w] : grid_.Interpolation(model::FlipZ(light[k]))) {
       const int pixel = pixel_of_cell_[cell];
       sum[0][pixel] += static_cast<float>(w) * weights[k] * values[k];
       weight[0][pixel] += static_cast<float>(w) * weights[k];

@@ -92,25 +92,25 @@ std::vector<uint8_t> TexelsWithDotBeneath(const TexelGeometry& geometry) {
   std::vector<uint8_t> reach(geometry.num_texels(), 0);
   if (geometry.dots.empty()) return reach;
   // The monitor plane: through the dots' centroid, with its normal; an in-plane basis.
-  const Vec3 n = geometry.monitor_normal.normalized();
-  Vec3 centroid = Vec3::Zero();
-  for (const Vec3& p : geometry.dots) centroid += p;
+  const model::Vec3 n = geometry.monitor_normal.normalized();
+  model::Vec3 centroid = model::Vec3::Zero();
+  for (const model::Vec3& p : geometry.dots) centroid += p;
   centroid /= static_cast<double>(geometry.dots.size());
-  const Vec3 e1 = (std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(n).normalized();
-  const Vec3 e2 = n.cross(e1);
+  const model::Vec3 e1 = (std::abs(n.x()) < 0.9 ? model::Vec3::UnitX() : model::Vec3::UnitY()).cross(n).normalized();
+  const model::Vec3 e2 = n.cross(e1);
   std::vector<Eigen::Vector2d> dots;
-  for (const Vec3& p : geometry.dots) dots.emplace_back((p - centroid).dot(e1), (p - centroid).dot(e2));
+  for (const model::Vec3& p : geometry.dots) dots.emplace_back((p - centroid).dot(e1), (p - centroid).dot(e2));
   const double spacing = std::sqrt(geometry.DotCellArea());
   const std::vector<Eigen::Vector2d> hull = ConvexHull(dots);
   for (int64_t t = 0; t < geometry.num_texels(); ++t) {
-    const Vec3 x = geometry.TexelCentre(t);
-    const Vec3 o = geometry.View(t);
+    const model::Vec3 x = geometry.TexelCentre(t);
+    const model::Vec3 o = geometry.View(t);
     // x - s o on the plane: (x - s o - centroid) . n = 0.
     const double along = o.dot(n);
     if (!(std::abs(along) > 1e-12)) continue;
     const double s = (x - centroid).dot(n) / along;
     if (!(s > 0)) continue;  // the continued ray never reaches the monitor
-    const Vec3 hit = x - s * o - centroid;
+    const model::Vec3 hit = x - s * o - centroid;
     const Eigen::Vector2d m(hit.dot(e1), hit.dot(e2));
     if (HullDistance(m, hull) > 0.5 * spacing) continue;
     double nearest = std::numeric_limits<double>::infinity();
@@ -130,7 +130,7 @@ struct SliceStoreWriter::State {
   TexelGeometry geometry;
   std::unique_ptr<File> samples;
   std::set<int> dots_done;
-  std::optional<DurableLog> progress;  // progress.jsonl: one line per dot written
+  std::optional<common::DurableLog> progress;  // progress.jsonl: one line per dot written
 };
 
 namespace {
@@ -140,7 +140,7 @@ bool FolderIsEmpty(const fs::path& folder) { return fs::is_directory(folder) && 
 // The dots whose samples are on disk. A line torn by a crash is left out and cut off before the
 // next append; a damaged line (glued to a torn one by a version that did not cut it off) names
 // no dot. Either way that dot is processed again, which rewrites its samples in place.
-std::set<int> ReadProgress(const DurableLog& log) {
+std::set<int> ReadProgress(const common::DurableLog& log) {
   std::set<int> done;
   for (const std::string& line : log.lines()) {
     try {
@@ -158,7 +158,7 @@ SliceStoreWriter::SliceStoreWriter(const fs::path& folder, const SliceStoreInfo&
     : state_(std::make_unique<State>()) {
   CheckInfo(info, folder.string());
   if (static_cast<int>(calibration.monitor.dots.size()) != info.num_dots) {
-    ThrowInvalidInput(folder.string(), "the calibration lists " + std::to_string(calibration.monitor.dots.size()) +
+    common::ThrowInvalidInput(folder.string(), "the calibration lists " + std::to_string(calibration.monitor.dots.size()) +
                                            " dots but the store is for " + std::to_string(info.num_dots));
   }
   State& s = *state_;
@@ -170,27 +170,27 @@ SliceStoreWriter::SliceStoreWriter(const fs::path& folder, const SliceStoreInfo&
   if (fs::exists(folder / kManifest)) {
     const nlohmann::json manifest = ReadManifest(folder);
     if (manifest.value("complete", false)) {
-      ThrowInvalidInput(folder.string(), "already holds a finished processing", "choose a new output folder");
+      common::ThrowInvalidInput(folder.string(), "already holds a finished processing", "choose a new output folder");
     }
-    const nlohmann::json calibration_on_disk = nlohmann::json::parse(ReadTextFile(folder / kCalibration));
+    const nlohmann::json calibration_on_disk = nlohmann::json::parse(common::ReadTextFile(folder / kCalibration));
     if (manifest.at("texels_x") != info.texels_x || manifest.at("texels_y") != info.texels_y ||
         manifest.at("num_dots") != info.num_dots || manifest.at("light_resolution") != info.light_resolution ||
         manifest.at("tile_texels") != info.tile_texels || calibration_on_disk != calib::ToJson(calibration)) {
-      ThrowInvalidInput(folder.string(), "holds an unfinished processing with other settings or another calibration",
+      common::ThrowInvalidInput(folder.string(), "holds an unfinished processing with other settings or another calibration",
                         "finish it with the same options, or choose a new output folder");
     }
     s.samples = std::make_unique<File>(folder / kSamples, O_RDWR);
-    if (s.samples->Size() != bytes) ThrowFormatError((folder / kSamples).string(), "has the wrong size to resume");
-    s.progress = DurableLog::Open(folder / kProgress);
+    if (s.samples->Size() != bytes) common::ThrowFormatError((folder / kSamples).string(), "has the wrong size to resume");
+    s.progress = common::DurableLog::Open(folder / kProgress);
     s.dots_done = ReadProgress(*s.progress);
     return;
   }
   if (fs::exists(folder) && !FolderIsEmpty(folder)) {
-    ThrowInvalidInput(folder.string(), "is not empty and holds no unfinished processing", "choose a new output folder");
+    common::ThrowInvalidInput(folder.string(), "is not empty and holds no unfinished processing", "choose a new output folder");
   }
   std::error_code error;
   fs::create_directories(folder, error);
-  if (error) ThrowIoError(folder.string(), "cannot create: " + error.message(), "is the folder writable?");
+  if (error) common::ThrowIoError(folder.string(), "cannot create: " + error.message(), "is the folder writable?");
   calib::WriteSessionCalibration(folder / kCalibration, calibration);
   s.samples = std::make_unique<File>(folder / kSamples, O_RDWR | O_CREAT | O_TRUNC);
   s.samples->Resize(bytes);  // sparse until written
@@ -205,9 +205,9 @@ bool SliceStoreWriter::HasDot(int dot) const { return state_->dots_done.count(do
 void SliceStoreWriter::WriteDot(int dot, const std::vector<float>& rgb) {
   State& s = *state_;
   const int64_t texels = s.geometry.num_texels();
-  if (dot < 0 || dot >= s.info.num_dots) ThrowInvalidInput("dot", std::to_string(dot) + " is outside the store");
+  if (dot < 0 || dot >= s.info.num_dots) common::ThrowInvalidInput("dot", std::to_string(dot) + " is outside the store");
   if (static_cast<int64_t>(rgb.size()) != 3 * texels) {
-    ThrowInvalidInput("dot " + std::to_string(dot), "has " + std::to_string(rgb.size()) + " values for " +
+    common::ThrowInvalidInput("dot " + std::to_string(dot), "has " + std::to_string(rgb.size()) + " values for " +
                                                         std::to_string(texels) + " RGB texels");
   }
   const int64_t tile_values = static_cast<int64_t>(s.info.tile_texels) * 3;
@@ -220,7 +220,7 @@ void SliceStoreWriter::WriteDot(int dot, const std::vector<float>& rgb) {
     s.samples->WriteAt(run.data(), run.size() * sizeof(Half), offset);
   }
   s.samples->Sync();
-  if (!s.progress) s.progress = DurableLog::Open(s.folder / kProgress);
+  if (!s.progress) s.progress = common::DurableLog::Open(s.folder / kProgress);
   s.progress->Append(nlohmann::json{{"dot", dot}}.dump());
   s.dots_done.insert(dot);
 }
@@ -228,28 +228,28 @@ void SliceStoreWriter::WriteDot(int dot, const std::vector<float>& rgb) {
 namespace {
 
 struct TexelSummary {
-  Rgb rho_d = {0, 0, 0};
+  model::Rgb rho_d = {0, 0, 0};
   bool valid = false;
   int samples = 0;
 };
 
 // One texel's valid samples, with their light directions and noise scales.
 struct TexelSamples {
-  std::vector<Vec3> light;
-  std::vector<Rgb> rgb;
+  std::vector<model::Vec3> light;
+  std::vector<model::Rgb> rgb;
   std::vector<double> noise_scale;  // s_q = |p_q - x|^2 / (|i_q.z| P(theta_q)): R per unit camera rate
   std::vector<int> dot;              // which dot each sample is
 };
 
 TexelSamples GatherSamples(const TexelGeometry& geometry, const calib::MonitorCalibration& monitor, int64_t texel,
                            const float* tile, int tile_texels, int64_t k, int num_dots) {
-  const Vec3 x = geometry.TexelCentre(texel);
+  const model::Vec3 x = geometry.TexelCentre(texel);
   TexelSamples out;
   for (int q = 0; q < num_dots; ++q) {
     const float* r = tile + (static_cast<int64_t>(q) * tile_texels + k) * 3;
     if (!std::isfinite(r[0]) || !std::isfinite(r[1]) || !std::isfinite(r[2])) continue;
-    const Vec3 to_dot = geometry.dots[q] - x;
-    const Vec3 i = to_dot.normalized();
+    const model::Vec3 to_dot = geometry.dots[q] - x;
+    const model::Vec3 i = to_dot.normalized();
     const double emission = std::max(1e-6, monitor.Emission(std::max(0.0, -i.dot(geometry.monitor_normal))));
     out.light.push_back(i);
     out.rgb.push_back({r[0], r[1], r[2]});
@@ -262,13 +262,13 @@ TexelSamples GatherSamples(const TexelGeometry& geometry, const calib::MonitorCa
 // Diffuse separation: the floor of the samples (EstimateDiffuse) whose dot is not too dim in the
 // image for a uniform R (1 / s_q at least `diffuse_threshold` of the texel's largest): a choice
 // made on the geometry, not on the measured values, so that it does not bias the floor.
-Rgb SeparateDiffuse(const TexelSamples& samples, const std::vector<std::array<int, 2>>& neighbours,
+model::Rgb SeparateDiffuse(const TexelSamples& samples, const std::vector<std::array<int, 2>>& neighbours,
                     const SliceStoreWriter::FinishOptions& options) {
   if (samples.rgb.empty()) return {0, 0, 0};
   double brightest = 0;
   for (double s : samples.noise_scale) brightest = std::max(brightest, 1.0 / s);
   std::vector<int> index(neighbours.size(), -1);  // dot -> position among the kept samples
-  std::vector<Rgb> kept;
+  std::vector<model::Rgb> kept;
   std::vector<double> scale;
   std::vector<int> kept_dots;
   for (size_t s = 0; s < samples.rgb.size(); ++s) {
@@ -284,13 +284,13 @@ Rgb SeparateDiffuse(const TexelSamples& samples, const std::vector<std::array<in
     const auto [a, b] = neighbours[kept_dots[k]];
     if (a >= 0 && b >= 0 && index[a] >= 0 && index[b] >= 0) neighbour[k] = {index[a], index[b]};
   }
-  Rgb rho_d = EstimateDiffuse(kept, scale, neighbour).rho_d;
+  model::Rgb rho_d = EstimateDiffuse(kept, scale, neighbour).rho_d;
   for (double& d : rho_d) d = std::max(0.0, d);
   return rho_d;
 }
 
 // The resampled refractive slice of one texel given its diffuse term.
-TexelSummary Resample(const TexelSamples& samples, const Rgb& rho_d, const PushPullResampler& resampler,
+TexelSummary Resample(const TexelSamples& samples, const model::Rgb& rho_d, const PushPullResampler& resampler,
                       const SliceStoreWriter::FinishOptions& options, std::vector<float>* cells) {
   TexelSummary summary;
   summary.samples = static_cast<int>(samples.light.size());
@@ -300,7 +300,7 @@ TexelSummary Resample(const TexelSamples& samples, const Rgb& rho_d, const PushP
   std::vector<float> values(samples.rgb.size()), weights(samples.rgb.size(), 1.0f);
   double peak = 0;
   for (size_t s = 0; s < samples.rgb.size(); ++s) {
-    values[s] = static_cast<float>(std::max(0.0, Luminance(samples.rgb[s]) - Luminance(rho_d)));
+    values[s] = static_cast<float>(std::max(0.0, model::Luminance(samples.rgb[s]) - model::Luminance(rho_d)));
     peak = std::max(peak, static_cast<double>(values[s]));
   }
   std::vector<float> confidence;
@@ -334,21 +334,21 @@ std::vector<int64_t> NearestReachedTexel(const std::vector<uint8_t>& reach, int 
 void SliceStoreWriter::Finish(const FinishOptions& options) {
   State& s = *state_;
   for (int q = 0; q < s.info.num_dots; ++q) {
-    if (!HasDot(q)) ThrowInvalidInput(s.folder.string(), "is missing dot " + std::to_string(q), "process every dot first");
+    if (!HasDot(q)) common::ThrowInvalidInput(s.folder.string(), "is missing dot " + std::to_string(q), "process every dot first");
   }
-  const Hemicube light_grid(s.info.light_resolution);
+  const model::Hemicube light_grid(s.info.light_resolution);
   const PushPullResampler resampler(light_grid);
   const int64_t texels = s.geometry.num_texels();
   const calib::MonitorCalibration& monitor = s.calibration.monitor;
   const File slices(s.folder / kSlices, O_RDWR | O_CREAT | O_TRUNC);
-  FloatImage rho_d(s.info.texels_x, s.info.texels_y, 3), mask(s.info.texels_x, s.info.texels_y, 1),
+  common::FloatImage rho_d(s.info.texels_x, s.info.texels_y, 3), mask(s.info.texels_x, s.info.texels_y, 1),
       reach_map(s.info.texels_x, s.info.texels_y, 1);
   const std::vector<uint8_t> reach = TexelsWithDotBeneath(s.geometry);
   const std::vector<std::array<int, 2>> neighbours = OppositeNeighbours(s.geometry.dots);
   int64_t valid_texels = 0, without_dot_beneath = 0;
   for (uint8_t r : reach) without_dot_beneath += r ? 0 : 1;
-  std::unique_ptr<ProgressBar> progress;
-  if (options.progress) progress = std::make_unique<ProgressBar>("separate and resample", texels, "texels");
+  std::unique_ptr<common::ProgressBar> progress;
+  if (options.progress) progress = std::make_unique<common::ProgressBar>("separate and resample", texels, "texels");
   std::vector<Half> tile_raw(TileBytes(s.info) / sizeof(Half));
   std::vector<float> tile(tile_raw.size());
   const auto read_tile = [&](int64_t t) {
@@ -384,7 +384,7 @@ void SliceStoreWriter::Finish(const FinishOptions& options) {
     const auto selected = [&](int64_t k) { return (reach[begin + k] != 0) == reached; };
     std::vector<Half> slice_out((end - begin) * light_grid.num_cells());
     std::vector<TexelSummary> summaries(end - begin);
-    ParallelFor(end - begin, options.threads, 16, [&](int64_t a, int64_t b) {
+    common::ParallelFor(end - begin, options.threads, 16, [&](int64_t a, int64_t b) {
       std::vector<float> cells;
       for (int64_t k = a; k < b; ++k) {
         if (!selected(k)) continue;
@@ -416,9 +416,9 @@ void SliceStoreWriter::Finish(const FinishOptions& options) {
     const std::vector<int64_t> source = NearestReachedTexel(reach, s.info.texels_x, s.info.texels_y);
     const auto nearest_reached = [&](int64_t texel, const TexelSamples&) {
       const int64_t from = source[texel];
-      if (from < 0) return Rgb{0, 0, 0};
+      if (from < 0) return model::Rgb{0, 0, 0};
       const int col = static_cast<int>(from % s.info.texels_x), row = static_cast<int>(from / s.info.texels_x);
-      return Rgb{rho_d.at(col, row, 0), rho_d.at(col, row, 1), rho_d.at(col, row, 2)};
+      return model::Rgb{rho_d.at(col, row, 0), rho_d.at(col, row, 1), rho_d.at(col, row, 2)};
     };
     for (int64_t t = 0; t < NumTiles(s.info); ++t) {
       if (tile_has_unreached[t]) resample_tile(t, /*reached=*/false, nearest_reached);
@@ -426,9 +426,9 @@ void SliceStoreWriter::Finish(const FinishOptions& options) {
   }
   if (progress) progress->Finish();
   slices.Sync();
-  WriteFloatImage(s.folder / "rho_d.exr", rho_d, /*half_precision=*/false, /*overwrite=*/true);
-  WriteFloatImage(s.folder / "mask.exr", mask, false, true);
-  WriteFloatImage(s.folder / "reach.exr", reach_map, false, true);
+  common::WriteFloatImage(s.folder / "rho_d.exr", rho_d, /*half_precision=*/false, /*overwrite=*/true);
+  common::WriteFloatImage(s.folder / "mask.exr", mask, false, true);
+  common::WriteFloatImage(s.folder / "reach.exr", reach_map, false, true);
   const nlohmann::json statistics = {
       {"texels", texels}, {"valid_texels", valid_texels}, {"texels_without_dot_beneath", without_dot_beneath}};
   WriteManifest(s.folder, s.info, s.geometry, /*complete=*/true, statistics);

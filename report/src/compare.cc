@@ -17,8 +17,8 @@ namespace {
 struct RelativeRmse {
   double error = 0, norm = 0;
   void Add(double fitted, double truth) {
-    error += Square(fitted - truth);
-    norm += Square(truth);
+    error += model::Square(fitted - truth);
+    norm += model::Square(truth);
   }
   double Value() const { return norm > 0 ? std::sqrt(error / norm) : std::nan(""); }
 };
@@ -38,7 +38,7 @@ std::vector<bool> HeldOutDots(const fit::Material& material, const CompareOption
   std::vector<bool> held_out(rig_dots, false);
   for (int q : dots) {
     if (q < 0 || q >= static_cast<int>(rig_dots)) {
-      ThrowFormatError(options.material_folder,
+      common::ThrowFormatError(options.material_folder,
                        "records held-out dot " + std::to_string(q) + ", which the rig does not have");
     }
     held_out[q] = true;
@@ -69,7 +69,7 @@ nlohmann::json NumberOrNull(double value) { return std::isfinite(value) ? nlohma
 
 void RequireSameSize(const fit::Material& material, const std::string& material_folder, const Truth& truth) {
   if (material.width == truth.width() && material.height == truth.height()) return;
-  ThrowInvalidInput(material_folder, "is " + std::to_string(material.width) + "x" + std::to_string(material.height) +
+  common::ThrowInvalidInput(material_folder, "is " + std::to_string(material.width) + "x" + std::to_string(material.height) +
                                          " texels but the truth is " + std::to_string(truth.width()) + "x" +
                                          std::to_string(truth.height()),
                     "compare a material fitted at the truth's resolution");
@@ -83,34 +83,34 @@ CompareMetrics Compare(const fit::Material& material, const Truth& truth, const 
   metrics.truth_kind = truth.kind();
   metrics.btdf = fit::MaterialModelName(material.model);
   metrics.truth_has_parameters = truth.parameters() != nullptr;
-  const RigTruth& rig = truth.rig();
+  const simulate::RigTruth& rig = truth.rig();
   const std::vector<bool> held_out = HeldOutDots(material, options, rig.dots.size(), metrics);
   const std::vector<int> texels = TexelSubset(material, options);
   metrics.texels_compared = texels.size();
 
   const fit::MaterialEvaluator evaluator(material);
-  const Hemicube grid(material.ndf_resolution);
-  const Vec3 camera = rig.pose.Centre();
+  const model::Hemicube grid(material.ndf_resolution);
+  const model::Vec3 camera = rig.pose.Centre();
   // The single-interface baseline has no alpha; its NDF (the GGX lobe of its one rough
   // refraction) still compares.
   const bool fitted_alpha = material.model == fit::MaterialModel::kDualMicrofacet;
   std::vector<double> alpha_errors, ndf_errors, rho_d_errors;
   RelativeRmse heldout, all_dots;
-  ProgressBar progress("compare", static_cast<int64_t>(texels.size()), "texels");
+  common::ProgressBar progress("compare", static_cast<int64_t>(texels.size()), "texels");
   for (int t : texels) {
     const int x = t % material.width, y = t / material.width;
     const fit::TexelBtdf fitted = evaluator.Texel(x, y);
-    if (const MaterialTruth* parameters = truth.parameters()) {
+    if (const simulate::MaterialTruth* parameters = truth.parameters()) {
       if (fitted_alpha) alpha_errors.push_back(std::abs(fitted.params().alpha - parameters->Params(x, y).alpha));
       ndf_errors.push_back(fit::NdfRelativeL2(grid, fitted.ndf(), *parameters->TexelNdf(x, y)));
     }
-    const double true_rho_d = Luminance(truth.RhoD(x, y));
-    if (true_rho_d > 1e-3) rho_d_errors.push_back(std::abs(Luminance(fitted.params().rho_d) / true_rho_d - 1.0));
-    const Vec3 position = rig.sample.TexelCentre(x, y);
-    const Vec3 o = (camera - position).normalized();
+    const double true_rho_d = model::Luminance(truth.RhoD(x, y));
+    if (true_rho_d > 1e-3) rho_d_errors.push_back(std::abs(model::Luminance(fitted.params().rho_d) / true_rho_d - 1.0));
+    const model::Vec3 position = rig.sample.TexelCentre(x, y);
+    const model::Vec3 o = (camera - position).normalized();
     for (size_t q = 0; q < rig.dots.size(); ++q) {
-      const Vec3 i = (rig.dots[q].position - position).normalized();
-      const double fitted_value = Luminance(fitted.Evaluate(i, o)), expected = Luminance(truth.Evaluate(x, y, i, o));
+      const model::Vec3 i = (rig.dots[q].position - position).normalized();
+      const double fitted_value = model::Luminance(fitted.Evaluate(i, o)), expected = model::Luminance(truth.Evaluate(x, y, i, o));
       all_dots.Add(fitted_value, expected);
       if (held_out[q]) heldout.Add(fitted_value, expected);
     }
@@ -118,9 +118,9 @@ CompareMetrics Compare(const fit::Material& material, const Truth& truth, const 
   }
   progress.Finish();
   metrics.alpha_within_0_05 = FractionWithin(alpha_errors, 0.05);
-  metrics.alpha_error_median = Median(alpha_errors);
-  metrics.ndf_rel_l2_median = Median(ndf_errors);
-  metrics.rho_d_rel_error_median = Median(rho_d_errors);
+  metrics.alpha_error_median = common::Median(alpha_errors);
+  metrics.ndf_rel_l2_median = common::Median(ndf_errors);
+  metrics.rho_d_rel_error_median = common::Median(rho_d_errors);
   metrics.heldout_rel_rmse = heldout.Value();
   metrics.all_dots_rel_rmse = all_dots.Value();
   return metrics;

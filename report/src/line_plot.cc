@@ -158,7 +158,7 @@ std::vector<unsigned char> LinePlot::Render() const {
   return canvas.Take();
 }
 
-void LinePlot::WritePng(const std::filesystem::path& path) const { WriteRgb8Png(path, Render(), width, height); }
+void LinePlot::WritePng(const std::filesystem::path& path) const { common::WriteRgb8Png(path, Render(), width, height); }
 
 std::string HexColor(const Rgb8& color) {
   char buffer[8];

@@ -18,7 +18,7 @@ namespace svbtdf::report {
 namespace {
 namespace fs = std::filesystem;
 
-double MaxOf(const FloatImage& map) {
+double MaxOf(const common::FloatImage& map) {
   double m = 0;
   for (float v : map.pixels) m = std::max(m, static_cast<double>(v));
   return m;
@@ -56,7 +56,7 @@ class Page {
          << "text-align:center}img{image-rendering:pixelated;border:1px solid #ccc}td,th{padding:2px 10px;text-align:left}"
          << "</style></head><body><h1>" << title << "</h1>\n"
          << html_.str() << "</body></html>\n";
-    WriteTextAtomically(folder_ / "index.html", page.str(), /*overwrite=*/false);
+    common::WriteTextAtomically(folder_ / "index.html", page.str(), /*overwrite=*/false);
   }
 
  private:
@@ -65,8 +65,8 @@ class Page {
 };
 
 // The Monte Carlo truth's slab material of every texel, and what each one is.
-void AddSlabMaterials(Page& page, const MonteCarloTruth& truth) {
-  FloatImage index(truth.texels_x(), truth.texels_y(), 1);
+void AddSlabMaterials(Page& page, const simulate::MonteCarloTruth& truth) {
+  common::FloatImage index(truth.texels_x(), truth.texels_y(), 1);
   for (int y = 0; y < index.height; ++y) {
     for (int x = 0; x < index.width; ++x) index.at(x, y) = static_cast<float>(truth.material_of(truth.Index(x, y)));
   }
@@ -82,7 +82,7 @@ void AddSlabMaterials(Page& page, const MonteCarloTruth& truth) {
 }
 
 void AddMaps(Page& page, const fit::Material& material, const Truth* truth) {
-  const MaterialTruth* parameters = truth ? truth->parameters() : nullptr;
+  const simulate::MaterialTruth* parameters = truth ? truth->parameters() : nullptr;
   page.Heading("Maps");
   page.Paragraph("Colour ramp: dark purple = low, yellow = high; white = not fitted. Ranges in the captions.");
   if (truth && !parameters) {
@@ -91,7 +91,7 @@ void AddMaps(Page& page, const fit::Material& material, const Truth* truth) {
   page.Figure("alpha.png", ScalarMap(material.alpha, 0, 0, 1), "alpha (0 .. 1)");
   if (parameters) {
     page.Figure("alpha_truth.png", ScalarMap(parameters->alpha, 0, 0, 1), "true alpha (0 .. 1)");
-    FloatImage error = material.alpha;
+    common::FloatImage error = material.alpha;
     for (int y = 0; y < error.height; ++y) {
       for (int x = 0; x < error.width; ++x) error.at(x, y) = std::abs(material.alpha.at(x, y) - parameters->alpha.at(x, y));
     }
@@ -102,17 +102,17 @@ void AddMaps(Page& page, const fit::Material& material, const Truth* truth) {
               "shadowing roughness (0 .. " + std::to_string(shadowing_max).substr(0, 5) + ")");
   const double k_s_max = std::max(1e-3, MaxOf(material.k_s));
   page.Figure("k_s.png", ColourMap(material.k_s, k_s_max), "k_s (RGB, white = " + std::to_string(k_s_max).substr(0, 5) + ")");
-  const std::optional<FloatImage> true_rho_d = truth ? std::optional(truth->RhoDMap()) : std::nullopt;
+  const std::optional<common::FloatImage> true_rho_d = truth ? std::optional(truth->RhoDMap()) : std::nullopt;
   const double rho_d_max = std::max({1e-4, MaxOf(material.rho_d), true_rho_d ? MaxOf(*true_rho_d) : 0.0});
   page.Figure("rho_d.png", ColourMap(material.rho_d, rho_d_max), "rho_d (RGB, white = " + std::to_string(rho_d_max).substr(0, 6) + ")");
   if (true_rho_d) page.Figure("rho_d_truth.png", ColourMap(*true_rho_d, rho_d_max), "true rho_d (same scale)");
   if (truth && truth->montecarlo()) AddSlabMaterials(page, *truth->montecarlo());
-  FloatImage residual = material.residual;
+  common::FloatImage residual = material.residual;
   for (float& r : residual.pixels) r = r < 0 ? std::nanf("") : r;
   page.Figure("residual.png", ScalarMap(residual, 0, 0, 0.2), "representatives' fit residual, relative RMSE (0 .. 0.2)");
 }
 
-void AddNdfs(Page& page, const fit::Material& material, const MaterialTruth* parameters, int max_ndfs) {
+void AddNdfs(Page& page, const fit::Material& material, const simulate::MaterialTruth* parameters, int max_ndfs) {
   page.Heading("NDFs of the representatives");
   page.Paragraph("ln D over the hemisphere of half-vectors seen from above (x right, y up), top 8 units of ln D." +
                  std::string(parameters ? " Each fitted NDF is followed by the true NDF of the same texel." : ""));
@@ -157,7 +157,7 @@ std::vector<fit::QualityWarning> AddQuality(Page& page, const fit::Material& mat
 }
 
 void AddCompare(Page& page, const std::string& compare_file) {
-  const nlohmann::json metrics = nlohmann::json::parse(ReadTextFile(compare_file));
+  const nlohmann::json metrics = nlohmann::json::parse(common::ReadTextFile(compare_file));
   page.Heading("Against the ground truth");
   std::string table = "<table>";
   for (const auto& [key, value] : metrics.items()) table += "<tr><th>" + key + "</th><td>" + value.dump() + "</td></tr>";
@@ -168,7 +168,7 @@ void AddCompare(Page& page, const std::string& compare_file) {
 
 std::vector<fit::QualityWarning> WriteMaterialReport(const MaterialReportOptions& options) {
   if (fs::exists(options.out) && !fs::is_empty(options.out)) {
-    ThrowInvalidInput(options.out.string(), "is not empty", "report writes into a new folder; choose another --out");
+    common::ThrowInvalidInput(options.out.string(), "is not empty", "report writes into a new folder; choose another --out");
   }
   const fit::Material material = fit::ReadMaterial(options.material_folder);
   std::optional<Truth> truth;
@@ -178,7 +178,7 @@ std::vector<fit::QualityWarning> WriteMaterialReport(const MaterialReportOptions
   }
   std::error_code error;
   fs::create_directories(options.out, error);
-  if (error) ThrowIoError(options.out.string(), "cannot create: " + error.message());
+  if (error) common::ThrowIoError(options.out.string(), "cannot create: " + error.message());
   Page page(options.out);
   const std::vector<fit::QualityWarning> warnings = AddQuality(page, material, options.material_folder);
   page.Paragraph("Material <code>" + options.material_folder + "</code>: " + std::to_string(material.width) + " x " +

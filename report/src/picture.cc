@@ -33,9 +33,9 @@ Picture Picture::Enlarged(int min_side) const {
   return big;
 }
 
-void Picture::WritePng(const std::filesystem::path& path) const { WriteRgb8Png(path, pixels, width, height); }
+void Picture::WritePng(const std::filesystem::path& path) const { common::WriteRgb8Png(path, pixels, width, height); }
 
-Picture ScalarMap(const FloatImage& map, int channel, double lo, double hi) {
+Picture ScalarMap(const common::FloatImage& map, int channel, double lo, double hi) {
   Picture p(map.width, map.height);
   for (int y = 0; y < map.height; ++y) {
     for (int x = 0; x < map.width; ++x) p.Set(x, y, Ramp((map.at(x, y, channel) - lo) / (hi - lo)));
@@ -43,7 +43,7 @@ Picture ScalarMap(const FloatImage& map, int channel, double lo, double hi) {
   return p;
 }
 
-Picture ColourMap(const FloatImage& map, double white) {
+Picture ColourMap(const common::FloatImage& map, double white) {
   Picture p(map.width, map.height);
   for (int y = 0; y < map.height; ++y) {
     for (int x = 0; x < map.width; ++x) {
@@ -57,7 +57,7 @@ Picture ColourMap(const FloatImage& map, double white) {
   return p;
 }
 
-Picture NdfPicture(const Ndf& ndf, int side) {
+Picture NdfPicture(const model::Ndf& ndf, int side) {
   Picture p(side, side);
   std::vector<double> ln_d(static_cast<size_t>(side) * side, std::nan(""));
   double peak = -1e300;
@@ -65,7 +65,7 @@ Picture NdfPicture(const Ndf& ndf, int side) {
     for (int x = 0; x < side; ++x) {
       const double u = (x + 0.5) / side * 2 - 1, v = 1 - (y + 0.5) / side * 2;
       if (u * u + v * v >= 1) continue;
-      const double d = ndf.D(Vec3(u, v, std::sqrt(1 - u * u - v * v)));
+      const double d = ndf.D(model::Vec3(u, v, std::sqrt(1 - u * u - v * v)));
       ln_d[static_cast<size_t>(y) * side + x] = std::log(std::max(d, 1e-30));
       peak = std::max(peak, ln_d[static_cast<size_t>(y) * side + x]);
     }

@@ -7,29 +7,29 @@ namespace svbtdf::report {
 Truth ReadTruth(const std::filesystem::path& folder) {
   Truth truth;
   truth.folder_ = folder;
-  truth.kind_ = ReadTruthKind(folder);
+  truth.kind_ = simulate::ReadTruthKind(folder);
   if (truth.kind_ == "montecarlo") {
-    auto montecarlo = std::make_unique<MonteCarloTruth>(ReadMonteCarloTruth(folder));
+    auto montecarlo = std::make_unique<simulate::MonteCarloTruth>(simulate::ReadMonteCarloTruth(folder));
     truth.montecarlo_ = montecarlo.get();
     truth.btdf_ = std::move(montecarlo);
   } else {
-    truth.analytic_.emplace(ReadMaterialTruth(folder));
-    truth.btdf_ = std::make_unique<TruthMaterial>(truth.analytic_->ToTruthMaterial());
+    truth.analytic_.emplace(simulate::ReadMaterialTruth(folder));
+    truth.btdf_ = std::make_unique<simulate::TruthMaterial>(truth.analytic_->ToTruthMaterial());
   }
-  truth.rig_ = ReadRigTruth(folder / "rig.json");
+  truth.rig_ = simulate::ReadRigTruth(folder / "rig.json");
   return truth;
 }
 
-Rgb Truth::RhoD(int x, int y) const {
+model::Rgb Truth::RhoD(int x, int y) const {
   return analytic_ ? analytic_->Params(x, y).rho_d : montecarlo_->rho_d(montecarlo_->Index(x, y));
 }
 
-FloatImage Truth::RhoDMap() const {
+common::FloatImage Truth::RhoDMap() const {
   if (analytic_) return analytic_->rho_d;
-  FloatImage map(width(), height(), 3);
+  common::FloatImage map(width(), height(), 3);
   for (int y = 0; y < height(); ++y) {
     for (int x = 0; x < width(); ++x) {
-      const Rgb rho_d = RhoD(x, y);
+      const model::Rgb rho_d = RhoD(x, y);
       for (int c = 0; c < 3; ++c) map.at(x, y, c) = static_cast<float>(rho_d[c]);
     }
   }

@@ -18,30 +18,30 @@ struct ModelColumn {
   const char* key;
   const char* label;
   Rgb8 color;
-  const std::vector<double> ValidationCase::*values;
-  double ModelErrors::*error;
+  const std::vector<double> simulate::ValidationCase::*values;
+  double simulate::ModelErrors::*error;
 };
 
 const ModelColumn kColumns[] = {
-    {"rho_T", "rho_T (rough entry)", {31, 119, 180}, &ValidationCase::rho_T, &ModelErrors::rho_T},
-    {"rho_B", "rho_B (rough exit)", {214, 39, 40}, &ValidationCase::rho_B, &ModelErrors::rho_B},
-    {"blend", "blend, best alpha", {44, 160, 44}, &ValidationCase::blend, &ModelErrors::blend},
-    {"single_same_ndf", "single interface, same NDF", {255, 127, 14}, &ValidationCase::single_same_ndf,
-     &ModelErrors::single_same_ndf},
+    {"rho_T", "rho_T (rough entry)", {31, 119, 180}, &simulate::ValidationCase::rho_T, &simulate::ModelErrors::rho_T},
+    {"rho_B", "rho_B (rough exit)", {214, 39, 40}, &simulate::ValidationCase::rho_B, &simulate::ModelErrors::rho_B},
+    {"blend", "blend, best alpha", {44, 160, 44}, &simulate::ValidationCase::blend, &simulate::ModelErrors::blend},
+    {"single_same_ndf", "single interface, same NDF", {255, 127, 14}, &simulate::ValidationCase::single_same_ndf,
+     &simulate::ModelErrors::single_same_ndf},
     {"single_fitted", "single interface, fitted roughness", {148, 103, 189},
-     &ValidationCase::single_fitted, &ModelErrors::single_fitted},
-    {"blend_fitted", "blend, fitted alpha and roughness", {23, 190, 207}, &ValidationCase::blend_fitted,
-     &ModelErrors::blend_fitted},
+     &simulate::ValidationCase::single_fitted, &simulate::ModelErrors::single_fitted},
+    {"blend_fitted", "blend, fitted alpha and roughness", {23, 190, 207}, &simulate::ValidationCase::blend_fitted,
+     &simulate::ModelErrors::blend_fitted},
 };
 
-nlohmann::json ErrorsToJson(const ModelErrors& errors) {
+nlohmann::json ErrorsToJson(const simulate::ModelErrors& errors) {
   nlohmann::json out;
   for (const ModelColumn& column : kColumns) out[column.key] = errors.*column.error;
   return out;
 }
 
-nlohmann::json CaseToJson(const ValidationCase& c) {
-  const EnergyFractions& f = c.mc.fractions;
+nlohmann::json CaseToJson(const simulate::ValidationCase& c) {
+  const simulate::EnergyFractions& f = c.mc.fractions;
   return {
       {"config", ToString(c.rough_sides)},
       {"incidence_deg", c.incidence_deg},
@@ -72,16 +72,16 @@ struct CrossSection {
   std::vector<std::pair<int, int>> cells;
 };
 
-CrossSection PlaneOfIncidence(const Hemicube& grid) {
+CrossSection PlaneOfIncidence(const model::Hemicube& grid) {
   CrossSection section;
   constexpr double kStepDeg = 0.05;
   constexpr double kOffset = 1e-9;  // selects the cells just above and below y = 0
   double angle_sum = 0.0;
   int count = 0;
   for (double s = -89.9; s <= 89.9; s += kStepDeg) {
-    const double r = s * kPi / 180.0;
-    const std::pair<int, int> cells = {grid.CellOf(Vec3(std::sin(r), kOffset, std::cos(r)).normalized()),
-                                       grid.CellOf(Vec3(std::sin(r), -kOffset, std::cos(r)).normalized())};
+    const double r = s * model::kPi / 180.0;
+    const std::pair<int, int> cells = {grid.CellOf(model::Vec3(std::sin(r), kOffset, std::cos(r)).normalized()),
+                                       grid.CellOf(model::Vec3(std::sin(r), -kOffset, std::cos(r)).normalized())};
     if (section.cells.empty() || cells != section.cells.back()) {
       if (count > 0) section.angles_deg.push_back(angle_sum / count);
       section.cells.push_back(cells);
@@ -101,11 +101,11 @@ std::vector<double> Along(const CrossSection& section, const std::vector<double>
   return out;
 }
 
-std::string PlotName(const ValidationCase& c) {
+std::string PlotName(const simulate::ValidationCase& c) {
   return std::string(ToString(c.rough_sides)) + "_" + std::to_string(std::lround(c.incidence_deg)) + ".png";
 }
 
-void WritePlot(const ValidationCase& c, const CrossSection& section, const fs::path& path) {
+void WritePlot(const simulate::ValidationCase& c, const CrossSection& section, const fs::path& path) {
   LinePlot plot;
   for (const ModelColumn& column : kColumns) {
     PlotSeries series;
@@ -145,7 +145,7 @@ std::string Fixed(double value, int decimals = 3) {
   return buffer;
 }
 
-void WriteHtml(const std::vector<ValidationCase>& cases, const ValidationSettings& settings, const fs::path& path) {
+void WriteHtml(const std::vector<simulate::ValidationCase>& cases, const ValidationSettings& settings, const fs::path& path) {
   std::ostringstream html;
   html << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>svbtdf validate-model</title>\n"
        << "<style>body{font-family:sans-serif;max-width:1400px;margin:auto}"
@@ -159,7 +159,7 @@ void WriteHtml(const std::vector<ValidationCase>& cases, const ValidationSetting
        << "angle (docs/validation.md).</p>\n<table><tr><th>config</th><th>incidence</th><th>best alpha</th>";
   for (const ModelColumn& column : kColumns) html << "<th>" << column.label << "</th>";
   html << "<th>MC noise</th></tr>\n";
-  for (const ValidationCase& c : cases) {
+  for (const simulate::ValidationCase& c : cases) {
     html << "<tr><td>" << ToString(c.rough_sides) << "</td><td>" << c.incidence_deg << "&deg;</td><td>"
          << Fixed(c.best_alpha) << "</td>";
     for (const ModelColumn& column : kColumns) html << "<td>" << Fixed(c.errors.*column.error) << "</td>";
@@ -173,13 +173,13 @@ void WriteHtml(const std::vector<ValidationCase>& cases, const ValidationSetting
          << column.label << " &nbsp; ";
   }
   html << "<span class=\"swatch\" style=\"background:#000\"></span>Monte Carlo &plusmn; 2 standard errors</p>\n";
-  for (const ValidationCase& c : cases) {
+  for (const simulate::ValidationCase& c : cases) {
     html << "<figure><img src=\"" << PlotName(c) << "\" width=\"480\"><figcaption>" << ToString(c.rough_sides)
          << " rough, " << c.incidence_deg << "&deg;, best alpha " << Fixed(c.best_alpha, 2)
          << "</figcaption></figure>\n";
   }
   html << "</body></html>\n";
-  WriteTextAtomically(path, html.str(), /*overwrite=*/false);
+  common::WriteTextAtomically(path, html.str(), /*overwrite=*/false);
 }
 
 // printf into a string, for the table's fixed-width columns.
@@ -192,12 +192,12 @@ void AppendFormatted(std::string& out, const char* format, Args... args) {
 
 }  // namespace
 
-std::string ValidationTable(const std::vector<ValidationCase>& cases) {
+std::string ValidationTable(const std::vector<simulate::ValidationCase>& cases) {
   std::string table;
   AppendFormatted(table, "%-6s %5s %6s", "config", "angle", "alpha");
   for (const ModelColumn& column : kColumns) AppendFormatted(table, " %15s", column.key);
   AppendFormatted(table, " %8s %9s\n", "MC noise", "paths");
-  for (const ValidationCase& c : cases) {
+  for (const simulate::ValidationCase& c : cases) {
     AppendFormatted(table, "%-6s %5.0f %6.3f", ToString(c.rough_sides), c.incidence_deg, c.best_alpha);
     for (const ModelColumn& column : kColumns) AppendFormatted(table, " %15.4f", c.errors.*column.error);
     AppendFormatted(table, " %8.4f %9lld\n", c.mc_noise, static_cast<long long>(c.mc.paths));
@@ -205,21 +205,21 @@ std::string ValidationTable(const std::vector<ValidationCase>& cases) {
   return table;
 }
 
-nlohmann::json ValidationJson(const std::vector<ValidationCase>& cases, const ValidationSettings& settings) {
+nlohmann::json ValidationJson(const std::vector<simulate::ValidationCase>& cases, const ValidationSettings& settings) {
   nlohmann::json out;
   out["options"] = {{"ndf", settings.ndf},         {"roughness", settings.roughness},
                     {"eta", settings.eta},         {"samples", settings.samples},
                     {"seed", settings.seed},       {"resolution", settings.resolution},
                     {"max_bounces", settings.max_bounces}};
   out["cases"] = nlohmann::json::array();
-  for (const ValidationCase& c : cases) out["cases"].push_back(CaseToJson(c));
+  for (const simulate::ValidationCase& c : cases) out["cases"].push_back(CaseToJson(c));
   return out;
 }
 
-void WriteValidationPage(const std::vector<ValidationCase>& cases, const ValidationSettings& settings,
-                         const Hemicube& grid, const fs::path& folder) {
+void WriteValidationPage(const std::vector<simulate::ValidationCase>& cases, const ValidationSettings& settings,
+                         const model::Hemicube& grid, const fs::path& folder) {
   const CrossSection section = PlaneOfIncidence(grid);
-  for (const ValidationCase& c : cases) WritePlot(c, section, folder / PlotName(c));
+  for (const simulate::ValidationCase& c : cases) WritePlot(c, section, folder / PlotName(c));
   WriteHtml(cases, settings, folder / "index.html");
 }
 

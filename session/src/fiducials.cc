@@ -51,7 +51,7 @@ std::vector<int> FiducialDots(int cols, int rows) {
   // a small grid may allow less: then the most distinct pattern found.
   for (uint64_t rule = 0; rule < 256 && best_distance < n / 4; ++rule) {
     std::vector<bool> lit(n);
-    for (int q = 0; q < n; ++q) lit[q] = (SplitMix64((rule << 32) | static_cast<uint64_t>(q)) >> 33) & 1;
+    for (int q = 0; q < n; ++q) lit[q] = (common::SplitMix64((rule << 32) | static_cast<uint64_t>(q)) >> 33) & 1;
     int distance = n;
     for (size_t s = 1; s < symmetries.size(); ++s) distance = std::min(distance, SymmetryDistance(lit, symmetries[s]));
     if (distance > best_distance) best_distance = distance, best = lit;

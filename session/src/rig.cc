@@ -19,7 +19,7 @@ class Fields {
   // The fields of member `key`, which must be an object when present.
   Fields Member(const char* key) const {
     const json* member = Find(key);
-    if (member && !member->is_object()) ThrowFormatError(source_, where_ + "." + key + " must be an object");
+    if (member && !member->is_object()) common::ThrowFormatError(source_, where_ + "." + key + " must be an object");
     return Fields(member, where_ + "." + key, source_);
   }
 
@@ -31,7 +31,7 @@ class Fields {
     try {
       *out = member->get<T>();
     } catch (const json::exception&) {
-      ThrowFormatError(source_, where_ + "." + key + " has the wrong type (" + member->dump() + ")");
+      common::ThrowFormatError(source_, where_ + "." + key + " has the wrong type (" + member->dump() + ")");
     }
     return true;
   }
@@ -61,7 +61,7 @@ SensorWindow ReadSensor(const Fields& camera, const std::string& source) {
   sensor.Read("window_offset", &offset);
   if (window.sensor_width > 0 || !offset.empty()) {
     if (offset.size() != 2 || window.sensor_height <= 0) {
-      ThrowFormatError(source, "has a malformed rig.camera.sensor",
+      common::ThrowFormatError(source, "has a malformed rig.camera.sensor",
                        "it needs width, height and window_offset [x, y]");
     }
     window.offset_x = offset[0];
@@ -98,7 +98,7 @@ SensorWindow SensorWindow::Centred(int width, int height, int sensor_width, int 
 }
 
 RigDescription ParseRigDescription(const json& rig, const std::string& source) {
-  if (!rig.is_object()) ThrowFormatError(source, "rig must be an object");
+  if (!rig.is_object()) common::ThrowFormatError(source, "rig must be an object");
   const Fields all(&rig, "rig", source);
   RigDescription d;
 

@@ -35,11 +35,11 @@ std::string UtcNow() {
 }
 
 nlohmann::json ParseJsonFile(const fs::path& path) {
-  const std::string text = ReadTextFile(path);
+  const std::string text = common::ReadTextFile(path);
   try {
     return nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {  // parse errors, but also number overflow
-    ThrowFormatError(path.string(), std::string("is not valid JSON: ") + e.what());
+    common::ThrowFormatError(path.string(), std::string("is not valid JSON: ") + e.what());
   }
 }
 
@@ -47,17 +47,17 @@ nlohmann::json ParseJsonFile(const fs::path& path) {
 void RequireValidKey(const std::string& key, const std::string& source) {
   static const std::regex pattern(R"([A-Za-z0-9_\-]+(\.[A-Za-z0-9_\-]+)*(/[A-Za-z0-9_\-]+(\.[A-Za-z0-9_\-]+)*)*)");
   if (key.empty() || key.size() > 200 || !std::regex_match(key, pattern)) {
-    ThrowFormatError(source, "invalid capture key '" + key.substr(0, 80) + "'");
+    common::ThrowFormatError(source, "invalid capture key '" + key.substr(0, 80) + "'");
   }
 }
 
 template <typename T>
 T Field(const nlohmann::json& object, const char* name, const std::string& source) {
-  if (!object.is_object() || !object.contains(name)) ThrowFormatError(source, std::string("missing field '") + name + "'");
+  if (!object.is_object() || !object.contains(name)) common::ThrowFormatError(source, std::string("missing field '") + name + "'");
   try {
     return object.at(name).get<T>();
   } catch (const nlohmann::json::exception&) {
-    ThrowFormatError(source, std::string("field '") + name + "' has the wrong type");
+    common::ThrowFormatError(source, std::string("field '") + name + "' has the wrong type");
   }
 }
 
@@ -65,7 +65,7 @@ T Field(const nlohmann::json& object, const char* name, const std::string& sourc
 
 uint32_t FileCrc32(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) ThrowIoError(path.string(), "cannot be read");
+  if (!in) common::ThrowIoError(path.string(), "cannot be read");
   uLong crc = crc32(0L, Z_NULL, 0);
   char buffer[1 << 16];
   while (in) {
@@ -96,16 +96,16 @@ std::string SessionVerification::Summary() const {
 Session Session::Create(const fs::path& folder, const nlohmann::json& rig, const std::vector<std::string>& planned_keys) {
   RigDescription description = ParseRigDescription(rig, (folder / kManifest).string() + " (new)");
   if (fs::exists(folder) && (!fs::is_directory(folder) || !fs::is_empty(folder))) {
-    ThrowInvalidInput(folder.string(), "exists and is not empty; an existing session is never overwritten",
+    common::ThrowInvalidInput(folder.string(), "exists and is not empty; an existing session is never overwritten",
                  "choose a new output folder, or resume with the same command");
   }
   std::error_code error;
   fs::create_directories(folder / "images", error);
-  if (error) ThrowIoError(folder.string(), "cannot create: " + error.message());
+  if (error) common::ThrowIoError(folder.string(), "cannot create: " + error.message());
   std::set<std::string> unique;
   for (const std::string& key : planned_keys) {
     RequireValidKey(key, "plan");
-    if (!unique.insert(key).second) ThrowInvalidInput("plan", "capture key '" + key + "' is planned twice");
+    if (!unique.insert(key).second) common::ThrowInvalidInput("plan", "capture key '" + key + "' is planned twice");
   }
   Session session;
   session.folder_ = folder;
@@ -116,23 +116,23 @@ Session Session::Create(const fs::path& folder, const nlohmann::json& rig, const
   const nlohmann::json manifest = {{"format", "svbtdf-session"}, {"version", kSessionFormatVersion},
                                    {"created", UtcNow()},        {"software", "svbtdf"},
                                    {"rig", rig}};
-  WriteTextAtomically(folder / kPlan, nlohmann::json({{"captures", planned_keys}}).dump(1) + "\n", false);
-  WriteTextAtomically(folder / kManifest, manifest.dump(2) + "\n", false);
+  common::WriteTextAtomically(folder / kPlan, nlohmann::json({{"captures", planned_keys}}).dump(1) + "\n", false);
+  common::WriteTextAtomically(folder / kManifest, manifest.dump(2) + "\n", false);
   return session;
 }
 
 Session Session::Open(const fs::path& folder) {
-  if (!fs::is_directory(folder)) ThrowIoError(folder.string(), "is not a session folder (does not exist)");
+  if (!fs::is_directory(folder)) common::ThrowIoError(folder.string(), "is not a session folder (does not exist)");
   Session session;
   session.folder_ = folder;
   const fs::path manifest_path = folder / kManifest;
   const nlohmann::json manifest = ParseJsonFile(manifest_path);
   if (Field<std::string>(manifest, "format", manifest_path.string()) != "svbtdf-session") {
-    ThrowFormatError(manifest_path.string(), "is not an svbtdf session manifest");
+    common::ThrowFormatError(manifest_path.string(), "is not an svbtdf session manifest");
   }
   const int version = Field<int>(manifest, "version", manifest_path.string());
   if (version != kSessionFormatVersion) {
-    ThrowFormatError(manifest_path.string(), "has session format version " + std::to_string(version) +
+    common::ThrowFormatError(manifest_path.string(), "has session format version " + std::to_string(version) +
                                                  "; this svbtdf reads version " + std::to_string(kSessionFormatVersion));
   }
   session.rig_json_ = manifest.value("rig", nlohmann::json::object());
@@ -150,7 +150,7 @@ void Session::ReadJournal() {
   index_.clear();
   // A last line cut short by a crash during its append is left out (and cut off before the
   // next append): its image counts as not captured, and a resumed capture replaces it.
-  journal_ = DurableLog::Open(folder_ / kJournal, IsJsonObjectLine);
+  journal_ = common::DurableLog::Open(folder_ / kJournal, common::IsJsonObjectLine);
   const std::vector<std::string>& lines = journal_->lines();
   for (size_t n = 0; n < lines.size(); ++n) {
     const std::string where = journal_->path().string() + ":" + std::to_string(n + 1);
@@ -159,13 +159,13 @@ void Session::ReadJournal() {
     try {
       object = nlohmann::json::parse(lines[n]);
     } catch (const nlohmann::json::exception&) {  // parse errors, but also number overflow
-      ThrowFormatError(where, "is not a valid journal line");
+      common::ThrowFormatError(where, "is not a valid journal line");
     }
     SessionEntry entry;
     entry.key = Field<std::string>(object, "key", where);
     RequireValidKey(entry.key, where);
     entry.file = Field<std::string>(object, "file", where);
-    if (entry.file != FileForKey(entry.key)) ThrowFormatError(where, "file does not match the key");
+    if (entry.file != FileForKey(entry.key)) common::ThrowFormatError(where, "file does not match the key");
     entry.bytes = Field<uint64_t>(object, "bytes", where);
     entry.crc32 = Field<uint32_t>(object, "crc32", where);
     entry.exposure_s = Field<double>(object, "exposure_s", where);
@@ -187,42 +187,42 @@ std::vector<std::string> Session::PlannedKeys(CaptureKind kind) const {
 
 const SessionEntry& Session::Entry(const std::string& key) const {
   const auto it = index_.find(key);
-  if (it == index_.end()) ThrowIoError((folder_ / FileForKey(key)).string(), "is not in the session journal", "is the session complete? run 'svbtdf session verify'");
+  if (it == index_.end()) common::ThrowIoError((folder_ / FileForKey(key)).string(), "is not in the session journal", "is the session complete? run 'svbtdf session verify'");
   return entries_[it->second];
 }
 
-void Session::AddImage(const std::string& key, const CameraImage& image, double exposure_s, double gain) {
+void Session::AddImage(const std::string& key, const common::CameraImage& image, double exposure_s, double gain) {
   RequireValidKey(key, "capture");
-  if (Contains(key)) ThrowIoError(key, "is captured already; a capture is never overwritten");
+  if (Contains(key)) common::ThrowIoError(key, "is captured already; a capture is never overwritten");
   if (!planned_.count(key)) {
-    ThrowInvalidInput(key, "is not in the session's plan");
+    common::ThrowInvalidInput(key, "is not in the session's plan");
   }
   const fs::path file = folder_ / FileForKey(key);
   std::error_code error;
   fs::create_directories(file.parent_path(), error);
-  if (error) ThrowIoError(file.parent_path().string(), "cannot create: " + error.message());
+  if (error) common::ThrowIoError(file.parent_path().string(), "cannot create: " + error.message());
   // A file without a journal line is left over from a crash mid-capture: replace it.
-  WriteCameraImage(file, image, /*overwrite=*/true);
+  common::WriteCameraImage(file, image, /*overwrite=*/true);
   SessionEntry entry{key, FileForKey(key), fs::file_size(file), FileCrc32(file), exposure_s, gain, UtcNow()};
   const nlohmann::json line = {{"key", entry.key},   {"file", entry.file},       {"bytes", entry.bytes},
                                {"crc32", entry.crc32}, {"exposure_s", exposure_s}, {"gain", gain},
                                {"time", entry.time}};
-  if (!journal_) journal_ = DurableLog::Open(folder_ / kJournal, IsJsonObjectLine);
+  if (!journal_) journal_ = common::DurableLog::Open(folder_ / kJournal, common::IsJsonObjectLine);
   journal_->Append(line.dump());
   index_.emplace(key, entries_.size());
   entries_.push_back(std::move(entry));
 }
 
-CameraImage Session::ReadImage(const std::string& key, bool check_crc) const {
+common::CameraImage Session::ReadImage(const std::string& key, bool check_crc) const {
   const SessionEntry& entry = Entry(key);
   const fs::path file = folder_ / entry.file;
   std::error_code error;
   const uint64_t size = fs::file_size(file, error);
-  if (error) ThrowIoError(file.string(), "is journalled but missing", "run 'svbtdf session verify'");
+  if (error) common::ThrowIoError(file.string(), "is journalled but missing", "run 'svbtdf session verify'");
   if (size != entry.bytes || (check_crc && FileCrc32(file) != entry.crc32)) {
-    ThrowFormatError(file.string(), "does not match its journal entry (corrupt)", "re-capture it: resume the session");
+    common::ThrowFormatError(file.string(), "does not match its journal entry (corrupt)", "re-capture it: resume the session");
   }
-  return ReadCameraImage(file);
+  return common::ReadCameraImage(file);
 }
 
 SessionVerification Session::Verify(bool check_crc) const {

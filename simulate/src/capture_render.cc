@@ -8,7 +8,7 @@
 #include "svbtdf/session/fiducials.h"
 #include "svbtdf/simulate/truth_material.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 
 uint64_t NoiseStream(std::string_view what, int index, int bracket) {
   const uint64_t name_hash = std::hash<std::string_view>{}(what);
@@ -64,12 +64,12 @@ CaptureTruth PlanCapture(const SimulationPreset& preset, const RigRenderer& rend
 }
 
 void RenderCaptureRadiance(const RigRenderer& renderer, const CaptureTruth& plan, const CaptureId& id,
-                           FloatImage* radiance) {
+                           common::FloatImage* radiance) {
   using session::CaptureKind;
   const CameraIntrinsics& k = renderer.rig().config().intrinsics;
   switch (id.key.kind) {
     case CaptureKind::kDark:
-      *radiance = FloatImage(k.width, k.height, 3);
+      *radiance = common::FloatImage(k.width, k.height, 3);
       return;
     case CaptureKind::kBoardView:
       renderer.RenderZhangBoard(plan.zhang_boards.at(id.key.view), radiance);
@@ -94,14 +94,14 @@ void RenderCaptureRadiance(const RigRenderer& renderer, const CaptureTruth& plan
     case CaptureKind::kMonitorPoseView:
       break;
   }
-  ThrowInvalidInput("capture", "the simulator does not render " + id.key.Format());
+  common::ThrowInvalidInput("capture", "the simulator does not render " + id.key.Format());
 }
 
-Vec2 CaptureWindowOrigin(const Rig& rig, const CaptureId& id) {
+model::Vec2 CaptureWindowOrigin(const Rig& rig, const CaptureId& id) {
   // Board views are whole-sensor images; every other capture is the window.
-  if (id.key.kind != session::CaptureKind::kBoardView) return Vec2::Zero();
+  if (id.key.kind != session::CaptureKind::kBoardView) return model::Vec2::Zero();
   const SensorWindow& window = rig.config().window;
-  return -Vec2(window.offset_x, window.offset_y);
+  return -model::Vec2(window.offset_x, window.offset_y);
 }
 
 std::unique_ptr<SimulatedSetup> MakeSimulatedSetup(SimulationPreset preset, uint64_t seed, int threads,
@@ -122,4 +122,4 @@ std::unique_ptr<SimulatedSetup> MakeSimulatedSetup(SimulationPreset preset, uint
   return setup;
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

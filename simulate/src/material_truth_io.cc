@@ -7,12 +7,12 @@
 #include "svbtdf/model/ndf_factory.h"
 #include "svbtdf/simulate/truth_io.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 namespace fs = std::filesystem;
 
 void WriteMaterialTruth(const fs::path& folder, const TruthMaterial& material) {
   const int w = material.texels_x(), h = material.texels_y();
-  FloatImage ndf(w, h, 5), alpha(w, h, 1), shadowing(w, h, 1), k_s(w, h, 3), rho_d(w, h, 3);
+  common::FloatImage ndf(w, h, 5), alpha(w, h, 1), shadowing(w, h, 1), k_s(w, h, 3), rho_d(w, h, 3);
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       const TruthTexel& t = material.texel(x, y);
@@ -26,11 +26,11 @@ void WriteMaterialTruth(const fs::path& folder, const TruthMaterial& material) {
       }
     }
   }
-  WriteFloatImage(folder / "ndf_params.exr", ndf, /*half_precision=*/false, false);
-  WriteFloatImage(folder / "alpha.exr", alpha, false, false);
-  WriteFloatImage(folder / "shadowing_roughness.exr", shadowing, false, false);
-  WriteFloatImage(folder / "k_s.exr", k_s, false, false);
-  WriteFloatImage(folder / "rho_d.exr", rho_d, false, false);
+  common::WriteFloatImage(folder / "ndf_params.exr", ndf, /*half_precision=*/false, false);
+  common::WriteFloatImage(folder / "alpha.exr", alpha, false, false);
+  common::WriteFloatImage(folder / "shadowing_roughness.exr", shadowing, false, false);
+  common::WriteFloatImage(folder / "k_s.exr", k_s, false, false);
+  common::WriteFloatImage(folder / "rho_d.exr", rho_d, false, false);
   const nlohmann::json manifest = {
       {"format", "svbtdf-truth-material"},
       {"version", kTruthFormatVersion},
@@ -43,7 +43,7 @@ void WriteMaterialTruth(const fs::path& folder, const TruthMaterial& material) {
                 {"k_s", "k_s.exr"}, {"rho_d", "rho_d.exr"}}},
       {"shadowing", "smith-ggx; 0 = none"},
   };
-  WriteTextAtomically(folder / "material.json", manifest.dump(2) + "\n", false);
+  common::WriteTextAtomically(folder / "material.json", manifest.dump(2) + "\n", false);
 }
 
 
@@ -51,20 +51,20 @@ MaterialTruth ReadMaterialTruth(const fs::path& folder) {
   const fs::path manifest_path = folder / "material.json";
   MaterialTruth truth;
   try {
-    const nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(manifest_path));
-    if (manifest.at("format") != "svbtdf-truth-material") ThrowFormatError(manifest_path.string(), "is not a truth material");
+    const nlohmann::json manifest = nlohmann::json::parse(common::ReadTextFile(manifest_path));
+    if (manifest.at("format") != "svbtdf-truth-material") common::ThrowFormatError(manifest_path.string(), "is not a truth material");
     if (manifest.at("ndf").at("kind") != "analytic") {
-      ThrowFormatError(manifest_path.string(), "is not an analytic truth (see its ndf.kind)");
+      common::ThrowFormatError(manifest_path.string(), "is not an analytic truth (see its ndf.kind)");
     }
     truth.eta = manifest.at("eta").get<double>();
     truth.ndf_name = manifest.at("ndf").at("name").get<std::string>();
   } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(manifest_path.string(), std::string("is malformed: ") + e.what());
+    common::ThrowFormatError(manifest_path.string(), std::string("is malformed: ") + e.what());
   }
   const auto read = [&](const char* file, int channels) {
-    FloatImage image = ReadFloatImage(folder / file);
-    RequireFinite(image, (folder / file).string());
-    if (image.channels != channels) ThrowFormatError((folder / file).string(), "has the wrong number of channels");
+    common::FloatImage image = common::ReadFloatImage(folder / file);
+    common::RequireFinite(image, (folder / file).string());
+    if (image.channels != channels) common::ThrowFormatError((folder / file).string(), "has the wrong number of channels");
     return image;
   };
   truth.ndf_params = read("ndf_params.exr", 5);
@@ -72,20 +72,20 @@ MaterialTruth ReadMaterialTruth(const fs::path& folder) {
   truth.shadowing_roughness = read("shadowing_roughness.exr", 1);
   truth.k_s = read("k_s.exr", 3);
   truth.rho_d = read("rho_d.exr", 3);
-  for (const FloatImage* image : {&truth.ndf_params, &truth.shadowing_roughness, &truth.k_s, &truth.rho_d}) {
+  for (const common::FloatImage* image : {&truth.ndf_params, &truth.shadowing_roughness, &truth.k_s, &truth.rho_d}) {
     if (image->width != truth.alpha.width || image->height != truth.alpha.height) {
-      ThrowFormatError(folder.string(), "holds maps of different sizes");
+      common::ThrowFormatError(folder.string(), "holds maps of different sizes");
     }
   }
   return truth;
 }
 
-DualMicrofacetParams MaterialTruth::Params(int x, int y) const {
-  DualMicrofacetParams p;
+model::DualMicrofacetParams MaterialTruth::Params(int x, int y) const {
+  model::DualMicrofacetParams p;
   p.eta = eta;
   p.alpha = alpha.at(x, y);
   const double roughness = shadowing_roughness.at(x, y);
-  p.shadowing = roughness > 0 ? SmithShadowing::Ggx(roughness) : SmithShadowing::None();
+  p.shadowing = roughness > 0 ? model::SmithShadowing::Ggx(roughness) : model::SmithShadowing::None();
   for (int c = 0; c < 3; ++c) {
     p.k_s[c] = k_s.at(x, y, c);
     p.rho_d[c] = rho_d.at(x, y, c);
@@ -93,14 +93,14 @@ DualMicrofacetParams MaterialTruth::Params(int x, int y) const {
   return p;
 }
 
-std::unique_ptr<Ndf> MaterialTruth::TexelNdf(int x, int y) const {
-  AnalyticNdfParams p;
+std::unique_ptr<model::Ndf> MaterialTruth::TexelNdf(int x, int y) const {
+  model::AnalyticNdfParams p;
   p.alpha_x = ndf_params.at(x, y, 0);
   p.alpha_y = ndf_params.at(x, y, 1);
   p.theta_x = ndf_params.at(x, y, 2);
   p.theta_y = ndf_params.at(x, y, 3);
   p.theta_z = ndf_params.at(x, y, 4);
-  return MakeAnalyticNdf(ndf_name, p);
+  return model::MakeAnalyticNdf(ndf_name, p);
 }
 
 TruthMaterial MaterialTruth::ToTruthMaterial() const {
@@ -108,7 +108,7 @@ TruthMaterial MaterialTruth::ToTruthMaterial() const {
   texels.reserve(static_cast<size_t>(width()) * height());
   for (int y = 0; y < height(); ++y) {
     for (int x = 0; x < width(); ++x) {
-      const DualMicrofacetParams p = Params(x, y);
+      const model::DualMicrofacetParams p = Params(x, y);
       TruthTexel t;
       t.ndf = {ndf_params.at(x, y, 0), ndf_params.at(x, y, 1), ndf_params.at(x, y, 2), ndf_params.at(x, y, 3),
                ndf_params.at(x, y, 4)};
@@ -122,4 +122,4 @@ TruthMaterial MaterialTruth::ToTruthMaterial() const {
   return TruthMaterial(width(), height(), eta, ndf_name, std::move(texels));
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

@@ -11,23 +11,23 @@
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/shadowing.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 namespace {
 
 // Solid angle of the spherical triangle with unit corners a, b, c (Van Oosterom and Strackee 1983).
-double TriangleSolidAngle(const Vec3& a, const Vec3& b, const Vec3& c) {
+double TriangleSolidAngle(const model::Vec3& a, const model::Vec3& b, const model::Vec3& c) {
   const double numerator = std::abs(a.dot(b.cross(c)));
   const double denominator = 1.0 + a.dot(b) + b.dot(c) + c.dot(a);
   return 2.0 * std::atan2(numerator, denominator);
 }
 
 // eta times the in-slab direction with the given tangential components (Snell at a flat interface).
-Vec3 ScaledSlabDirection(double tx, double ty, double eta) {
+model::Vec3 ScaledSlabDirection(double tx, double ty, double eta) {
   return {tx, ty, std::sqrt(std::max(0.0, eta * eta - tx * tx - ty * ty))};
 }
 
 // The model with its own shadowing term off: G is applied from the NDF instead.
-DualMicrofacetModel UnshadowedModel(double eta) { return DualMicrofacetModel(eta, SmithShadowing::None()); }
+model::DualMicrofacetModel UnshadowedModel(double eta) { return model::DualMicrofacetModel(eta, model::SmithShadowing::None()); }
 
 // The blend weight alpha minimising the blend's error against MC, given rho_T and rho_B at the
 // averager's points; `scan_points` alphas are scanned before the golden-section refinement.
@@ -37,7 +37,7 @@ double BestBlendAlpha(const std::vector<double>& rho_T_points, const std::vector
                       std::vector<double>* blend) {
   std::vector<double> points(rho_T_points.size());
   const auto blend_for = [&](double alpha) {
-    for (size_t p = 0; p < points.size(); ++p) points[p] = LogBlend(rho_T_points[p], rho_B_points[p], alpha);
+    for (size_t p = 0; p < points.size(); ++p) points[p] = model::LogBlend(rho_T_points[p], rho_B_points[p], alpha);
     return averager.Average(points);
   };
   const double alpha = MinimiseOnInterval(
@@ -47,7 +47,7 @@ double BestBlendAlpha(const std::vector<double>& rho_T_points, const std::vector
   return alpha;
 }
 
-void EvaluateTerms(const Ndf& ndf, double eta, const std::vector<Vec3>& points, const Vec3& o,
+void EvaluateTerms(const model::Ndf& ndf, double eta, const std::vector<model::Vec3>& points, const model::Vec3& o,
                    std::vector<double>* rho_T, std::vector<double>* rho_B) {
   rho_T->resize(points.size());
   rho_B->resize(points.size());
@@ -59,27 +59,27 @@ void EvaluateTerms(const Ndf& ndf, double eta, const std::vector<Vec3>& points, 
 
 }  // namespace
 
-double RhoTWithNdfShadowing(const Ndf& ndf, double eta, const Vec3& i, const Vec3& o) {
-  const VirtualConfiguration c = UnshadowedModel(eta).RoughEntry(i, o);
+double RhoTWithNdfShadowing(const model::Ndf& ndf, double eta, const model::Vec3& i, const model::Vec3& o) {
+  const model::VirtualConfiguration c = UnshadowedModel(eta).RoughEntry(i, o);
   if (!c.valid) return 0.0;
-  const Vec3 t = ScaledSlabDirection(o.x(), o.y(), eta) / eta;
+  const model::Vec3 t = ScaledSlabDirection(o.x(), o.y(), eta) / eta;
   return c.factor * ndf.D(c.h) * ndf.G1(i, c.h) * ndf.G1(t, c.h);
 }
 
-double RhoBWithNdfShadowing(const Ndf& ndf, double eta, const Vec3& i, const Vec3& o) {
-  const VirtualConfiguration c = UnshadowedModel(eta).RoughExit(i, o);
+double RhoBWithNdfShadowing(const model::Ndf& ndf, double eta, const model::Vec3& i, const model::Vec3& o) {
+  const model::VirtualConfiguration c = UnshadowedModel(eta).RoughExit(i, o);
   if (!c.valid) return 0.0;
-  const Vec3 t_i = -ScaledSlabDirection(-i.x(), -i.y(), eta) / eta;  // in-slab, pointing down
+  const model::Vec3 t_i = -ScaledSlabDirection(-i.x(), -i.y(), eta) / eta;  // in-slab, pointing down
   return c.factor * ndf.D(c.h) * ndf.G1(t_i, c.h) * ndf.G1(o, c.h);
 }
 
-double SingleInterfaceBtdf(const Ndf& ndf, double eta, const Vec3& i, const Vec3& o) {
-  return WalterBtdf(ndf, i, o, 1.0, eta);
+double SingleInterfaceBtdf(const model::Ndf& ndf, double eta, const model::Vec3& i, const model::Vec3& o) {
+  return model::WalterBtdf(ndf, i, o, 1.0, eta);
 }
 
-CellAverager::CellAverager(const Hemicube& grid, int subdivisions)
+CellAverager::CellAverager(const model::Hemicube& grid, int subdivisions)
     : grid_(grid), per_cell_(subdivisions * subdivisions) {
-  if (subdivisions < 1) ThrowInvalidInput("cell subdivisions", "must be >= 1");
+  if (subdivisions < 1) common::ThrowInvalidInput("cell subdivisions", "must be >= 1");
   const int cells = grid.num_cells();
   directions_.reserve(static_cast<size_t>(cells) * per_cell_);
   weights_.reserve(directions_.capacity());
@@ -91,12 +91,12 @@ CellAverager::CellAverager(const Hemicube& grid, int subdivisions)
       for (int a = 0; a < subdivisions; ++a) {
         // Hemicube cell edges are great-circle arcs, so two spherical triangles give the
         // sub-cell's solid angle exactly.
-        const Vec3 c00 = grid.CellPoint(cell, a * step, b * step);
-        const Vec3 c10 = grid.CellPoint(cell, (a + 1) * step, b * step);
-        const Vec3 c11 = grid.CellPoint(cell, (a + 1) * step, (b + 1) * step);
-        const Vec3 c01 = grid.CellPoint(cell, a * step, (b + 1) * step);
+        const model::Vec3 c00 = grid.CellPoint(cell, a * step, b * step);
+        const model::Vec3 c10 = grid.CellPoint(cell, (a + 1) * step, b * step);
+        const model::Vec3 c11 = grid.CellPoint(cell, (a + 1) * step, (b + 1) * step);
+        const model::Vec3 c01 = grid.CellPoint(cell, a * step, (b + 1) * step);
         const double solid_angle = TriangleSolidAngle(c00, c10, c11) + TriangleSolidAngle(c00, c11, c01);
-        directions_.push_back(FlipZ(grid.CellPoint(cell, (a + 0.5) * step, (b + 0.5) * step)));
+        directions_.push_back(model::FlipZ(grid.CellPoint(cell, (a + 0.5) * step, (b + 0.5) * step)));
         weights_.push_back(solid_angle);
         cell_solid_angle += solid_angle;
       }
@@ -111,34 +111,34 @@ std::vector<double> CellAverager::Average(const std::vector<double>& point_value
   return averages;
 }
 
-std::vector<double> CellAverager::Average(const std::function<double(const Vec3& i)>& f) const {
+std::vector<double> CellAverager::Average(const std::function<double(const model::Vec3& i)>& f) const {
   std::vector<double> values(directions_.size());
   for (size_t p = 0; p < directions_.size(); ++p) values[p] = f(directions_[p]);
   return Average(values);
 }
 
-double RelativeL2Error(const std::vector<double>& model, const std::vector<double>& reference,
+double RelativeL2Error(const std::vector<double>& predicted, const std::vector<double>& reference,
                        const std::vector<double>& solid_angles) {
   double difference = 0.0;
   double norm = 0.0;
   for (size_t c = 0; c < reference.size(); ++c) {
-    difference += solid_angles[c] * Square(model[c] - reference[c]);
-    norm += solid_angles[c] * Square(reference[c]);
+    difference += solid_angles[c] * model::Square(predicted[c] - reference[c]);
+    norm += solid_angles[c] * model::Square(reference[c]);
   }
   return norm > 0 ? std::sqrt(difference / norm) : std::numeric_limits<double>::infinity();
 }
 
-double ScaleFreeRelativeL2Error(const std::vector<double>& model, const std::vector<double>& reference,
+double ScaleFreeRelativeL2Error(const std::vector<double>& predicted, const std::vector<double>& reference,
                                 const std::vector<double>& solid_angles) {
   double cross = 0.0;
   double model_norm = 0.0;
   for (size_t c = 0; c < reference.size(); ++c) {
-    cross += solid_angles[c] * model[c] * reference[c];
-    model_norm += solid_angles[c] * Square(model[c]);
+    cross += solid_angles[c] * predicted[c] * reference[c];
+    model_norm += solid_angles[c] * model::Square(predicted[c]);
   }
-  if (!(model_norm > 0) || !(cross > 0)) return RelativeL2Error(model, reference, solid_angles);
-  std::vector<double> scaled(model.size());
-  for (size_t c = 0; c < model.size(); ++c) scaled[c] = model[c] * cross / model_norm;
+  if (!(model_norm > 0) || !(cross > 0)) return RelativeL2Error(predicted, reference, solid_angles);
+  std::vector<double> scaled(predicted.size());
+  for (size_t c = 0; c < predicted.size(); ++c) scaled[c] = predicted[c] * cross / model_norm;
   return RelativeL2Error(scaled, reference, solid_angles);
 }
 
@@ -153,7 +153,7 @@ const char* ToString(RoughSides sides) {
 
 double MinimiseOnInterval(const std::function<double(double)>& f, double lo, double hi,
                           int scan_points, double tolerance) {
-  if (!(hi > lo) || scan_points < 3) ThrowInvalidInput("interval", "needs lo < hi and >= 3 points");
+  if (!(hi > lo) || scan_points < 3) common::ThrowInvalidInput("interval", "needs lo < hi and >= 3 points");
   int best = 0;
   double best_value = std::numeric_limits<double>::infinity();
   const double step = (hi - lo) / (scan_points - 1);
@@ -167,7 +167,7 @@ double MinimiseOnInterval(const std::function<double(double)>& f, double lo, dou
   // Golden-section search in the bracket of the best scan point.
   const double a = lo + std::max(0, best - 1) * step;
   const double b = lo + std::min(scan_points - 1, best + 1) * step;
-  const double x = GoldenSectionSearch(f, a, b, tolerance);
+  const double x = common::GoldenSectionSearch(f, a, b, tolerance);
   return f(x) <= best_value ? x : lo + best * step;
 }
 
@@ -176,7 +176,7 @@ namespace {
 // What every case of one validation run shares.
 struct ValidationContext {
   const ValidationOptions& options;
-  const Ndf& ndf;
+  const model::Ndf& ndf;
   const CellAverager& averager;
   std::vector<double> solid_angles;
 };
@@ -185,8 +185,8 @@ double RelativeNoise(const BtdfSlice& mc, const std::vector<double>& solid_angle
   double noise = 0.0;
   double norm = 0.0;
   for (size_t c = 0; c < mc.rho.size(); ++c) {
-    noise += solid_angles[c] * Square(mc.standard_error[c]);
-    norm += solid_angles[c] * Square(mc.rho[c]);
+    noise += solid_angles[c] * model::Square(mc.standard_error[c]);
+    norm += solid_angles[c] * model::Square(mc.rho[c]);
   }
   return std::sqrt(noise / norm);
 }
@@ -195,9 +195,9 @@ double RelativeNoise(const BtdfSlice& mc, const std::vector<double>& solid_angle
 void FitSingleInterface(const ValidationContext& context, ValidationCase* result) {
   const ValidationOptions& options = context.options;
   const auto single_with_roughness = [&](double log_roughness) {
-    const std::unique_ptr<Ndf> fitted = options.make_ndf(std::exp(log_roughness));
+    const std::unique_ptr<model::Ndf> fitted = options.make_ndf(std::exp(log_roughness));
     return context.averager.Average(
-        [&](const Vec3& i) { return SingleInterfaceBtdf(*fitted, options.eta, i, result->o); });
+        [&](const model::Vec3& i) { return SingleInterfaceBtdf(*fitted, options.eta, i, result->o); });
   };
   const double log_roughness = MinimiseOnInterval(
       [&](double x) { return RelativeL2Error(single_with_roughness(x), result->mc.rho, context.solid_angles); },
@@ -210,9 +210,9 @@ void FitSingleInterface(const ValidationContext& context, ValidationCase* result
 // (a coarser alpha scan suffices inside the outer search).
 void FitBlendRoughness(const ValidationContext& context, ValidationCase* result) {
   const ValidationOptions& options = context.options;
-  const std::vector<Vec3>& points = context.averager.light_directions();
+  const std::vector<model::Vec3>& points = context.averager.light_directions();
   const auto fitted_blend = [&](double log_roughness, std::vector<double>* blend) {
-    const std::unique_ptr<Ndf> trial = options.make_ndf(std::exp(log_roughness));
+    const std::unique_ptr<model::Ndf> trial = options.make_ndf(std::exp(log_roughness));
     std::vector<double> trial_T, trial_B;
     EvaluateTerms(*trial, options.eta, points, result->o, &trial_T, &trial_B);
     return BestBlendAlpha(trial_T, trial_B, context.averager, result->mc.rho, context.solid_angles, 21,
@@ -231,10 +231,10 @@ void FitBlendRoughness(const ValidationContext& context, ValidationCase* result)
 
 void ComputeErrors(const std::vector<double>& solid_angles, ValidationCase* result) {
   const std::vector<double>& mc = result->mc.rho;
-  const auto both = [&](const std::vector<double>& model, double* error, double* scale_free_error) {
-    if (model.empty()) return;  // a column that was not computed
-    *error = RelativeL2Error(model, mc, solid_angles);
-    *scale_free_error = ScaleFreeRelativeL2Error(model, mc, solid_angles);
+  const auto both = [&](const std::vector<double>& predicted, double* error, double* scale_free_error) {
+    if (predicted.empty()) return;  // a column that was not computed
+    *error = RelativeL2Error(predicted, mc, solid_angles);
+    *scale_free_error = ScaleFreeRelativeL2Error(predicted, mc, solid_angles);
   };
   ModelErrors& e = result->errors;
   ModelErrors& f = result->scale_free_errors;
@@ -252,7 +252,7 @@ ValidationCase RunCase(const ValidationContext& context, const SlabTracer& trace
   ValidationCase result;
   result.rough_sides = sides;
   result.incidence_deg = incidence_deg;
-  result.o = SphericalDirection(incidence_deg * kPi / 180.0, 0.0);
+  result.o = model::SphericalDirection(incidence_deg * model::kPi / 180.0, 0.0);
   SliceOptions slice_options = options.slice;
   slice_options.seed = seed;
   result.mc = tracer.SliceForView(result.o, context.averager.grid(), slice_options);
@@ -266,7 +266,7 @@ ValidationCase RunCase(const ValidationContext& context, const SlabTracer& trace
   result.best_alpha = BestBlendAlpha(rho_T_points, rho_B_points, context.averager, result.mc.rho,
                                      context.solid_angles, 101, &result.blend);
   result.single_same_ndf = context.averager.Average(
-      [&](const Vec3& i) { return SingleInterfaceBtdf(context.ndf, options.eta, i, result.o); });
+      [&](const model::Vec3& i) { return SingleInterfaceBtdf(context.ndf, options.eta, i, result.o); });
   FitSingleInterface(context, &result);
   if (options.fit_blend_roughness) FitBlendRoughness(context, &result);
   ComputeErrors(context.solid_angles, &result);
@@ -275,18 +275,18 @@ ValidationCase RunCase(const ValidationContext& context, const SlabTracer& trace
 
 }  // namespace
 
-std::vector<ValidationCase> ValidateModel(const ValidationOptions& options, const Hemicube& grid,
+std::vector<ValidationCase> ValidateModel(const ValidationOptions& options, const model::Hemicube& grid,
                                           const std::function<void(const ValidationCase&)>& on_case) {
-  if (!options.make_ndf) ThrowInvalidInput("ndf", "no NDF factory given");
+  if (!options.make_ndf) common::ThrowInvalidInput("ndf", "no NDF factory given");
   if (!(options.eta > 1.0) || !std::isfinite(options.eta)) {
-    ThrowInvalidInput("--eta", "must be finite and > 1, got " + std::to_string(options.eta));
+    common::ThrowInvalidInput("--eta", "must be finite and > 1, got " + std::to_string(options.eta));
   }
   for (double angle : options.incidences_deg) {
     if (!(angle >= 0.0 && angle < 90.0)) {
-      ThrowInvalidInput("--incidence", "must lie in [0, 90) degrees, got " + std::to_string(angle));
+      common::ThrowInvalidInput("--incidence", "must lie in [0, 90) degrees, got " + std::to_string(angle));
     }
   }
-  const std::unique_ptr<Ndf> ndf = options.make_ndf(options.roughness);
+  const std::unique_ptr<model::Ndf> ndf = options.make_ndf(options.roughness);
   const CellAverager averager(grid, options.cell_subdivisions);
   ValidationContext context{options, *ndf, averager, std::vector<double>(grid.num_cells())};
   for (int c = 0; c < grid.num_cells(); ++c) context.solid_angles[c] = grid.CellSolidAngle(c);
@@ -307,4 +307,4 @@ std::vector<ValidationCase> ValidateModel(const ValidationOptions& options, cons
   return cases;
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

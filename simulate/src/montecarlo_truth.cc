@@ -9,14 +9,14 @@
 #include "svbtdf/common/progress.h"
 #include "svbtdf/common/random.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 namespace {
 
 
 // Every slice gets its own seed, so that slices are independent and a material's slices do not
 // change when another material is added.
 uint64_t SliceSeed(uint64_t seed, int material, int node) {
-  return SplitMix64(SplitMix64(SplitMix64(seed) ^ static_cast<uint64_t>(material)) ^ static_cast<uint64_t>(node));
+  return common::SplitMix64(common::SplitMix64(common::SplitMix64(seed) ^ static_cast<uint64_t>(material)) ^ static_cast<uint64_t>(node));
 }
 
 double InterfaceRoughness(const SlabInterfaceSpec& spec) {
@@ -27,7 +27,7 @@ double InterfaceRoughness(const SlabInterfaceSpec& spec) {
 
 // Float quantisation up front, so that the in-memory truth the renderer evaluates is bit for bit
 // the one written to and read back from the EXR maps.
-Rgb ToFloat(const Rgb& rgb) {
+model::Rgb ToFloat(const model::Rgb& rgb) {
   return {static_cast<float>(rgb[0]), static_cast<float>(rgb[1]), static_cast<float>(rgb[2])};
 }
 
@@ -36,8 +36,8 @@ Rgb ToFloat(const Rgb& rgb) {
 Slab SlabMaterial::ToSlab(double eta) const {
   Slab slab;
   slab.eta = eta;
-  slab.entry = SlabInterface::Rough(*MakeAnalyticNdf(entry.ndf, entry.params));
-  slab.exit = SlabInterface::Rough(*MakeAnalyticNdf(exit.ndf, exit.params));
+  slab.entry = SlabInterface::Rough(*model::MakeAnalyticNdf(entry.ndf, entry.params));
+  slab.exit = SlabInterface::Rough(*model::MakeAnalyticNdf(exit.ndf, exit.params));
   slab.optical_depth = optical_depth;
   return slab;
 }
@@ -80,7 +80,7 @@ std::vector<SlabMaterial> DefaultSlabMaterials() {
 std::vector<int> SlabIndexMap(int texels_x, int texels_y, int num_materials, uint64_t seed) {
   // A disc of material 1 over a vertical boundary between 0 (left) and 2 (right); the seed moves
   // the disc and the boundary by up to 8% of the width, so seeds give different layouts.
-  const auto jitter = [&](int k) { return 0.16 * ((SplitMix64(SplitMix64(seed) + k) >> 11) * 0x1.0p-53 - 0.5); };
+  const auto jitter = [&](int k) { return 0.16 * ((common::SplitMix64(common::SplitMix64(seed) + k) >> 11) * 0x1.0p-53 - 0.5); };
   const double cx = 0.5 + jitter(1), cy = 0.5 + jitter(2), boundary = 0.5 + jitter(3);
   const double aspect = static_cast<double>(texels_y) / texels_x;
   std::vector<int> map(static_cast<size_t>(texels_x) * texels_y);
@@ -95,13 +95,13 @@ std::vector<int> SlabIndexMap(int texels_x, int texels_y, int num_materials, uin
   return map;
 }
 
-Vec3 ViewGrid::Node(int node) const {
+model::Vec3 ViewGrid::Node(int node) const {
   const int ix = node % nx, iy = node / nx;
   const double ox = x0 + (x1 - x0) * ix / (nx - 1), oy = y0 + (y1 - y0) * iy / (ny - 1);
   return {ox, oy, std::sqrt(std::max(0.0, 1.0 - ox * ox - oy * oy))};
 }
 
-std::array<std::pair<int, double>, 4> ViewGrid::Interpolation(const Vec3& o) const {
+std::array<std::pair<int, double>, 4> ViewGrid::Interpolation(const model::Vec3& o) const {
   // Continuous node coordinates, clamped to the grid, then the cell [i, i + 1] holding them.
   const auto axis = [](double value, double lo, double hi, int n) {
     const double f = std::clamp((value - lo) / (hi - lo) * (n - 1), 0.0, n - 1.0);
@@ -116,8 +116,8 @@ std::array<std::pair<int, double>, 4> ViewGrid::Interpolation(const Vec3& o) con
            {(iy + 1) * nx + ix + 1, tx * ty}}};
 }
 
-ViewGrid ViewGrid::Spanning(const Vec3& camera_centre, const SampleConfig& sample, int nodes_per_axis) {
-  if (nodes_per_axis < 2) ThrowInvalidInput("view grid", "needs at least 2 nodes per axis");
+ViewGrid ViewGrid::Spanning(const model::Vec3& camera_centre, const SampleConfig& sample, int nodes_per_axis) {
+  if (nodes_per_axis < 2) common::ThrowInvalidInput("view grid", "needs at least 2 nodes per axis");
   ViewGrid grid;
   grid.nx = grid.ny = nodes_per_axis;
   grid.x0 = grid.y0 = 1e300;
@@ -127,8 +127,8 @@ ViewGrid ViewGrid::Spanning(const Vec3& camera_centre, const SampleConfig& sampl
   constexpr int kSteps = 16;
   for (int a = 0; a <= kSteps; ++a) {
     for (int b = 0; b <= kSteps; ++b) {
-      const Vec3 p((a / double(kSteps) - 0.5) * sample.width, (b / double(kSteps) - 0.5) * sample.height(), 0.0);
-      const Vec3 o = (camera_centre - p).normalized();
+      const model::Vec3 p((a / double(kSteps) - 0.5) * sample.width, (b / double(kSteps) - 0.5) * sample.height(), 0.0);
+      const model::Vec3 o = (camera_centre - p).normalized();
       grid.x0 = std::min(grid.x0, o.x());
       grid.x1 = std::max(grid.x1, o.x());
       grid.y0 = std::min(grid.y0, o.y());
@@ -144,49 +144,49 @@ ViewGrid ViewGrid::Spanning(const Vec3& camera_centre, const SampleConfig& sampl
 }
 
 MonteCarloTruth::MonteCarloTruth(int texels_x, int texels_y, double eta, std::vector<SlabMaterial> materials,
-                                 std::vector<int> index_map, std::vector<Rgb> rho_d, ViewGrid views,
+                                 std::vector<int> index_map, std::vector<model::Rgb> rho_d, ViewGrid views,
                                  int hemicube_resolution, std::vector<float> values, std::vector<float> errors)
     : texels_x_(texels_x), texels_y_(texels_y), eta_(eta), materials_(std::move(materials)),
       index_map_(std::move(index_map)), rho_d_(std::move(rho_d)), views_(views), grid_(hemicube_resolution),
       values_(std::move(values)), errors_(std::move(errors)) {
   const std::string subject = "Monte Carlo truth";
-  if (texels_x < 1 || texels_y < 1) ThrowInvalidInput(subject, "needs at least 1 x 1 texels");
-  if (!(eta > 1.0) || !std::isfinite(eta)) ThrowInvalidInput(subject, "eta must be > 1");
-  if (materials_.empty()) ThrowInvalidInput(subject, "needs at least one slab material");
+  if (texels_x < 1 || texels_y < 1) common::ThrowInvalidInput(subject, "needs at least 1 x 1 texels");
+  if (!(eta > 1.0) || !std::isfinite(eta)) common::ThrowInvalidInput(subject, "eta must be > 1");
+  if (materials_.empty()) common::ThrowInvalidInput(subject, "needs at least one slab material");
   const size_t texels = static_cast<size_t>(texels_x) * texels_y;
   if (index_map_.size() != texels || rho_d_.size() != texels) {
-    ThrowInvalidInput(subject, "index or rho_d map does not have " + std::to_string(texels) + " texels");
+    common::ThrowInvalidInput(subject, "index or rho_d map does not have " + std::to_string(texels) + " texels");
   }
   for (int m : index_map_) {
     if (m < 0 || m >= static_cast<int>(materials_.size())) {
-      ThrowInvalidInput(subject, "index map names material " + std::to_string(m) + " of " +
+      common::ThrowInvalidInput(subject, "index map names material " + std::to_string(m) + " of " +
                                      std::to_string(materials_.size()));
     }
   }
   if (views_.nx < 2 || views_.ny < 2 || !(views_.x1 > views_.x0) || !(views_.y1 > views_.y0)) {
-    ThrowInvalidInput(subject, "the view grid needs 2 x 2 nodes or more over a non-empty range");
+    common::ThrowInvalidInput(subject, "the view grid needs 2 x 2 nodes or more over a non-empty range");
   }
   const size_t expected = materials_.size() * views_.num_nodes() * grid_.num_cells() * 3;
   if (values_.size() != expected || errors_.size() != expected) {
-    ThrowInvalidInput(subject, "slice tables hold " + std::to_string(values_.size()) + " values, expected " +
+    common::ThrowInvalidInput(subject, "slice tables hold " + std::to_string(values_.size()) + " values, expected " +
                                    std::to_string(expected));
   }
   const auto bad = [](float v) { return !(v >= 0.0f) || !std::isfinite(v); };
   if (std::any_of(values_.begin(), values_.end(), bad) || std::any_of(errors_.begin(), errors_.end(), bad)) {
-    ThrowInvalidInput(subject, "slice values and errors must be finite and >= 0");
+    common::ThrowInvalidInput(subject, "slice values and errors must be finite and >= 0");
   }
-  for (Rgb& rgb : rho_d_) rgb = ToFloat(rgb);
+  for (model::Rgb& rgb : rho_d_) rgb = ToFloat(rgb);
 }
 
 MonteCarloTruth MonteCarloTruth::Trace(int texels_x, int texels_y, double eta, std::vector<SlabMaterial> materials,
                                        std::vector<int> index_map, const ViewGrid& views,
                                        const MonteCarloPrecision& precision, uint64_t seed, int threads,
                                        bool progress) {
-  const Hemicube grid(precision.hemicube_resolution);
+  const model::Hemicube grid(precision.hemicube_resolution);
   const int nodes = views.num_nodes(), cells = grid.num_cells();
   const size_t size = materials.size() * nodes * cells * 3;
   std::vector<float> values(size), errors(size);
-  std::optional<ProgressBar> bar;
+  std::optional<common::ProgressBar> bar;
   if (progress) bar.emplace("tracing the Monte Carlo truth", static_cast<int64_t>(materials.size()) * nodes, "slices");
   double worst_error = 0.0;
   for (size_t m = 0; m < materials.size(); ++m) {
@@ -210,7 +210,7 @@ MonteCarloTruth MonteCarloTruth::Trace(int texels_x, int texels_y, double eta, s
     }
   }
   if (bar) bar->Finish();
-  std::vector<Rgb> rho_d(index_map.size());
+  std::vector<model::Rgb> rho_d(index_map.size());
   for (size_t t = 0; t < index_map.size(); ++t) rho_d[t] = materials.at(index_map[t]).rho_d;
   MonteCarloTruth truth(texels_x, texels_y, eta, std::move(materials), std::move(index_map), std::move(rho_d),
                         views, precision.hemicube_resolution, std::move(values), std::move(errors));
@@ -220,17 +220,17 @@ MonteCarloTruth MonteCarloTruth::Trace(int texels_x, int texels_y, double eta, s
   return truth;
 }
 
-Rgb MonteCarloTruth::At(const std::vector<float>& table, int material, int node, int cell) const {
+model::Rgb MonteCarloTruth::At(const std::vector<float>& table, int material, int node, int cell) const {
   const size_t at = Offset(material, node, cell);
   return {table[at], table[at + 1], table[at + 2]};
 }
 
-Rgb MonteCarloTruth::Evaluate(int index, const Vec3& i, const Vec3& o) const {
+model::Rgb MonteCarloTruth::Evaluate(int index, const model::Vec3& i, const model::Vec3& o) const {
   const int material = index_map_[index];
   const auto view_weights = views_.Interpolation(o);
   // The slices are tabulated at the cells of FlipZ(i) (SlabTracer::SliceForView).
-  const Hemicube::Weights light_weights = grid_.Interpolation(FlipZ(i));
-  Rgb result = rho_d_[index];
+  const model::Hemicube::Weights light_weights = grid_.Interpolation(model::FlipZ(i));
+  model::Rgb result = rho_d_[index];
   for (const auto& [node, wv] : view_weights) {
     if (wv <= 0.0) continue;
     for (const auto& [cell, wc] : light_weights) {
@@ -244,4 +244,4 @@ Rgb MonteCarloTruth::Evaluate(int index, const Vec3& i, const Vec3& o) const {
 
 double MonteCarloTruth::MinRoughness(int index) const { return materials_[index_map_[index]].MinRoughness(); }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

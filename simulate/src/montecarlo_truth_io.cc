@@ -12,14 +12,14 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/simulate/montecarlo_truth.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 namespace fs = std::filesystem;
 namespace {
 
 constexpr int kMonteCarloTruthVersion = 2;  // the first truth-format version with this kind
 
 nlohmann::json InterfaceJson(const SlabInterfaceSpec& spec) {
-  const AnalyticNdfParams& p = spec.params;
+  const model::AnalyticNdfParams& p = spec.params;
   return {{"ndf", spec.ndf}, {"alpha_x", p.alpha_x}, {"alpha_y", p.alpha_y}, {"theta_x", p.theta_x},
           {"theta_y", p.theta_y}, {"theta_z", p.theta_z}, {"kappa", p.kappa},
           {"mean", {p.mean.x(), p.mean.y(), p.mean.z()}}};
@@ -28,7 +28,7 @@ nlohmann::json InterfaceJson(const SlabInterfaceSpec& spec) {
 SlabInterfaceSpec InterfaceFromJson(const nlohmann::json& in) {
   SlabInterfaceSpec spec;
   spec.ndf = in.at("ndf").get<std::string>();
-  AnalyticNdfParams& p = spec.params;
+  model::AnalyticNdfParams& p = spec.params;
   p.alpha_x = in.at("alpha_x").get<double>();
   p.alpha_y = in.at("alpha_y").get<double>();
   p.theta_x = in.at("theta_x").get<double>();
@@ -36,8 +36,8 @@ SlabInterfaceSpec InterfaceFromJson(const nlohmann::json& in) {
   p.theta_z = in.at("theta_z").get<double>();
   p.kappa = in.at("kappa").get<double>();
   const auto mean = in.at("mean").get<std::array<double, 3>>();
-  p.mean = Vec3(mean[0], mean[1], mean[2]);
-  MakeAnalyticNdf(spec.ndf, p);  // rejects an unknown NDF or bad parameters now, not when rendering
+  p.mean = model::Vec3(mean[0], mean[1], mean[2]);
+  model::MakeAnalyticNdf(spec.ndf, p);  // rejects an unknown NDF or bad parameters now, not when rendering
   return spec;
 }
 
@@ -52,8 +52,8 @@ SlabMaterial MaterialFromJson(const nlohmann::json& in) {
   m.entry = InterfaceFromJson(in.at("entry"));
   m.exit = InterfaceFromJson(in.at("exit"));
   m.optical_depth = in.at("optical_depth").get<double>();
-  m.tint = in.at("tint").get<Rgb>();
-  m.rho_d = in.at("rho_d").get<Rgb>();
+  m.tint = in.at("tint").get<model::Rgb>();
+  m.rho_d = in.at("rho_d").get<model::Rgb>();
   return m;
 }
 
@@ -83,14 +83,14 @@ nlohmann::json Manifest(const MonteCarloTruth& truth) {
 }
 
 // The slice tables as one image: a row per (material, view node), a column per cell.
-FloatImage SlicesImage(const MonteCarloTruth& truth) {
+common::FloatImage SlicesImage(const MonteCarloTruth& truth) {
   const int cells = truth.hemicube().num_cells(), nodes = truth.views().num_nodes();
   const int materials = static_cast<int>(truth.materials().size());
-  FloatImage image(cells, materials * nodes, 6);
+  common::FloatImage image(cells, materials * nodes, 6);
   for (int m = 0; m < materials; ++m) {
     for (int v = 0; v < nodes; ++v) {
       for (int cell = 0; cell < cells; ++cell) {
-        const Rgb value = truth.SliceValue(m, v, cell), error = truth.SliceError(m, v, cell);
+        const model::Rgb value = truth.SliceValue(m, v, cell), error = truth.SliceError(m, v, cell);
         for (int c = 0; c < 3; ++c) {
           image.at(cell, m * nodes + v, c) = static_cast<float>(value[c]);
           image.at(cell, m * nodes + v, 3 + c) = static_cast<float>(error[c]);
@@ -101,23 +101,23 @@ FloatImage SlicesImage(const MonteCarloTruth& truth) {
   return image;
 }
 
-FloatImage ReadMap(const fs::path& path, int width, int height, int channels) {
-  FloatImage image = ReadFloatImage(path);
-  RequireFinite(image, path.string());
+common::FloatImage ReadMap(const fs::path& path, int width, int height, int channels) {
+  common::FloatImage image = common::ReadFloatImage(path);
+  common::RequireFinite(image, path.string());
   if (image.width != width || image.height != height || image.channels != channels) {
-    ThrowFormatError(path.string(), "is " + std::to_string(image.width) + "x" + std::to_string(image.height) + "x" +
+    common::ThrowFormatError(path.string(), "is " + std::to_string(image.width) + "x" + std::to_string(image.height) + "x" +
                                         std::to_string(image.channels) + ", expected " + std::to_string(width) + "x" +
                                         std::to_string(height) + "x" + std::to_string(channels));
   }
   return image;
 }
 
-std::vector<int> IndexFromImage(const FloatImage& image, int materials, const fs::path& path) {
+std::vector<int> IndexFromImage(const common::FloatImage& image, int materials, const fs::path& path) {
   std::vector<int> map(image.pixels.size());
   for (size_t t = 0; t < map.size(); ++t) {
     const float value = image.pixels[t];
     if (value != std::round(value) || value < 0 || value >= materials) {
-      ThrowFormatError(path.string(), "texel " + std::to_string(t) + " holds " + std::to_string(value) +
+      common::ThrowFormatError(path.string(), "texel " + std::to_string(t) + " holds " + std::to_string(value) +
                                           ", not a material index in [0, " + std::to_string(materials) + ")");
     }
     map[t] = static_cast<int>(value);
@@ -125,7 +125,7 @@ std::vector<int> IndexFromImage(const FloatImage& image, int materials, const fs
   return map;
 }
 
-void SplitSlices(const FloatImage& image, std::vector<float>* values, std::vector<float>* errors) {
+void SplitSlices(const common::FloatImage& image, std::vector<float>* values, std::vector<float>* errors) {
   const size_t entries = static_cast<size_t>(image.width) * image.height;
   values->resize(entries * 3);
   errors->resize(entries * 3);
@@ -139,11 +139,11 @@ void SplitSlices(const FloatImage& image, std::vector<float>* values, std::vecto
 
 nlohmann::json ReadManifest(const fs::path& path) {
   try {
-    nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(path));
-    if (manifest.at("format") != "svbtdf-truth-material") ThrowFormatError(path.string(), "is not a truth material");
+    nlohmann::json manifest = nlohmann::json::parse(common::ReadTextFile(path));
+    if (manifest.at("format") != "svbtdf-truth-material") common::ThrowFormatError(path.string(), "is not a truth material");
     return manifest;
   } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(path.string(), std::string("is malformed: ") + e.what());
+    common::ThrowFormatError(path.string(), std::string("is malformed: ") + e.what());
   }
 }
 
@@ -155,32 +155,32 @@ std::string ReadTruthKind(const fs::path& folder) {
   try {
     return manifest.at("ndf").at("kind").get<std::string>();
   } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(path.string(), std::string("is malformed: ") + e.what());
+    common::ThrowFormatError(path.string(), std::string("is malformed: ") + e.what());
   }
 }
 
 void WriteMonteCarloTruth(const fs::path& folder, const MonteCarloTruth& truth) {
   const int w = truth.texels_x(), h = truth.texels_y();
-  FloatImage index(w, h, 1), rho_d(w, h, 3);
+  common::FloatImage index(w, h, 1), rho_d(w, h, 3);
   for (int t = 0; t < truth.num_texels(); ++t) {
     index.pixels[t] = static_cast<float>(truth.material_of(t));
     for (int c = 0; c < 3; ++c) rho_d.pixels[t * 3 + c] = static_cast<float>(truth.rho_d(t)[c]);
   }
   // The maps may be rewritten by a resumed run; the manifest, written last, marks the truth
   // complete and is never overwritten.
-  WriteFloatImage(folder / "index.exr", index, /*half_precision=*/false, /*overwrite=*/true);
-  WriteFloatImage(folder / "rho_d.exr", rho_d, false, true);
-  WriteFloatImage(folder / "slices.exr", SlicesImage(truth), false, true);
-  WriteTextAtomically(folder / "material.json", Manifest(truth).dump(2) + "\n", /*overwrite=*/false);
+  common::WriteFloatImage(folder / "index.exr", index, /*half_precision=*/false, /*overwrite=*/true);
+  common::WriteFloatImage(folder / "rho_d.exr", rho_d, false, true);
+  common::WriteFloatImage(folder / "slices.exr", SlicesImage(truth), false, true);
+  common::WriteTextAtomically(folder / "material.json", Manifest(truth).dump(2) + "\n", /*overwrite=*/false);
 }
 
 MonteCarloTruth ReadMonteCarloTruth(const fs::path& folder) {
   const fs::path path = folder / "material.json";
   const nlohmann::json manifest = ReadManifest(path);
   try {
-    if (manifest.at("ndf").at("kind") != "montecarlo") ThrowFormatError(path.string(), "is not a Monte Carlo truth");
+    if (manifest.at("ndf").at("kind") != "montecarlo") common::ThrowFormatError(path.string(), "is not a Monte Carlo truth");
     if (manifest.at("version").get<int>() != kMonteCarloTruthVersion) {
-      ThrowFormatError(path.string(), "has version " + manifest.at("version").dump() + ", this build reads version " +
+      common::ThrowFormatError(path.string(), "has version " + manifest.at("version").dump() + ", this build reads version " +
                                           std::to_string(kMonteCarloTruthVersion));
     }
     std::vector<SlabMaterial> materials;
@@ -196,15 +196,15 @@ MonteCarloTruth ReadMonteCarloTruth(const fs::path& folder) {
     const int w = manifest.at("width").get<int>(), h = manifest.at("height").get<int>();
     const int resolution = manifest.at("hemicube_resolution").get<int>();
     if (w < 1 || h < 1 || materials.empty() || views.nx < 2 || views.ny < 2 || resolution < 4 || resolution % 2) {
-      ThrowFormatError(path.string(), "has an empty texel grid, no materials, a view grid under 2x2 or a bad "
+      common::ThrowFormatError(path.string(), "has an empty texel grid, no materials, a view grid under 2x2 or a bad "
                                       "hemicube resolution");
     }
     const int materials_count = static_cast<int>(materials.size());
-    const FloatImage index_image = ReadMap(folder / "index.exr", w, h, 1);
-    const FloatImage rho_d_image = ReadMap(folder / "rho_d.exr", w, h, 3);
-    const FloatImage slices = ReadMap(folder / "slices.exr", Hemicube(resolution).num_cells(),
+    const common::FloatImage index_image = ReadMap(folder / "index.exr", w, h, 1);
+    const common::FloatImage rho_d_image = ReadMap(folder / "rho_d.exr", w, h, 3);
+    const common::FloatImage slices = ReadMap(folder / "slices.exr", model::Hemicube(resolution).num_cells(),
                                       materials_count * views.num_nodes(), 6);
-    std::vector<Rgb> rho_d(static_cast<size_t>(w) * h);
+    std::vector<model::Rgb> rho_d(static_cast<size_t>(w) * h);
     for (size_t t = 0; t < rho_d.size(); ++t) {
       rho_d[t] = {rho_d_image.pixels[t * 3], rho_d_image.pixels[t * 3 + 1], rho_d_image.pixels[t * 3 + 2]};
     }
@@ -220,17 +220,17 @@ MonteCarloTruth ReadMonteCarloTruth(const fs::path& folder) {
       const nlohmann::json& error = mc.at("dominant_relative_error_max");
       truth.dominant_relative_error = error.is_null() ? std::nan("") : error.get<double>();
       return truth;
-    } catch (const Error& e) {
-      if (e.kind() != ErrorKind::kInvalidInput) throw;
-      ThrowFormatError(folder.string(), "holds an inconsistent Monte Carlo truth: " + e.problem());
+    } catch (const common::Error& e) {
+      if (e.kind() != common::ErrorKind::kInvalidInput) throw;
+      common::ThrowFormatError(folder.string(), "holds an inconsistent Monte Carlo truth: " + e.problem());
     }
   } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(path.string(), std::string("is malformed: ") + e.what());
-  } catch (const Error& e) {
+    common::ThrowFormatError(path.string(), std::string("is malformed: ") + e.what());
+  } catch (const common::Error& e) {
     // An NDF the factory rejects is bad input from this file.
-    if (e.kind() != ErrorKind::kInvalidInput) throw;
-    ThrowFormatError(path.string(), "names an invalid slab interface: " + e.problem());
+    if (e.kind() != common::ErrorKind::kInvalidInput) throw;
+    common::ThrowFormatError(path.string(), "names an invalid slab interface: " + e.problem());
   }
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

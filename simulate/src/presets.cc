@@ -2,7 +2,7 @@
 
 #include "svbtdf/common/error.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 namespace {
 
 // The paper's geometry (camera 1 m from the sample centre at 45 degrees, monitor 4 cm behind an
@@ -22,10 +22,10 @@ RigConfig PaperGeometry(int width, int height, double f, int sensor_width, int s
   rig.intrinsics.cy = (height - 1) / 2.0 - 0.009 * height;
   // A long lens: mild barrel distortion and a little decentring.
   rig.intrinsics.distortion = {-0.12, 0.4, 0.0004, -0.0003, 0.0};
-  rig.pose = RigConfig::PaperPose(1.0, kPi / 4.0);
+  rig.pose = RigConfig::PaperPose(1.0, model::kPi / 4.0);
   // The grid is shifted away from the camera by d cos(theta); the monitor is centred on the
   // straight-through point d tan(theta) behind the sample centre, so that the grid fits.
-  rig.monitor.centre = Vec2(0.0, 0.04);
+  rig.monitor.centre = model::Vec2(0.0, 0.04);
   return rig;
 }
 
@@ -151,8 +151,8 @@ SimulationPreset MakePreset(const std::string& name) {
   if (name == "small") return Small();
   if (name == "demo") return Demo();
   if (name == "grid-sheet" || name == "leaf-glass" || name == "rice-paper") return PaperScale(name);
-  ThrowInvalidInput("--preset", "unknown preset '" + name + "'",
+  common::ThrowInvalidInput("--preset", "unknown preset '" + name + "'",
                     "use one of tiny, small, demo, grid-sheet, leaf-glass, rice-paper");
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

@@ -16,7 +16,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/random.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 namespace {
 
 // A counter-based random stream: SplitMix64 over a key made from (seed, stream, pixel), so that
@@ -24,11 +24,11 @@ namespace {
 class PixelRandom {
  public:
   PixelRandom(uint64_t seed, uint64_t stream, uint64_t pixel)
-      : state_(SplitMix64(SplitMix64(SplitMix64(seed) ^ stream) ^ pixel)) {}
+      : state_(common::SplitMix64(common::SplitMix64(common::SplitMix64(seed) ^ stream) ^ pixel)) {}
 
   double Uniform() {
     state_ += 0x9e3779b97f4a7c15ULL;
-    return static_cast<double>(SplitMix64(state_) >> 11) * 0x1.0p-53;
+    return static_cast<double>(common::SplitMix64(state_) >> 11) * 0x1.0p-53;
   }
   // Box-Muller, both of its outputs used.
   double Gaussian() {
@@ -39,9 +39,9 @@ class PixelRandom {
     const double u1 = 1.0 - Uniform();  // (0, 1]
     const double u2 = Uniform();
     const double radius = std::sqrt(-2.0 * std::log(u1));
-    spare_ = radius * std::sin(kTwoPi * u2);
+    spare_ = radius * std::sin(model::kTwoPi * u2);
     has_spare_ = true;
-    return radius * std::cos(kTwoPi * u2);
+    return radius * std::cos(model::kTwoPi * u2);
   }
   // Poisson(mean): exact multiplication method for small means, the normal approximation with
   // the exact variance above 64 electrons (its error is far below the read noise there).
@@ -71,12 +71,12 @@ double SrgbEncode(double v) {
 // Radon's 7-point rule on the unit disk (degree 5): the centre with weight 1/4 and six points at
 // radius sqrt(2/3) with weight 1/8 each (weights sum to 1: they average over the disk).
 constexpr int kRadonPoints = 7;
-const std::array<Vec2, kRadonPoints>& RadonNodes() {
-  static const std::array<Vec2, kRadonPoints> nodes = [] {
-    std::array<Vec2, kRadonPoints> n;
-    n[0] = Vec2::Zero();
+const std::array<model::Vec2, kRadonPoints>& RadonNodes() {
+  static const std::array<model::Vec2, kRadonPoints> nodes = [] {
+    std::array<model::Vec2, kRadonPoints> n;
+    n[0] = model::Vec2::Zero();
     const double r = std::sqrt(2.0 / 3.0);
-    for (int k = 0; k < 6; ++k) n[k + 1] = r * Vec2(std::cos(k * kPi / 3), std::sin(k * kPi / 3));
+    for (int k = 0; k < 6; ++k) n[k + 1] = r * model::Vec2(std::cos(k * model::kPi / 3), std::sin(k * model::kPi / 3));
     return n;
   }();
   return nodes;
@@ -95,7 +95,7 @@ RigRenderer::RigRenderer(const Rig& rig, const SpatialBtdf* material, int thread
   if (material_) {
     const SampleConfig& s = rig_.config().sample;
     if (material_->texels_x() != s.texels_x || material_->texels_y() != s.texels_y) {
-      ThrowInvalidInput("truth material", "has " + std::to_string(material_->texels_x()) + " x " +
+      common::ThrowInvalidInput("truth material", "has " + std::to_string(material_->texels_x()) + " x " +
                         std::to_string(material_->texels_y()) + " texels, the rig's sample " +
                         std::to_string(s.texels_x) + " x " + std::to_string(s.texels_y));
     }
@@ -108,7 +108,7 @@ void RigRenderer::PrecomputeGroups() {
   const CameraIntrinsics& k = rig_.config().intrinsics;
   const int n = rig_.config().pixel_samples;
   std::vector<std::vector<Group>> rows(k.height);
-  ParallelFor(k.height, threads_, 4, [&](int begin, int end) {
+  common::ParallelFor(k.height, threads_, 4, [&](int begin, int end) {
     for (int y = begin; y < end; ++y) {
       std::vector<Group>& out = rows[y];
       for (int x = 0; x < k.width; ++x) {
@@ -116,8 +116,8 @@ void RigRenderer::PrecomputeGroups() {
         std::vector<std::pair<int, std::array<double, 3>>> found;  // texel -> (count, sx, sy)
         for (int sy = 0; sy < n; ++sy) {
           for (int sx = 0; sx < n; ++sx) {
-            const Vec2 pixel(x + SubSample(sx, n), y + SubSample(sy, n));
-            const std::optional<Vec3> hit = rig_.SampleHit(pixel);
+            const model::Vec2 pixel(x + SubSample(sx, n), y + SubSample(sy, n));
+            const std::optional<model::Vec3> hit = rig_.SampleHit(pixel);
             if (!hit) continue;
             const auto texel = rig_.TexelAt(*hit);
             const int index = material_->Index((*texel)[0], (*texel)[1]);
@@ -159,23 +159,23 @@ void RigRenderer::PrecomputeBackground() {
   constexpr int kPatchesX = 48, kPatchesY = 32;
   const double patch_w = m.width / kPatchesX, patch_h = m.height / kPatchesY;
   const double patch_intensity = m.white_exitance * m.Luminance(0.0) * patch_w * patch_h;
-  const Vec3 camera = rig_.camera().Centre();
+  const model::Vec3 camera = rig_.camera().Centre();
   background_.assign(groups_.size() * 3, 0.f);
-  ParallelFor(static_cast<int>(groups_.size()), threads_, 256, [&](int begin, int end) {
+  common::ParallelFor(static_cast<int>(groups_.size()), threads_, 256, [&](int begin, int end) {
     for (int g = begin; g < end; ++g) {
       const Group& group = groups_[g];
-      const Vec3 x(group.x, group.y, 0.0);
-      const Vec3 o = (camera - x).normalized();
-      Vec3 sum = Vec3::Zero();
+      const model::Vec3 x(group.x, group.y, 0.0);
+      const model::Vec3 o = (camera - x).normalized();
+      model::Vec3 sum = model::Vec3::Zero();
       for (int py = 0; py < kPatchesY; ++py) {
         for (int px = 0; px < kPatchesX; ++px) {
-          const Vec3 p = frame.PointAt(Vec2((px + 0.5) * frame.width_px / kPatchesX, (py + 0.5) * frame.height_px / kPatchesY));
-          const Vec3 to_light = p - x;
+          const model::Vec3 p = frame.PointAt(model::Vec2((px + 0.5) * frame.width_px / kPatchesX, (py + 0.5) * frame.height_px / kPatchesY));
+          const model::Vec3 to_light = p - x;
           const double r2 = to_light.squaredNorm();
-          const Vec3 i = to_light / std::sqrt(r2);
+          const model::Vec3 i = to_light / std::sqrt(r2);
           const double intensity = patch_intensity * m.emission(-frame.normal.dot(i));
-          const Rgb rgb = material_->Evaluate(group.texel, i, o);
-          sum += Vec3(rgb[0], rgb[1], rgb[2]) * (std::abs(i.z()) * intensity / r2);
+          const model::Rgb rgb = material_->Evaluate(group.texel, i, o);
+          sum += model::Vec3(rgb[0], rgb[1], rgb[2]) * (std::abs(i.z()) * intensity / r2);
         }
       }
       for (int c = 0; c < 3; ++c) background_[3 * g + c] = static_cast<float>(sum[c]);
@@ -183,35 +183,35 @@ void RigRenderer::PrecomputeBackground() {
   });
 }
 
-Vec3 RigRenderer::DotRadianceAt(const Dot& dot, const Group& group) const {
-  const Vec3 x(group.x, group.y, 0.0);
-  const Vec3 o = (rig_.camera().Centre() - x).normalized();
+model::Vec3 RigRenderer::DotRadianceAt(const Dot& dot, const Group& group) const {
+  const model::Vec3 x(group.x, group.y, 0.0);
+  const model::Vec3 o = (rig_.camera().Centre() - x).normalized();
   const EmissionProfile& profile = rig_.config().monitor.emission;
   const MonitorFrame& frame = rig_.monitor_frame();
   const double angular_radius = dot.radius / (dot.position - x).norm();
   const bool point = angular_radius < 0.1 * material_->MinRoughness(group.texel);
-  Vec3 sum = Vec3::Zero();
+  model::Vec3 sum = model::Vec3::Zero();
   const int points = point ? 1 : kRadonPoints;
   for (int k = 0; k < points; ++k) {
-    const Vec3 p = dot.position + dot.radius * (RadonNodes()[k].x() * frame.right + RadonNodes()[k].y() * frame.down);
-    const Vec3 to_light = p - x;
+    const model::Vec3 p = dot.position + dot.radius * (RadonNodes()[k].x() * frame.right + RadonNodes()[k].y() * frame.down);
+    const model::Vec3 to_light = p - x;
     const double r2 = to_light.squaredNorm();
-    const Vec3 i = to_light / std::sqrt(r2);
+    const model::Vec3 i = to_light / std::sqrt(r2);
     const double intensity = dot.intensity * (point ? 1.0 : kRadonWeights[k]) * profile(-frame.normal.dot(i));
-    const Rgb rgb = material_->Evaluate(group.texel, i, o);
-    sum += Vec3(rgb[0], rgb[1], rgb[2]) * (std::abs(i.z()) * intensity / r2);
+    const model::Rgb rgb = material_->Evaluate(group.texel, i, o);
+    sum += model::Vec3(rgb[0], rgb[1], rgb[2]) * (std::abs(i.z()) * intensity / r2);
   }
   return sum;
 }
 
-void RigRenderer::RenderDot(const Dot& dot, FloatImage* radiance) const {
-  if (!material_) ThrowInvalidInput("renderer", "dot images need a truth material");
+void RigRenderer::RenderDot(const Dot& dot, common::FloatImage* radiance) const {
+  if (!material_) common::ThrowInvalidInput("renderer", "dot images need a truth material");
   const CameraIntrinsics& k = rig_.config().intrinsics;
-  *radiance = FloatImage(k.width, k.height, 3);
-  ParallelFor(k.height, threads_, 8, [&](int begin, int end) {
+  *radiance = common::FloatImage(k.width, k.height, 3);
+  common::ParallelFor(k.height, threads_, 8, [&](int begin, int end) {
     for (size_t g = row_begin_[begin]; g < row_begin_[end]; ++g) {
       const Group& group = groups_[g];
-      const Vec3 value = group.weight * DotRadianceAt(dot, group);
+      const model::Vec3 value = group.weight * DotRadianceAt(dot, group);
       float* out = &radiance->pixels[size_t(group.pixel) * 3];
       for (int c = 0; c < 3; ++c) {
         out[c] += static_cast<float>(value[c]) +
@@ -221,13 +221,13 @@ void RigRenderer::RenderDot(const Dot& dot, FloatImage* radiance) const {
   });
 }
 
-void RigRenderer::RenderAllDots(FloatImage* radiance) const {
+void RigRenderer::RenderAllDots(common::FloatImage* radiance) const {
   std::vector<int> all(rig_.dots().size());
   for (size_t q = 0; q < all.size(); ++q) all[q] = static_cast<int>(q);
   RenderDotSet(all, radiance);
 }
 
-void RigRenderer::RenderDotSet(const std::vector<int>& lit, FloatImage* radiance) const {
+void RigRenderer::RenderDotSet(const std::vector<int>& lit, common::FloatImage* radiance) const {
   const MonitorConfig& m = rig_.config().monitor;
   const MonitorFrame& frame = rig_.monitor_frame();
   const double radius_px = rig_.config().dots.radius_px;
@@ -238,8 +238,8 @@ void RigRenderer::RenderDotSet(const std::vector<int>& lit, FloatImage* radiance
   const double off = m.white_exitance * m.Luminance(0.0);
   const int reach = static_cast<int>(std::ceil(radius_px)) + 1;
   // Nearby lookups scan a small window of monitor pixels around the hit.
-  auto exitance = [&](const Vec3& p) -> double {
-    const Vec2 uv = frame.PixelCoordinates(p);
+  auto exitance = [&](const model::Vec3& p) -> double {
+    const model::Vec2 uv = frame.PixelCoordinates(p);
     if (!frame.InActiveArea(uv)) return 0.0;
     const int ux = static_cast<int>(uv.x()), uy = static_cast<int>(uv.y());
     for (int dy = -reach; dy <= reach; ++dy) {
@@ -255,30 +255,30 @@ void RigRenderer::RenderDotSet(const std::vector<int>& lit, FloatImage* radiance
   RenderMonitor(exitance, radiance);
 }
 
-void RigRenderer::RenderFlatField(double level, FloatImage* radiance) const {
+void RigRenderer::RenderFlatField(double level, common::FloatImage* radiance) const {
   const MonitorConfig& m = rig_.config().monitor;
   const MonitorFrame& frame = rig_.monitor_frame();
   const double exitance = m.white_exitance * m.Luminance(level);
-  RenderMonitor([&](const Vec3& p) { return frame.InActiveArea(frame.PixelCoordinates(p)) ? exitance : 0.0; },
+  RenderMonitor([&](const model::Vec3& p) { return frame.InActiveArea(frame.PixelCoordinates(p)) ? exitance : 0.0; },
                 radiance);
 }
 
-void RigRenderer::RenderMonitor(const std::function<double(const Vec3&)>& exitance, FloatImage* radiance) const {
+void RigRenderer::RenderMonitor(const std::function<double(const model::Vec3&)>& exitance, common::FloatImage* radiance) const {
   const MonitorConfig& m = rig_.config().monitor;
   const MonitorFrame& frame = rig_.monitor_frame();
   const CameraIntrinsics& k = rig_.config().intrinsics;
   const int n = rig_.config().board_samples;
-  const Vec3 camera = rig_.camera().Centre();
-  *radiance = FloatImage(k.width, k.height, 3);
-  ParallelFor(k.height, threads_, 4, [&](int begin, int end) {
+  const model::Vec3 camera = rig_.camera().Centre();
+  *radiance = common::FloatImage(k.width, k.height, 3);
+  common::ParallelFor(k.height, threads_, 4, [&](int begin, int end) {
     for (int y = begin; y < end; ++y) {
       for (int x = 0; x < k.width; ++x) {
         double sum = 0.0;
         for (int sy = 0; sy < n; ++sy) {
           for (int sx = 0; sx < n; ++sx) {
-            const auto ray = rig_.camera().PixelRay(Vec2(x + SubSample(sx, n), y + SubSample(sy, n)));
+            const auto ray = rig_.camera().PixelRay(model::Vec2(x + SubSample(sx, n), y + SubSample(sy, n)));
             if (!ray) continue;
-            const std::optional<Vec3> p = frame.Intersect(camera, *ray);
+            const std::optional<model::Vec3> p = frame.Intersect(camera, *ray);
             const double cos_e = -frame.normal.dot(*ray);
             if (!p || !(cos_e > 0.0)) continue;
             // Radiance of an emitter of radiant intensity per area I P(theta_e): I P / cos.
@@ -299,23 +299,23 @@ namespace {
 // sees a single reflectance.
 class BoardPattern {
  public:
-  BoardPattern(const BoardPose& pose, const BoardConfig& board, const Vec3& eye)
+  BoardPattern(const BoardPose& pose, const BoardConfig& board, const model::Vec3& eye)
       : pose_(pose), board_(board), eye_(eye), normal_(pose.rotation.col(2)) {}
 
   static constexpr double kTable = 0.12;  // reflectance of the table around the board
 
   // Board coordinates in square units where the ray from the eye meets the board's plane;
   // nullopt when it does not (the table is seen).
-  std::optional<Vec2> Hit(const std::optional<Vec3>& ray) const {
+  std::optional<model::Vec2> Hit(const std::optional<model::Vec3>& ray) const {
     const double denominator = ray ? normal_.dot(*ray) : 0.0;
     if (std::abs(denominator) < 1e-12) return std::nullopt;
     const double t = normal_.dot(pose_.translation - eye_) / denominator;
     if (t <= 0.0) return std::nullopt;
-    const Vec3 local = pose_.rotation.transpose() * (eye_ + t * (*ray) - pose_.translation);
-    return Vec2(local.x(), local.y()) / board_.square;
+    const model::Vec3 local = pose_.rotation.transpose() * (eye_ + t * (*ray) - pose_.translation);
+    return model::Vec2(local.x(), local.y()) / board_.square;
   }
 
-  double Reflectance(const std::optional<Vec2>& uv) const {
+  double Reflectance(const std::optional<model::Vec2>& uv) const {
     if (!uv) return kTable;
     const double u = uv->x(), v = uv->y();
     if (u < -2.0 || v < -2.0 || u > board_.inner_cols + 1.0 || v > board_.inner_rows + 1.0) return kTable;
@@ -326,7 +326,7 @@ class BoardPattern {
 
   // True when the four corners of a pixel's footprint lie in one unit cell: the cell is convex,
   // so the whole (nearly straight-edged) footprint does.
-  static bool OneCell(const std::array<std::optional<Vec2>, 4>& corners) {
+  static bool OneCell(const std::array<std::optional<model::Vec2>, 4>& corners) {
     for (const auto& c : corners) {
       if (!c) return false;
     }
@@ -340,36 +340,36 @@ class BoardPattern {
  private:
   const BoardPose& pose_;
   const BoardConfig& board_;
-  Vec3 eye_;
-  Vec3 normal_;
+  model::Vec3 eye_;
+  model::Vec3 normal_;
 };
 
 }  // namespace
 
-void RigRenderer::RenderZhangBoard(const BoardPose& board, FloatImage* radiance) const {
+void RigRenderer::RenderZhangBoard(const BoardPose& board, common::FloatImage* radiance) const {
   RenderBoard(board, rig_.config().board, rig_.sensor_camera(), radiance);
 }
 
-void RigRenderer::RenderHolderBoard(const BoardPose& board, FloatImage* radiance) const {
+void RigRenderer::RenderHolderBoard(const BoardPose& board, common::FloatImage* radiance) const {
   RenderBoard(board, rig_.config().holder_board, rig_.camera(), radiance);
 }
 
 void RigRenderer::RenderBoard(const BoardPose& board, const BoardConfig& config, const PinholeCamera& camera,
-                              FloatImage* radiance) const {
+                              common::FloatImage* radiance) const {
   const CameraIntrinsics& k = camera.intrinsics();
   const int n = rig_.config().board_samples;
   const BoardPattern pattern(board, config, camera.Centre());
-  const auto hit = [&](double x, double y) { return pattern.Hit(camera.PixelRay(Vec2(x, y))); };
-  *radiance = FloatImage(k.width, k.height, 3);
-  ParallelFor(k.height, threads_, 4, [&](int begin, int end) {
+  const auto hit = [&](double x, double y) { return pattern.Hit(camera.PixelRay(model::Vec2(x, y))); };
+  *radiance = common::FloatImage(k.width, k.height, 3);
+  common::ParallelFor(k.height, threads_, 4, [&](int begin, int end) {
     // Board coordinates of the pixel corners above and below the current row.
-    std::vector<std::optional<Vec2>> top(k.width + 1), bottom(k.width + 1);
+    std::vector<std::optional<model::Vec2>> top(k.width + 1), bottom(k.width + 1);
     for (int x = 0; x <= k.width; ++x) top[x] = hit(x - 0.5, begin - 0.5);
     for (int y = begin; y < end; ++y) {
       for (int x = 0; x <= k.width; ++x) bottom[x] = hit(x - 0.5, y + 0.5);
       for (int x = 0; x < k.width; ++x) {
         double reflectance = 0.0;
-        const std::array<std::optional<Vec2>, 4> corners = {top[x], top[x + 1], bottom[x], bottom[x + 1]};
+        const std::array<std::optional<model::Vec2>, 4> corners = {top[x], top[x + 1], bottom[x], bottom[x + 1]};
         if (BoardPattern::OneCell(corners)) {
           reflectance = pattern.Reflectance(top[x]);  // the cell's, wherever in it
         } else if (corners[0] && corners[1] && corners[2] && corners[3]) {
@@ -377,8 +377,8 @@ void RigRenderer::RenderBoard(const BoardPose& board, const BoardConfig& config,
           // thousandth of a pixel: the sub-samples' board points interpolate the corners'.
           for (int sy = 0; sy < n; ++sy) {
             const double fy = SubSample(sy, n) + 0.5;
-            const Vec2 left = (1 - fy) * *corners[0] + fy * *corners[2];
-            const Vec2 right = (1 - fy) * *corners[1] + fy * *corners[3];
+            const model::Vec2 left = (1 - fy) * *corners[0] + fy * *corners[2];
+            const model::Vec2 right = (1 - fy) * *corners[1] + fy * *corners[3];
             for (int sx = 0; sx < n; ++sx) {
               const double fx = SubSample(sx, n) + 0.5;
               reflectance += pattern.Reflectance((1 - fx) * left + fx * right);
@@ -399,10 +399,10 @@ void RigRenderer::RenderBoard(const BoardPose& board, const BoardConfig& config,
   });
 }
 
-std::vector<Vec3> BoardCorners(const BoardPose& pose, const BoardConfig& board) {
-  std::vector<Vec3> corners;
+std::vector<model::Vec3> BoardCorners(const BoardPose& pose, const BoardConfig& board) {
+  std::vector<model::Vec3> corners;
   for (int j = 0; j < board.inner_rows; ++j) {
-    for (int i = 0; i < board.inner_cols; ++i) corners.push_back(pose.ToWorld(Vec2(i, j) * board.square));
+    for (int i = 0; i < board.inner_cols; ++i) corners.push_back(pose.ToWorld(model::Vec2(i, j) * board.square));
   }
   return corners;
 }
@@ -412,8 +412,8 @@ BoardPose RigRenderer::HolderBoardPose() const {
   BoardPose pose;
   // Board x along world x, board y along world -y, so that the board faces the camera (+z) with
   // a right-handed frame whose z points down into the plane: rotation = diag(1, -1, -1).
-  pose.rotation = Vec3(1.0, -1.0, -1.0).asDiagonal();
-  pose.translation = Vec3(-(b.inner_cols - 1) * b.square / 2, (b.inner_rows - 1) * b.square / 2, 0.0);
+  pose.rotation = model::Vec3(1.0, -1.0, -1.0).asDiagonal();
+  pose.translation = model::Vec3(-(b.inner_cols - 1) * b.square / 2, (b.inner_rows - 1) * b.square / 2, 0.0);
   return pose;
 }
 
@@ -424,37 +424,37 @@ std::vector<BoardPose> RigRenderer::ZhangBoardPoses(int views, uint64_t seed) co
   const CameraPose& camera_pose = camera.pose();
   const double distance = rig_.camera().Centre().norm();
   // The board's outline including its white margin: this much must be in view.
-  const std::array<Vec2, 4> outline = {Vec2(-2, -2) * b.square,
-                                       Vec2(b.inner_cols + 1, -2) * b.square,
-                                       Vec2(b.inner_cols + 1, b.inner_rows + 1) * b.square,
-                                       Vec2(-2, b.inner_rows + 1) * b.square};
-  const Vec2 board_centre = Vec2(b.inner_cols - 1, b.inner_rows - 1) * b.square / 2.0;
+  const std::array<model::Vec2, 4> outline = {model::Vec2(-2, -2) * b.square,
+                                       model::Vec2(b.inner_cols + 1, -2) * b.square,
+                                       model::Vec2(b.inner_cols + 1, b.inner_rows + 1) * b.square,
+                                       model::Vec2(-2, b.inner_rows + 1) * b.square};
+  const model::Vec2 board_centre = model::Vec2(b.inner_cols - 1, b.inner_rows - 1) * b.square / 2.0;
   std::vector<BoardPose> poses;
   PixelRandom random(seed, 0x626f617264ULL, 0);
   for (int view = 0; view < views; ++view) {
     bool placed = false;
     for (int attempt = 0; attempt < 200 && !placed; ++attempt) {
       const double shrink = 1.0 - attempt / 200.0;  // fall back toward fronto-parallel, centred
-      const double tilt = shrink * (20.0 + 20.0 * random.Uniform()) * kPi / 180.0;
-      const double axis_angle = kTwoPi * (view + 0.3 * random.Uniform()) / views;
-      const double spin = shrink * (random.Uniform() - 0.5) * 40.0 * kPi / 180.0;
-      const Vec3 axis(std::cos(axis_angle), std::sin(axis_angle), 0.0);
+      const double tilt = shrink * (20.0 + 20.0 * random.Uniform()) * model::kPi / 180.0;
+      const double axis_angle = model::kTwoPi * (view + 0.3 * random.Uniform()) / views;
+      const double spin = shrink * (random.Uniform() - 0.5) * 40.0 * model::kPi / 180.0;
+      const model::Vec3 axis(std::cos(axis_angle), std::sin(axis_angle), 0.0);
       // In camera coordinates: the board faces the camera (board z along the optical axis),
       // tilted about an in-plane axis and spun about its normal.
-      const Mat3 in_camera = Eigen::AngleAxisd(tilt, axis).toRotationMatrix() *
-                             Eigen::AngleAxisd(spin, Vec3::UnitZ()).toRotationMatrix();
-      const Vec2 offset_px((random.Uniform() - 0.5) * 0.3 * shrink * k.width,
+      const model::Mat3 in_camera = Eigen::AngleAxisd(tilt, axis).toRotationMatrix() *
+                             Eigen::AngleAxisd(spin, model::Vec3::UnitZ()).toRotationMatrix();
+      const model::Vec2 offset_px((random.Uniform() - 0.5) * 0.3 * shrink * k.width,
                            (random.Uniform() - 0.5) * 0.3 * shrink * k.height);
       const double depth = distance * (0.9 + 0.2 * random.Uniform());
-      const Vec3 centre_cam((k.cx + offset_px.x() - k.cx) / k.fx * depth,
+      const model::Vec3 centre_cam((k.cx + offset_px.x() - k.cx) / k.fx * depth,
                             (k.cy + offset_px.y() - k.cy) / k.fy * depth, depth);
       BoardPose pose;
       pose.rotation = camera_pose.rotation.transpose() * in_camera;
-      const Vec3 centre_world = camera_pose.rotation.transpose() * (centre_cam - camera_pose.translation);
-      pose.translation = centre_world - pose.rotation * Vec3(board_centre.x(), board_centre.y(), 0.0);
+      const model::Vec3 centre_world = camera_pose.rotation.transpose() * (centre_cam - camera_pose.translation);
+      pose.translation = centre_world - pose.rotation * model::Vec3(board_centre.x(), board_centre.y(), 0.0);
       placed = true;
-      for (const Vec2& corner : outline) {
-        const std::optional<Vec2> px = camera.Project(pose.ToWorld(corner));
+      for (const model::Vec2& corner : outline) {
+        const std::optional<model::Vec2> px = camera.Project(pose.ToWorld(corner));
         if (!px || px->x() < 2 || px->y() < 2 || px->x() > k.width - 3 || px->y() > k.height - 3) {
           placed = false;
           break;
@@ -463,7 +463,7 @@ std::vector<BoardPose> RigRenderer::ZhangBoardPoses(int views, uint64_t seed) co
       if (placed) poses.push_back(pose);
     }
     if (!placed) {
-      ThrowInvalidInput("board", "a " + std::to_string(b.inner_cols) + " x " +
+      common::ThrowInvalidInput("board", "a " + std::to_string(b.inner_cols) + " x " +
                         std::to_string(b.inner_rows) + " board of " +
                         std::to_string(b.square * 1000) + " mm squares does not fit in the camera's view",
                         "use smaller squares (board.square) or a wider sensor (window)");
@@ -472,18 +472,18 @@ std::vector<BoardPose> RigRenderer::ZhangBoardPoses(int views, uint64_t seed) co
   return poses;
 }
 
-double RigRenderer::Vignetting(const Vec2& pixel) const {
+double RigRenderer::Vignetting(const model::Vec2& pixel) const {
   const CameraIntrinsics& k = rig_.config().intrinsics;
   const double half_diagonal = 0.5 * std::hypot(k.width, k.height);
-  const double r2 = (Square(pixel.x() - k.cx) + Square(pixel.y() - k.cy)) / Square(half_diagonal);
+  const double r2 = (model::Square(pixel.x() - k.cx) + model::Square(pixel.y() - k.cy)) / model::Square(half_diagonal);
   return 1.0 / (1.0 + rig_.config().sensor.vignetting * r2);
 }
 
-double RigRenderer::MeanElectrons(double radiance, const Vec2& pixel, double exposure_s) const {
+double RigRenderer::MeanElectrons(double radiance, const model::Vec2& pixel, double exposure_s) const {
   return MeanElectrons(radiance, ElectronsPerRadiance(pixel, exposure_s), exposure_s);
 }
 
-double RigRenderer::ElectronsPerRadiance(const Vec2& pixel, double exposure_s) const {
+double RigRenderer::ElectronsPerRadiance(const model::Vec2& pixel, double exposure_s) const {
   return exposure_s * rig_.config().sensor.sensitivity * Vignetting(pixel);
 }
 
@@ -491,10 +491,10 @@ double RigRenderer::MeanElectrons(double radiance, double electrons_per_radiance
   return radiance * electrons_per_radiance + rig_.config().sensor.dark_current * exposure_s;
 }
 
-CameraImage RigRenderer::Expose(const FloatImage& radiance, double exposure_s, uint64_t seed, uint64_t stream,
-                                const Vec2& window_origin) const {
+common::CameraImage RigRenderer::Expose(const common::FloatImage& radiance, double exposure_s, uint64_t seed, uint64_t stream,
+                                const model::Vec2& window_origin) const {
   const SensorConfig& s = rig_.config().sensor;
-  CameraImage out;
+  common::CameraImage out;
   out.width = radiance.width;
   out.height = radiance.height;
   out.channels = radiance.channels;
@@ -502,12 +502,12 @@ CameraImage RigRenderer::Expose(const FloatImage& radiance, double exposure_s, u
   out.pixels.assign(radiance.pixels.size(), 0);
   const double max_value = std::ldexp(1.0, s.bit_depth) - 1.0;
   const bool srgb = s.response == "srgb";
-  ParallelFor(radiance.height, threads_, 16, [&](int begin, int end) {
+  common::ParallelFor(radiance.height, threads_, 16, [&](int begin, int end) {
     for (int y = begin; y < end; ++y) {
       for (int x = 0; x < radiance.width; ++x) {
         const uint64_t pixel = uint64_t(y) * radiance.width + x;
         PixelRandom random(seed, stream, pixel);
-        const double gain = ElectronsPerRadiance(window_origin + Vec2(x, y), exposure_s);  // once per pixel
+        const double gain = ElectronsPerRadiance(window_origin + model::Vec2(x, y), exposure_s);  // once per pixel
         for (int c = 0; c < radiance.channels; ++c) {
           const double mean = MeanElectrons(radiance.at(x, y, c), gain, exposure_s);
           double electrons = s.shot_noise ? random.Poisson(mean) : mean;
@@ -524,17 +524,17 @@ CameraImage RigRenderer::Expose(const FloatImage& radiance, double exposure_s, u
 }
 
 double RigRenderer::ProbePeakRadiance() const {
-  if (!material_) ThrowInvalidInput("renderer", "the probe needs a truth material");
+  if (!material_) common::ThrowInvalidInput("renderer", "the probe needs a truth material");
   // The dot nearest to where the view of the sample centre goes on, straight through it.
-  const Vec3 camera = rig_.camera().Centre();
-  const Vec3 straight = rig_.monitor_frame().Intersect(camera, -camera.normalized()).value_or(Vec3::Zero());
+  const model::Vec3 camera = rig_.camera().Centre();
+  const model::Vec3 straight = rig_.monitor_frame().Intersect(camera, -camera.normalized()).value_or(model::Vec3::Zero());
   const Dot* best = &rig_.dots().front();
   for (const Dot& dot : rig_.dots()) {
     if ((dot.position - straight).norm() < (best->position - straight).norm()) best = &dot;
   }
-  FloatImage image;
+  common::FloatImage image;
   RenderDot(*best, &image);
   return *std::max_element(image.pixels.begin(), image.pixels.end());
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

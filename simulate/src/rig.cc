@@ -6,7 +6,7 @@
 
 #include "svbtdf/common/error.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 namespace {
 
 std::string Fmt(double value) {
@@ -17,20 +17,20 @@ std::string Fmt(double value) {
 
 void RequirePositive(double value, const std::string& name) {
   if (!(value > 0.0) || !std::isfinite(value)) {
-    ThrowInvalidInput(name, "must be a positive finite number, got " + Fmt(value));
+    common::ThrowInvalidInput(name, "must be a positive finite number, got " + Fmt(value));
   }
 }
 
 }  // namespace
 
-CameraPose CameraPose::LookAt(const Vec3& eye, const Vec3& target, const Vec3& up_hint) {
-  const Vec3 forward = (target - eye).normalized();
-  const Vec3 right = forward.cross(up_hint);
+CameraPose CameraPose::LookAt(const model::Vec3& eye, const model::Vec3& target, const model::Vec3& up_hint) {
+  const model::Vec3 forward = (target - eye).normalized();
+  const model::Vec3 right = forward.cross(up_hint);
   if (right.norm() < 1e-9) {
-    ThrowInvalidInput("camera pose", "the up hint is parallel to the viewing direction");
+    common::ThrowInvalidInput("camera pose", "the up hint is parallel to the viewing direction");
   }
-  const Vec3 x = right.normalized();
-  const Vec3 y = forward.cross(x);  // image down
+  const model::Vec3 x = right.normalized();
+  const model::Vec3 y = forward.cross(x);  // image down
   CameraPose pose;
   pose.rotation.row(0) = x;
   pose.rotation.row(1) = y;
@@ -42,7 +42,7 @@ CameraPose CameraPose::LookAt(const Vec3& eye, const Vec3& target, const Vec3& u
 PinholeCamera::PinholeCamera(CameraIntrinsics intrinsics, CameraPose pose)
     : intrinsics_(intrinsics), pose_(pose), centre_(pose.Centre()) {}
 
-Vec2 PinholeCamera::Distort(const Vec2& p) const {
+model::Vec2 PinholeCamera::Distort(const model::Vec2& p) const {
   const auto& d = intrinsics_.distortion;
   const double x = p.x(), y = p.y();
   const double r2 = x * x + y * y;
@@ -51,9 +51,9 @@ Vec2 PinholeCamera::Distort(const Vec2& p) const {
           y * radial + d[2] * (r2 + 2.0 * y * y) + 2.0 * d[3] * x * y};
 }
 
-std::optional<Vec2> PinholeCamera::Undistort(const Vec2& distorted) const {
+std::optional<model::Vec2> PinholeCamera::Undistort(const model::Vec2& distorted) const {
   const auto& d = intrinsics_.distortion;
-  Vec2 p = distorted;
+  model::Vec2 p = distorted;
   for (int iteration = 0; iteration < 50; ++iteration) {
     const double x = p.x(), y = p.y();
     const double r2 = x * x + y * y;
@@ -64,7 +64,7 @@ std::optional<Vec2> PinholeCamera::Undistort(const Vec2& distorted) const {
     jacobian(0, 1) = 2.0 * x * y * dradial + 2.0 * d[2] * x + 2.0 * d[3] * y;
     jacobian(1, 0) = 2.0 * x * y * dradial + 2.0 * d[2] * x + 2.0 * d[3] * y;
     jacobian(1, 1) = radial + 2.0 * y * y * dradial + 6.0 * d[2] * y + 2.0 * d[3] * x;
-    const Vec2 residual = Distort(p) - distorted;
+    const model::Vec2 residual = Distort(p) - distorted;
     if (residual.norm() < 1e-14) return p;
     const double det = jacobian.determinant();
     if (!(std::abs(det) > 1e-12)) return std::nullopt;
@@ -75,19 +75,19 @@ std::optional<Vec2> PinholeCamera::Undistort(const Vec2& distorted) const {
   return std::nullopt;
 }
 
-std::optional<Vec2> PinholeCamera::Project(const Vec3& world) const {
-  const Vec3 c = pose_.rotation * world + pose_.translation;
+std::optional<model::Vec2> PinholeCamera::Project(const model::Vec3& world) const {
+  const model::Vec3 c = pose_.rotation * world + pose_.translation;
   if (!(c.z() > 0.0)) return std::nullopt;
-  const Vec2 q = Distort(Vec2(c.x() / c.z(), c.y() / c.z()));
-  return Vec2(intrinsics_.fx * q.x() + intrinsics_.cx, intrinsics_.fy * q.y() + intrinsics_.cy);
+  const model::Vec2 q = Distort(model::Vec2(c.x() / c.z(), c.y() / c.z()));
+  return model::Vec2(intrinsics_.fx * q.x() + intrinsics_.cx, intrinsics_.fy * q.y() + intrinsics_.cy);
 }
 
-std::optional<Vec3> PinholeCamera::PixelRay(const Vec2& pixel) const {
-  const Vec2 distorted((pixel.x() - intrinsics_.cx) / intrinsics_.fx,
+std::optional<model::Vec3> PinholeCamera::PixelRay(const model::Vec2& pixel) const {
+  const model::Vec2 distorted((pixel.x() - intrinsics_.cx) / intrinsics_.fx,
                        (pixel.y() - intrinsics_.cy) / intrinsics_.fy);
-  const std::optional<Vec2> p = Undistort(distorted);
+  const std::optional<model::Vec2> p = Undistort(distorted);
   if (!p) return std::nullopt;
-  return (pose_.rotation.transpose() * Vec3(p->x(), p->y(), 1.0)).normalized();
+  return (pose_.rotation.transpose() * model::Vec3(p->x(), p->y(), 1.0)).normalized();
 }
 
 double EmissionProfile::operator()(double cos_theta_e) const {
@@ -107,29 +107,29 @@ double NominalOrientationDeg(const MonitorConfig& monitor) {
 }
 
 MonitorFrame MonitorFrame::Of(const MonitorConfig& m) {
-  const double phi = m.orientation_deg * kPi / 180.0, tau = m.tilt_deg * kPi / 180.0;
+  const double phi = m.orientation_deg * model::kPi / 180.0, tau = m.tilt_deg * model::kPi / 180.0;
   // Orientation 0 seen from the sample (from +z): u along +x, v along -y; then turned by phi
   // about z and tilted by tau about x.
-  const Eigen::AngleAxisd turn(phi, Vec3::UnitZ()), tilt(tau, Vec3::UnitX());
+  const Eigen::AngleAxisd turn(phi, model::Vec3::UnitZ()), tilt(tau, model::Vec3::UnitX());
   MonitorFrame f;
-  f.right = tilt * (turn * Vec3::UnitX());
-  f.down = tilt * (turn * -Vec3::UnitY());
-  f.normal = tilt * Vec3::UnitZ();
+  f.right = tilt * (turn * model::Vec3::UnitX());
+  f.down = tilt * (turn * -model::Vec3::UnitY());
+  f.normal = tilt * model::Vec3::UnitZ();
   if (m.mirrored) f.down = -f.down;
   f.pixel_pitch = m.pixel_pitch;
   f.width_px = m.width / m.pixel_pitch;
   f.height_px = m.height / m.pixel_pitch;
-  const Vec3 centre(m.centre.x(), m.centre.y(), -m.distance);
+  const model::Vec3 centre(m.centre.x(), m.centre.y(), -m.distance);
   f.origin = centre - 0.5 * (m.width * f.right + m.height * f.down);
   return f;
 }
 
-Vec2 MonitorFrame::PixelCoordinates(const Vec3& point) const {
-  const Vec3 d = point - origin;
-  return Vec2(d.dot(right), d.dot(down)) / pixel_pitch;
+model::Vec2 MonitorFrame::PixelCoordinates(const model::Vec3& point) const {
+  const model::Vec3 d = point - origin;
+  return model::Vec2(d.dot(right), d.dot(down)) / pixel_pitch;
 }
 
-std::optional<Vec3> MonitorFrame::Intersect(const Vec3& from, const Vec3& direction) const {
+std::optional<model::Vec3> MonitorFrame::Intersect(const model::Vec3& from, const model::Vec3& direction) const {
   const double along = normal.dot(direction);
   if (std::abs(along) < 1e-12) return std::nullopt;
   const double t = normal.dot(origin - from) / along;
@@ -138,8 +138,8 @@ std::optional<Vec3> MonitorFrame::Intersect(const Vec3& from, const Vec3& direct
 }
 
 CameraPose RigConfig::PaperPose(double distance, double theta) {
-  const Vec3 eye(0.0, -distance * std::sin(theta), distance * std::cos(theta));
-  return CameraPose::LookAt(eye, Vec3::Zero(), Vec3::UnitZ());
+  const model::Vec3 eye(0.0, -distance * std::sin(theta), distance * std::cos(theta));
+  return CameraPose::LookAt(eye, model::Vec3::Zero(), model::Vec3::UnitZ());
 }
 
 std::string BoardConfig::Spec() const {
@@ -170,58 +170,58 @@ Rig::Rig(RigConfig config)
 }
 
 double Rig::CameraTheta() const {
-  const Vec3 c = camera_.Centre();
+  const model::Vec3 c = camera_.Centre();
   return std::atan2(c.head<2>().norm(), c.z());
 }
 
 void Rig::Validate() const {
   const CameraIntrinsics& k = config_.intrinsics;
   if (k.width < 8 || k.height < 8) {
-    ThrowInvalidInput("camera.width/height", "the image must be at least 8 x 8 pixels");
+    common::ThrowInvalidInput("camera.width/height", "the image must be at least 8 x 8 pixels");
   }
   RequirePositive(k.fx, "camera.fx");
   RequirePositive(k.fy, "camera.fy");
   for (double v : k.distortion) {
-    if (!std::isfinite(v)) ThrowInvalidInput("camera.distortion", "must be finite");
+    if (!std::isfinite(v)) common::ThrowInvalidInput("camera.distortion", "must be finite");
   }
   if (!config_.pose.rotation.allFinite() || !config_.pose.translation.allFinite() ||
       std::abs(config_.pose.rotation.determinant() - 1.0) > 1e-6) {
-    ThrowInvalidInput("camera pose", "the rotation must be a proper rotation matrix");
+    common::ThrowInvalidInput("camera pose", "the rotation must be a proper rotation matrix");
   }
-  const Vec3 centre = camera_.Centre();
+  const model::Vec3 centre = camera_.Centre();
   if (!(centre.z() > 0.0)) {
-    ThrowInvalidInput("camera pose", "the camera is at z = " + Fmt(centre.z()) +
+    common::ThrowInvalidInput("camera pose", "the camera is at z = " + Fmt(centre.z()) +
                       " m, on or below the sample plane",
                       "the camera must look down at the sample from z > 0 (the monitor is below)");
   }
   const SampleConfig& s = config_.sample;
   RequirePositive(s.width, "sample.width");
-  if (s.texels_x < 1 || s.texels_y < 1) ThrowInvalidInput("sample.texels", "must be >= 1");
+  if (s.texels_x < 1 || s.texels_y < 1) common::ThrowInvalidInput("sample.texels", "must be >= 1");
   // Every corner of the sample must project inside the image (with a half-pixel margin).
   for (double sx : {-0.5, 0.5}) {
     for (double sy : {-0.5, 0.5}) {
-      const Vec3 corner(sx * s.width, sy * s.height(), 0.0);
-      const std::optional<Vec2> px = camera_.Project(corner);
+      const model::Vec3 corner(sx * s.width, sy * s.height(), 0.0);
+      const std::optional<model::Vec2> px = camera_.Project(corner);
       if (!px || px->x() < 0.0 || px->y() < 0.0 || px->x() > k.width - 1.0 ||
           px->y() > k.height - 1.0) {
-        ThrowInvalidInput("camera", "the sample corner (" + Fmt(corner.x()) + ", " +
+        common::ThrowInvalidInput("camera", "the sample corner (" + Fmt(corner.x()) + ", " +
                           Fmt(corner.y()) + ") m is not in view",
                           "move the camera back, lower fx/fy or enlarge the image");
       }
-      const std::optional<Vec3> ray = camera_.PixelRay(*px);
+      const std::optional<model::Vec3> ray = camera_.PixelRay(*px);
       if (!ray || ((*ray) - (corner - centre).normalized()).norm() > 1e-6) {
-        ThrowInvalidInput("camera.distortion", "the lens distortion is not invertible over the "
+        common::ThrowInvalidInput("camera.distortion", "the lens distortion is not invertible over the "
                           "sample's image", "use smaller distortion coefficients");
       }
     }
   }
   const MonitorConfig& m = config_.monitor;
   if (!(m.distance > 0.0) || !std::isfinite(m.distance)) {
-    ThrowInvalidInput("monitor.distance", "the monitor must lie behind the sample (d > 0), got d = " +
+    common::ThrowInvalidInput("monitor.distance", "the monitor must lie behind the sample (d > 0), got d = " +
                       Fmt(m.distance) + " m", "the monitor plane is z = -d, on the far side from the camera");
   }
   if (!std::isfinite(m.orientation_deg) || !(std::abs(m.tilt_deg) < 30.0)) {
-    ThrowInvalidInput("monitor.orientation/tilt", "the orientation must be finite and the tilt within 30 degrees",
+    common::ThrowInvalidInput("monitor.orientation/tilt", "the orientation must be finite and the tilt within 30 degrees",
                       "the screen must face the sample");
   }
   RequirePositive(m.width, "monitor.width");
@@ -230,51 +230,51 @@ void Rig::Validate() const {
   RequirePositive(m.gamma, "monitor.gamma");
   RequirePositive(m.white_exitance, "monitor.white_exitance");
   if (!(m.black_level >= 0.0 && m.black_level < 1.0)) {
-    ThrowInvalidInput("monitor.black_level", "must lie in [0, 1)");
+    common::ThrowInvalidInput("monitor.black_level", "must lie in [0, 1)");
   }
   const std::string& kind = m.emission.kind;
   if (kind != "isotropic" && kind != "lambertian" && kind != "lcd") {
-    ThrowInvalidInput("monitor.emission", "unknown profile '" + kind + "'",
+    common::ThrowInvalidInput("monitor.emission", "unknown profile '" + kind + "'",
                       "use isotropic, lambertian or lcd");
   }
   if (kind == "lcd") RequirePositive(m.emission.exponent, "monitor.emission.exponent");
   const DotGridConfig& g = config_.dots;
-  if (g.cols < 1 || g.rows < 1) ThrowInvalidInput("dots", "the grid needs at least 1 x 1 dots");
+  if (g.cols < 1 || g.rows < 1) common::ThrowInvalidInput("dots", "the grid needs at least 1 x 1 dots");
   RequirePositive(g.span_scale, "dots.span_scale");
   RequirePositive(g.radius_px, "dots.radius_px");
-  if (!(g.level > 0.0 && g.level <= 1.0)) ThrowInvalidInput("dots.level", "must lie in (0, 1]");
+  if (!(g.level > 0.0 && g.level <= 1.0)) common::ThrowInvalidInput("dots.level", "must lie in (0, 1]");
   const SensorConfig& sensor = config_.sensor;
-  if (sensor.exposures_s.empty()) ThrowInvalidInput("sensor.exposures", "at least one exposure");
+  if (sensor.exposures_s.empty()) common::ThrowInvalidInput("sensor.exposures", "at least one exposure");
   for (double t : sensor.exposures_s) RequirePositive(t, "sensor.exposures");
   RequirePositive(sensor.sensitivity, "sensor.sensitivity");
   RequirePositive(sensor.full_well, "sensor.full_well");
-  if (!(sensor.read_noise >= 0.0)) ThrowInvalidInput("sensor.read_noise", "must be >= 0");
-  if (!(sensor.dark_current >= 0.0)) ThrowInvalidInput("sensor.dark_current", "must be >= 0");
+  if (!(sensor.read_noise >= 0.0)) common::ThrowInvalidInput("sensor.read_noise", "must be >= 0");
+  if (!(sensor.dark_current >= 0.0)) common::ThrowInvalidInput("sensor.dark_current", "must be >= 0");
   if (sensor.bit_depth < 8 || sensor.bit_depth > 16) {
-    ThrowInvalidInput("sensor.bit_depth", "must lie in [8, 16]");
+    common::ThrowInvalidInput("sensor.bit_depth", "must lie in [8, 16]");
   }
   if (sensor.response != "linear" && sensor.response != "srgb") {
-    ThrowInvalidInput("sensor.response", "unknown response '" + sensor.response + "'",
+    common::ThrowInvalidInput("sensor.response", "unknown response '" + sensor.response + "'",
                       "use linear or srgb");
   }
   if (!(sensor.vignetting >= 0.0 && sensor.vignetting < 1.0)) {
-    ThrowInvalidInput("sensor.vignetting", "must lie in [0, 1)");
+    common::ThrowInvalidInput("sensor.vignetting", "must lie in [0, 1)");
   }
   if (!(sensor.black_offset >= 0.0 && sensor.black_offset < 0.5)) {
-    ThrowInvalidInput("sensor.black_offset", "must lie in [0, 0.5)");
+    common::ThrowInvalidInput("sensor.black_offset", "must lie in [0, 0.5)");
   }
   if (config_.pixel_samples < 1 || config_.board_samples < 1) {
-    ThrowInvalidInput("pixel_samples", "supersampling must be >= 1");
+    common::ThrowInvalidInput("pixel_samples", "supersampling must be >= 1");
   }
   for (const auto& [b, name] : {std::pair{&config_.board, "board"}, std::pair{&config_.holder_board, "holder_board"}}) {
-    if (b->inner_cols < 3 || b->inner_rows < 3) ThrowInvalidInput(name, "needs >= 3 x 3 inner corners");
+    if (b->inner_cols < 3 || b->inner_rows < 3) common::ThrowInvalidInput(name, "needs >= 3 x 3 inner corners");
     RequirePositive(b->square, std::string(name) + ".square");
   }
-  if (config_.board.views < 3) ThrowInvalidInput("board.views", "Zhang calibration needs at least 3 views");
+  if (config_.board.views < 3) common::ThrowInvalidInput("board.views", "Zhang calibration needs at least 3 views");
   const SensorWindow& w = config_.window;
   if (!w.whole_sensor() && (w.offset_x < 0 || w.offset_y < 0 || w.offset_x + k.width > w.sensor_width ||
                             w.offset_y + k.height > w.sensor_height)) {
-    ThrowInvalidInput("window", "the " + std::to_string(k.width) + " x " + std::to_string(k.height) + " image at (" +
+    common::ThrowInvalidInput("window", "the " + std::to_string(k.width) + " x " + std::to_string(k.height) + " image at (" +
                                     std::to_string(w.offset_x) + ", " + std::to_string(w.offset_y) +
                                     ") does not lie on the " + std::to_string(w.sensor_width) + " x " +
                                     std::to_string(w.sensor_height) + " sensor");
@@ -286,16 +286,16 @@ void Rig::LayOutDots() {
   const MonitorConfig& m = config_.monitor;
   const DotGridConfig& g = config_.dots;
   const MonitorFrame& frame = monitor_frame_;
-  const Vec3 camera = camera_.Centre();
+  const model::Vec3 camera = camera_.Centre();
   // Away from the camera along its azimuth (the camera sits above some point of the plane).
-  Vec2 away = -camera.head<2>();
-  away = away.norm() > 1e-12 ? away.normalized() : Vec2::Zero();
+  model::Vec2 away = -camera.head<2>();
+  away = away.norm() > 1e-12 ? away.normalized() : model::Vec2::Zero();
   const double shift = g.shift >= 0.0 ? g.shift : m.distance * std::cos(CameraTheta());
-  const Vec2 grid_centre = shift * away;
-  const Vec2 centre_px = frame.PixelCoordinates(Vec3(grid_centre.x(), grid_centre.y(), -m.distance));
+  const model::Vec2 grid_centre = shift * away;
+  const model::Vec2 centre_px = frame.PixelCoordinates(model::Vec3(grid_centre.x(), grid_centre.y(), -m.distance));
   // The grid covers span_scale times the sample's extent along each of the screen's axes.
-  const auto extent = [&](const Vec3& axis) { return std::abs(axis.x()) * s.width + std::abs(axis.y()) * s.height(); };
-  const Vec2 span_px = g.span_scale * Vec2(extent(frame.right), extent(frame.down)) / m.pixel_pitch;
+  const auto extent = [&](const model::Vec3& axis) { return std::abs(axis.x()) * s.width + std::abs(axis.y()) * s.height(); };
+  const model::Vec2 span_px = g.span_scale * model::Vec2(extent(frame.right), extent(frame.down)) / m.pixel_pitch;
   dots_.clear();
   dots_.reserve(static_cast<size_t>(g.cols) * g.rows);
   for (int row = 0; row < g.rows; ++row) {
@@ -303,11 +303,11 @@ void Rig::LayOutDots() {
       // Column along u, row down the screen along v; a 1 x N grid sits on the centre line.
       const double fu = g.cols > 1 ? static_cast<double>(col) / (g.cols - 1) - 0.5 : 0.0;
       const double fv = g.rows > 1 ? static_cast<double>(row) / (g.rows - 1) - 0.5 : 0.0;
-      const Vec2 in_monitor = centre_px + Vec2(fu * span_px.x(), fv * span_px.y());
+      const model::Vec2 in_monitor = centre_px + model::Vec2(fu * span_px.x(), fv * span_px.y());
       if (in_monitor.x() - g.radius_px < 0.0 || in_monitor.y() - g.radius_px < 0.0 ||
           in_monitor.x() + g.radius_px > frame.width_px || in_monitor.y() + g.radius_px > frame.height_px) {
-        const Vec3 nominal = frame.PointAt(in_monitor);
-        ThrowInvalidInput("monitor", "dot (" + std::to_string(col) + ", " + std::to_string(row) +
+        const model::Vec3 nominal = frame.PointAt(in_monitor);
+        common::ThrowInvalidInput("monitor", "dot (" + std::to_string(col) + ", " + std::to_string(row) +
                           ") at (" + Fmt(nominal.x()) + ", " + Fmt(nominal.y()) +
                           ") m is off the monitor's active area",
                           "use a larger monitor, move its centre or shrink dots.span_scale");
@@ -318,11 +318,11 @@ void Rig::LayOutDots() {
       dot.col = col;
       dot.row = row;
       // The all-dots image (sample removed) must show every dot to locate it.
-      const std::optional<Vec2> px = camera_.Project(dot.position);
+      const std::optional<model::Vec2> px = camera_.Project(dot.position);
       const CameraIntrinsics& k = config_.intrinsics;
       if (!px || px->x() < 2.0 || px->y() < 2.0 || px->x() > k.width - 3.0 ||
           px->y() > k.height - 3.0) {
-        ThrowInvalidInput("dots", "dot (" + std::to_string(col) + ", " + std::to_string(row) +
+        common::ThrowInvalidInput("dots", "dot (" + std::to_string(col) + ", " + std::to_string(row) +
                           ") at (" + Fmt(dot.position.x()) + ", " + Fmt(dot.position.y()) +
                           ") m is outside the camera's view of the monitor",
                           "shrink dots.span_scale, or widen the view (image size, fx/fy)");
@@ -338,26 +338,26 @@ Dot Rig::DotAt(double x_px, double y_px, double radius_px, double luminance) con
   dot.col = dot.row = -1;
   dot.monitor_x = static_cast<int>(std::floor(x_px));
   dot.monitor_y = static_cast<int>(std::floor(y_px));
-  dot.position = monitor_frame_.PointAt(Vec2(x_px + 0.5, y_px + 0.5));
+  dot.position = monitor_frame_.PointAt(model::Vec2(x_px + 0.5, y_px + 0.5));
   dot.radius = radius_px * m.pixel_pitch;
-  dot.intensity = m.white_exitance * luminance * kPi * dot.radius * dot.radius;
+  dot.intensity = m.white_exitance * luminance * model::kPi * dot.radius * dot.radius;
   return dot;
 }
 
-double Rig::DotIntensityToward(const Dot& dot, const Vec3& x) const {
+double Rig::DotIntensityToward(const Dot& dot, const model::Vec3& x) const {
   return dot.intensity * config_.monitor.emission(monitor_frame_.CosEmission(dot.position, x));
 }
 
-std::optional<Vec3> Rig::SampleHit(const Vec2& pixel) const {
-  const std::optional<Vec3> ray = camera_.PixelRay(pixel);
+std::optional<model::Vec3> Rig::SampleHit(const model::Vec2& pixel) const {
+  const std::optional<model::Vec3> ray = camera_.PixelRay(pixel);
   if (!ray || !(ray->z() < 0.0)) return std::nullopt;
-  const Vec3 c = camera_.Centre();
-  const Vec3 x = c + (-c.z() / ray->z()) * (*ray);
+  const model::Vec3 c = camera_.Centre();
+  const model::Vec3 x = c + (-c.z() / ray->z()) * (*ray);
   if (!TexelAt(x)) return std::nullopt;
-  return Vec3(x.x(), x.y(), 0.0);
+  return model::Vec3(x.x(), x.y(), 0.0);
 }
 
-std::optional<std::array<int, 2>> Rig::TexelAt(const Vec3& x) const {
+std::optional<std::array<int, 2>> Rig::TexelAt(const model::Vec3& x) const {
   const SampleConfig& s = config_.sample;
   const double u = (x.x() + 0.5 * s.width) / s.texel_pitch();
   const double v = (0.5 * s.height() - x.y()) / s.texel_pitch();
@@ -365,6 +365,6 @@ std::optional<std::array<int, 2>> Rig::TexelAt(const Vec3& x) const {
   return std::array<int, 2>{static_cast<int>(u), static_cast<int>(v)};
 }
 
-Vec3 Rig::TexelCentre(int col, int row) const { return config_.sample.TexelCentre(col, row); }
+model::Vec3 Rig::TexelCentre(int col, int row) const { return config_.sample.TexelCentre(col, row); }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

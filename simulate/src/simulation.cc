@@ -9,7 +9,7 @@
 #include "svbtdf/simulate/truth_io.h"
 #include "svbtdf/simulate/truth_material.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 namespace fs = std::filesystem;
 namespace {
 
@@ -30,7 +30,7 @@ std::unique_ptr<SpatialBtdf> MakeTruth(const SimulationPreset& preset, const Rig
     auto truth = std::make_unique<MonteCarloTruth>(ReadMonteCarloTruth(truth_folder));
     if (truth->texels_x() != sample.texels_x || truth->texels_y() != sample.texels_y || truth->eta() != preset.eta ||
         truth->seed != options.seed) {
-      ThrowInvalidInput(truth_folder.string(), "holds the truth of other settings", "choose a new output folder");
+      common::ThrowInvalidInput(truth_folder.string(), "holds the truth of other settings", "choose a new output folder");
     }
     return truth;
   }
@@ -49,9 +49,9 @@ bool Close(double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(std::
 
 double EtaOfTruthMaterial(const fs::path& manifest_path) {
   try {
-    return nlohmann::json::parse(ReadTextFile(manifest_path)).at("eta").get<double>();
+    return nlohmann::json::parse(common::ReadTextFile(manifest_path)).at("eta").get<double>();
   } catch (const nlohmann::json::exception& e) {
-    ThrowFormatError(manifest_path.string(), std::string("is malformed: ") + e.what());
+    common::ThrowFormatError(manifest_path.string(), std::string("is malformed: ") + e.what());
   }
 }
 
@@ -60,7 +60,7 @@ double EtaOfTruthMaterial(const fs::path& manifest_path) {
 void RequireSameRig(const SimulatedSetup& setup, const RigTruth& truth, const fs::path& rig_path) {
   const CameraIntrinsics& k = setup.rig->config().intrinsics;
   const auto mismatch = [&](const std::string& what) {
-    ThrowFormatError(rig_path.string(), "does not match preset '" + setup.preset.name + "' of this build (" + what + ")",
+    common::ThrowFormatError(rig_path.string(), "does not match preset '" + setup.preset.name + "' of this build (" + what + ")",
                      "re-run `svbtdf simulate` with this build");
   };
   if (k.width != truth.camera.width || k.height != truth.camera.height || !Close(k.fx, truth.camera.fx)) mismatch("camera");
@@ -82,7 +82,7 @@ void RequireSameRig(const SimulatedSetup& setup, const RigTruth& truth, const fs
 
 SimulationPreset PresetWithOptions(const SimulationOptions& options) {
   if (options.truth != "model" && options.truth != "montecarlo") {
-    ThrowInvalidInput("--truth", "must be model or montecarlo, got '" + options.truth + "'");
+    common::ThrowInvalidInput("--truth", "must be model or montecarlo, got '" + options.truth + "'");
   }
   SimulationPreset preset = MakePreset(options.preset);
   if (!options.noise) {
@@ -94,7 +94,7 @@ SimulationPreset PresetWithOptions(const SimulationOptions& options) {
   if (options.mirror_monitor) preset.rig.monitor.mirrored = true;
   if (options.eta != 0.0) {
     if (!(options.eta > 1.0) || !std::isfinite(options.eta)) {
-      ThrowInvalidInput("--eta", "must be > 1, got " + std::to_string(options.eta));
+      common::ThrowInvalidInput("--eta", "must be > 1, got " + std::to_string(options.eta));
     }
     preset.eta = options.eta;
   }
@@ -105,7 +105,7 @@ std::unique_ptr<SimulatedSetup> PrepareSimulation(const fs::path& truth_folder, 
   SimulationPreset preset = PresetWithOptions(options);
   std::error_code error;
   fs::create_directories(truth_folder, error);
-  if (error) ThrowIoError(truth_folder.string(), "cannot create: " + error.message(), "is the folder writable?");
+  if (error) common::ThrowIoError(truth_folder.string(), "cannot create: " + error.message(), "is the folder writable?");
   const TruthMaker make_truth = [&](const Rig& rig) { return MakeTruth(preset, rig, options, truth_folder); };
   std::unique_ptr<SimulatedSetup> setup = MakeSimulatedSetup(preset, options.seed, options.threads, make_truth);
   setup->plan.truth_kind = options.truth;
@@ -116,7 +116,7 @@ std::unique_ptr<SimulatedSetup> PrepareSimulation(const fs::path& truth_folder, 
 std::unique_ptr<SimulatedSetup> LoadSimulatedSetup(const fs::path& out, int threads) {
   const fs::path rig_path = out / "truth" / "rig.json";
   if (!fs::exists(rig_path)) {
-    ThrowInvalidInput(out.string(), "is not the output folder of `svbtdf simulate` (no truth/rig.json)",
+    common::ThrowInvalidInput(out.string(), "is not the output folder of `svbtdf simulate` (no truth/rig.json)",
                       "run `svbtdf simulate --preset tiny --out " + out.string() + "` first");
   }
   const RigTruth truth = ReadRigTruth(rig_path);
@@ -137,4 +137,4 @@ std::unique_ptr<SimulatedSetup> LoadSimulatedSetup(const fs::path& out, int thre
   return setup;
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

@@ -18,17 +18,17 @@
 #include "svbtdf/common/progress.h"
 #include "svbtdf/model/fresnel.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 namespace {
 
 // The facet a path meets at one interface hit, oriented toward the side the path arrives from.
 struct Facet {
-  Vec3 h = Vec3::UnitZ();   // the NDF's normal, upper hemisphere (for D and G1)
-  Vec3 n = Vec3::UnitZ();   // the same facet's normal on the arriving side: sign(v.z) h
+  model::Vec3 h = model::Vec3::UnitZ();   // the NDF's normal, upper hemisphere (for D and G1)
+  model::Vec3 n = model::Vec3::UnitZ();   // the same facet's normal on the arriving side: sign(v.z) h
   double weight = 1.0;      // the visible-normal sampler's weight (1 for exact samplers)
 };
 
-Facet SampleFacet(const SlabInterface& interface, const Vec3& v, Pcg32& rng) {
+Facet SampleFacet(const SlabInterface& interface, const model::Vec3& v, common::Pcg32& rng) {
   Facet facet;
   const double side = v.z() > 0 ? 1.0 : -1.0;
   if (!interface.flat()) {
@@ -36,7 +36,7 @@ Facet SampleFacet(const SlabInterface& interface, const Vec3& v, Pcg32& rng) {
     // visible from v are those visible from the side-adjusted -v (Walter et al. 2007 eq. 23).
     const double u0 = rng.NextDouble();
     const double u1 = rng.NextDouble();
-    const NormalSample sample = interface.ndf->SampleVisibleNormal(side * v, Vec2(u0, u1));
+    const model::NormalSample sample = interface.ndf->SampleVisibleNormal(side * v, model::Vec2(u0, u1));
     facet.h = sample.h;
     facet.weight = sample.weight;
   }
@@ -47,19 +47,19 @@ Facet SampleFacet(const SlabInterface& interface, const Vec3& v, Pcg32& rng) {
 // Refracts v (pointing away from the facet on the arriving side, v.n = cos_i > 0) through a
 // facet with relative index eta_rel = n_transmitted / n_incident; Walter et al. 2007 eq. 40.
 // The caller has excluded total internal reflection.
-Vec3 Refract(const Vec3& v, const Vec3& n, double cos_i, double eta_rel) {
+model::Vec3 Refract(const model::Vec3& v, const model::Vec3& n, double cos_i, double eta_rel) {
   const double inv_eta = 1.0 / eta_rel;
   const double sin2_t = inv_eta * inv_eta * std::max(0.0, 1.0 - cos_i * cos_i);
   const double cos_t = std::sqrt(std::max(0.0, 1.0 - sin2_t));
   return (inv_eta * cos_i - cos_t) * n - inv_eta * v;
 }
 
-void ValidateDirection(const Vec3& v, const char* subject, bool upper) {
+void ValidateDirection(const model::Vec3& v, const char* subject, bool upper) {
   if (!v.allFinite() || std::abs(v.squaredNorm() - 1.0) > 1e-9) {
-    ThrowInvalidInput(subject, "must be a finite unit vector");
+    common::ThrowInvalidInput(subject, "must be a finite unit vector");
   }
   if (upper ? !(v.z() > 0) : !(v.z() < 0)) {
-    ThrowInvalidInput(subject, upper ? "must point toward the camera (z > 0)"
+    common::ThrowInvalidInput(subject, upper ? "must point toward the camera (z > 0)"
                                      : "must point toward the light (z < 0)",
                       "directions point away from the sample; z is the normal toward the camera");
   }
@@ -130,36 +130,36 @@ double BtdfSlice::DominantRelativeError(double energy_fraction) const {
 
 SlabTracer::SlabTracer(Slab slab) : slab_(std::move(slab)) {
   if (!(slab_.eta > 1.0) || !std::isfinite(slab_.eta)) {
-    ThrowInvalidInput("eta", "the slab's relative index must be finite and > 1, got " +
+    common::ThrowInvalidInput("eta", "the slab's relative index must be finite and > 1, got " +
                                  std::to_string(slab_.eta),
                       "eta = n_slab / n_air, e.g. 1.5 for glass");
   }
   if (!(slab_.optical_depth >= 0.0) || !std::isfinite(slab_.optical_depth)) {
-    ThrowInvalidInput("optical depth", "must be finite and >= 0, got " +
+    common::ThrowInvalidInput("optical depth", "must be finite and >= 0, got " +
                                            std::to_string(slab_.optical_depth),
                       "0 means a clear slab");
   }
 }
 
-PathRecord SlabTracer::TracePath(const Vec3& direction, Pcg32& rng, int max_interactions) const {
+PathRecord SlabTracer::TracePath(const model::Vec3& direction, common::Pcg32& rng, int max_interactions) const {
   PathRecord record;
   const bool from_camera_side = direction.z() < 0;
   double throughput = 1.0;
   bool inside = false;
-  Vec3 w = direction;  // current travel direction
+  model::Vec3 w = direction;  // current travel direction
   for (int hit = 0; hit < max_interactions; ++hit) {
     // Outside, only the first interface can be next; inside, the travel direction decides.
     const bool at_exit_interface = inside ? w.z() > 0 : from_camera_side;
     const SlabInterface& interface = at_exit_interface ? slab_.exit : slab_.entry;
-    const Vec3 v = -w;  // toward where the path came from
+    const model::Vec3 v = -w;  // toward where the path came from
     const Facet facet = SampleFacet(interface, v, rng);
     record.interactions = hit + 1;
 
     const double cos_i = v.dot(facet.n);
     const double eta_rel = inside ? 1.0 / slab_.eta : slab_.eta;  // n_transmitted / n_incident
-    const double reflectance = cos_i > 0 ? FresnelDielectric(cos_i, eta_rel) : 1.0;
+    const double reflectance = cos_i > 0 ? model::FresnelDielectric(cos_i, eta_rel) : 1.0;
     const bool reflect = rng.NextDouble() < reflectance;
-    const Vec3 out = reflect ? Vec3(2.0 * cos_i * facet.n - v)
+    const model::Vec3 out = reflect ? model::Vec3(2.0 * cos_i * facet.n - v)
                              : Refract(v, facet.n, cos_i, eta_rel);
     // A reflection must stay on the arriving side of the macro surface, a refraction must cross
     // it; otherwise the outgoing ray meets the microsurface again, which single-scattering
@@ -192,22 +192,22 @@ PathRecord SlabTracer::TracePath(const Vec3& direction, Pcg32& rng, int max_inte
   return record;
 }
 
-BtdfSlice SlabTracer::SliceForView(const Vec3& o, const Hemicube& grid,
+BtdfSlice SlabTracer::SliceForView(const model::Vec3& o, const model::Hemicube& grid,
                                    const SliceOptions& options) const {
   ValidateDirection(o, "view direction o", /*upper=*/true);
   return TraceSlice(-o, grid, options);
 }
 
-BtdfSlice SlabTracer::SliceForLight(const Vec3& i, const Hemicube& grid,
+BtdfSlice SlabTracer::SliceForLight(const model::Vec3& i, const model::Hemicube& grid,
                                     const SliceOptions& options) const {
   ValidateDirection(i, "light direction i", /*upper=*/false);
   return TraceSlice(-i, grid, options);
 }
 
-BtdfSlice SlabTracer::TraceSlice(const Vec3& arrival, const Hemicube& grid,
+BtdfSlice SlabTracer::TraceSlice(const model::Vec3& arrival, const model::Hemicube& grid,
                                  const SliceOptions& options) const {
-  if (options.paths < 2) ThrowInvalidInput("paths", "need at least 2 paths for an error estimate");
-  if (options.max_interactions < 1) ThrowInvalidInput("max interactions", "must be >= 1");
+  if (options.paths < 2) common::ThrowInvalidInput("paths", "need at least 2 paths for an error estimate");
+  if (options.max_interactions < 1) common::ThrowInvalidInput("max interactions", "must be >= 1");
   const auto start = std::chrono::steady_clock::now();
   const int cells = grid.num_cells();
   std::vector<double> inverse_solid_angle(cells);
@@ -217,7 +217,7 @@ BtdfSlice SlabTracer::TraceSlice(const Vec3& arrival, const Hemicube& grid,
 
   const auto trace_chunk = [&](int64_t chunk, int64_t count) {
     Tally tally(cells);
-    Pcg32 rng(options.seed, static_cast<uint64_t>(chunk));
+    common::Pcg32 rng(options.seed, static_cast<uint64_t>(chunk));
     for (int64_t p = 0; p < count; ++p) {
       const PathRecord path = TracePath(arrival, rng, options.max_interactions);
       const std::array<double, 5> e = AsArray(path.energy);
@@ -226,7 +226,7 @@ BtdfSlice SlabTracer::TraceSlice(const Vec3& arrival, const Hemicube& grid,
         tally.fraction_squares[k] += e[k] * e[k];
       }
       if (path.transmitted && path.energy.transmitted > 0) {
-        const Vec3 upper = exit_below ? FlipZ(path.direction) : path.direction;
+        const model::Vec3 upper = exit_below ? model::FlipZ(path.direction) : path.direction;
         const int cell = grid.CellOf(upper);
         // The cell mean of rho is (1 / Omega_c) integral_c p(d) / |d.z| d omega, estimated per path
         // by throughput / (|d.z| Omega_c) if the path lands in c, else 0.
@@ -244,7 +244,7 @@ BtdfSlice SlabTracer::TraceSlice(const Vec3& arrival, const Hemicube& grid,
   const int threads = options.threads > 0
                           ? options.threads
                           : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-  std::optional<ProgressBar> progress;
+  std::optional<common::ProgressBar> progress;
   if (options.show_progress) progress.emplace("tracing", options.paths, "paths");
 
   Tally total(cells);
@@ -283,7 +283,7 @@ BtdfSlice SlabTracer::TraceSlice(const Vec3& arrival, const Hemicube& grid,
     int64_t next_to_reduce = batch_begin;
     const auto worker = [&] {
       for (;;) {
-        if (InterruptRequested()) return;
+        if (common::InterruptRequested()) return;
         const int64_t chunk = next_chunk.fetch_add(1);
         if (chunk >= batch_end) return;
         const int64_t count = std::min(kChunkPaths, options.paths - chunk * kChunkPaths);
@@ -303,7 +303,7 @@ BtdfSlice SlabTracer::TraceSlice(const Vec3& arrival, const Hemicube& grid,
     for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
     worker();
     for (std::thread& thread : pool) thread.join();
-    ThrowIfInterrupted("Monte Carlo slab tracing");
+    common::ThrowIfInterrupted("Monte Carlo slab tracing");
 
     finish_slice();
     if (options.target_relative_error > 0 &&
@@ -317,4 +317,4 @@ BtdfSlice SlabTracer::TraceSlice(const Vec3& arrival, const Hemicube& grid,
   return slice;
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

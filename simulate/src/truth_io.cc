@@ -5,28 +5,28 @@
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 namespace {
 
 using nlohmann::json;
 
-json ToJson(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
-json ToJson(const Vec2& v) { return {v.x(), v.y()}; }
-json ToJson(const Mat3& m) {
+json ToJson(const model::Vec3& v) { return {v.x(), v.y(), v.z()}; }
+json ToJson(const model::Vec2& v) { return {v.x(), v.y()}; }
+json ToJson(const model::Mat3& m) {
   return {{m(0, 0), m(0, 1), m(0, 2)}, {m(1, 0), m(1, 1), m(1, 2)}, {m(2, 0), m(2, 1), m(2, 2)}};
 }
-json ToJson(const BoardPose& pose, const std::vector<Vec3>& corners) {
+json ToJson(const BoardPose& pose, const std::vector<model::Vec3>& corners) {
   json out = {{"rotation", ToJson(pose.rotation)}, {"translation", ToJson(pose.translation)}};
   json list = json::array();
-  for (const Vec3& c : corners) list.push_back(ToJson(c));
+  for (const model::Vec3& c : corners) list.push_back(ToJson(c));
   out["corners_world"] = list;
   return out;
 }
 
-Vec3 Vec3From(const json& j) { return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()}; }
-Vec2 Vec2From(const json& j) { return {j.at(0).get<double>(), j.at(1).get<double>()}; }
-Mat3 Mat3From(const json& j) {
-  Mat3 m;
+model::Vec3 Vec3From(const json& j) { return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()}; }
+model::Vec2 Vec2From(const json& j) { return {j.at(0).get<double>(), j.at(1).get<double>()}; }
+model::Mat3 Mat3From(const json& j) {
+  model::Mat3 m;
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) m(r, c) = j.at(r).at(c).get<double>();
   }
@@ -62,7 +62,7 @@ void WriteRigTruth(const std::filesystem::path& path, const Rig& rig, const Capt
       {"translation", ToJson(config.pose.translation)},
       {"pose_convention", "x_cam = rotation * x_world + translation (OpenCV)"},
       {"centre", ToJson(rig.camera().Centre())},
-      {"theta_deg", rig.CameraTheta() * 180.0 / kPi}};
+      {"theta_deg", rig.CameraTheta() * 180.0 / model::kPi}};
   const CameraIntrinsics& sensor_k = rig.sensor_camera().intrinsics();
   out["camera"]["sensor"] = {{"width", sensor_k.width}, {"height", sensor_k.height},
                              {"window_offset", {config.window.offset_x, config.window.offset_y}},
@@ -112,20 +112,20 @@ void WriteRigTruth(const std::filesystem::path& path, const Rig& rig, const Capt
                          {"square", h.square}, {"pose", ToJson(capture.holder_board, BoardCorners(capture.holder_board, h))}};
   out["exposures"] = {{"dots_s", capture.dot_exposures_s}, {"all_dots_s", capture.all_dots_exposure_s},
                       {"flat_s", capture.flat_exposure_s}, {"board_s", capture.board_exposure_s}};
-  WriteTextAtomically(path, out.dump(2) + "\n", /*overwrite=*/false);
+  common::WriteTextAtomically(path, out.dump(2) + "\n", /*overwrite=*/false);
 }
 
 RigTruth ReadRigTruth(const std::filesystem::path& path) {
-  const std::string text = ReadTextFile(path);
+  const std::string text = common::ReadTextFile(path);
   RigTruth truth;
   try {
     const json in = json::parse(text);
     if (in.value("format", "") != "svbtdf-rig-truth") {
-      ThrowFormatError(path.string(), "is not an svbtdf rig truth file (format key)");
+      common::ThrowFormatError(path.string(), "is not an svbtdf rig truth file (format key)");
     }
     truth.version = in.at("version").get<int>();
     if (truth.version != kRigTruthVersion) {
-      ThrowFormatError(path.string(), "has version " + std::to_string(truth.version) +
+      common::ThrowFormatError(path.string(), "has version " + std::to_string(truth.version) +
                        ", this build reads version " + std::to_string(kRigTruthVersion),
                        "re-run `svbtdf simulate` with this build");
     }
@@ -181,10 +181,10 @@ RigTruth ReadRigTruth(const std::filesystem::path& path) {
     truth.capture.preset = in.at("preset");
     truth.capture.truth_kind = in.at("truth");
   } catch (const json::exception& e) {
-    ThrowFormatError(path.string(), std::string("cannot be read: ") + e.what(),
+    common::ThrowFormatError(path.string(), std::string("cannot be read: ") + e.what(),
                      "it should be a rig.json written by `svbtdf simulate`");
   }
   return truth;
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

@@ -7,13 +7,13 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/random.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 namespace {
 
 
 // Uniform [0, 1) value attached to an integer lattice point.
 double LatticeValue(int64_t ix, int64_t iy, uint64_t seed) {
-  const uint64_t h = SplitMix64(SplitMix64(seed) ^ SplitMix64(static_cast<uint64_t>(ix) * 0x632be59bd9b4e019ULL) ^
+  const uint64_t h = common::SplitMix64(common::SplitMix64(seed) ^ common::SplitMix64(static_cast<uint64_t>(ix) * 0x632be59bd9b4e019ULL) ^
                           static_cast<uint64_t>(iy) * 0x85157af5ULL);
   return static_cast<double>(h >> 11) * 0x1.0p-53;
 }
@@ -83,13 +83,13 @@ TruthTexel LeafGlassPattern(double u, double v, double aspect, uint64_t seed) {
   for (int k = 0; k < 7; ++k) {
     const double cx = 0.15 + 0.7 * LatticeValue(k, 1, seed);
     const double cy = 0.15 + 0.7 * LatticeValue(k, 2, seed);
-    const double angle = kPi * LatticeValue(k, 3, seed);
+    const double angle = model::kPi * LatticeValue(k, 3, seed);
     const double length = 0.12 + 0.12 * LatticeValue(k, 4, seed);
     const double dx = u - cx, dy = (v - cy) * aspect;
     const double a = std::cos(angle) * dx + std::sin(angle) * dy;
     const double b = -std::sin(angle) * dx + std::cos(angle) * dy;
     // Lens-shaped leaf: width tapers to the tips.
-    const double half_width = 0.35 * length * std::max(0.0, 1.0 - Square(a / length));
+    const double half_width = 0.35 * length * std::max(0.0, 1.0 - model::Square(a / length));
     const double inside = std::max(0.0, 1.0 - std::abs(b) / std::max(half_width, 1e-9));
     leaf = std::max(leaf, SmoothStep(0.0, 0.25, inside) * (std::abs(a) < length ? 1.0 : 0.0));
   }
@@ -123,7 +123,7 @@ PatternFunction FindPattern(const std::string& name) {
   if (name == "grid-sheet") return GridSheetPattern;
   if (name == "leaf-glass") return LeafGlassPattern;
   if (name == "rice-paper") return RicePaperPattern;
-  ThrowInvalidInput("pattern", "unknown truth pattern '" + name + "'",
+  common::ThrowInvalidInput("pattern", "unknown truth pattern '" + name + "'",
                     "use smooth, grid-sheet, leaf-glass or rice-paper");
 }
 
@@ -138,25 +138,25 @@ TruthMaterial::TruthMaterial(int texels_x, int texels_y, double eta, std::string
     : texels_x_(texels_x), texels_y_(texels_y), eta_(eta), ndf_name_(std::move(ndf_name)),
       texels_(std::move(texels)) {
   if (texels_x < 1 || texels_y < 1) {
-    ThrowInvalidInput("truth material", "needs at least 1 x 1 texels");
+    common::ThrowInvalidInput("truth material", "needs at least 1 x 1 texels");
   }
   if (texels_.size() != static_cast<size_t>(texels_x) * texels_y) {
-    ThrowInvalidInput("truth material", "has " + std::to_string(texels_.size()) +
+    common::ThrowInvalidInput("truth material", "has " + std::to_string(texels_.size()) +
                       " texels, expected " + std::to_string(texels_x * texels_y));
   }
   if (!(eta > 1.0) || !std::isfinite(eta)) {
-    ThrowInvalidInput("--eta", "must be > 1 (eta = n_slab / n_air), got " + std::to_string(eta));
+    common::ThrowInvalidInput("--eta", "must be > 1 (eta = n_slab / n_air), got " + std::to_string(eta));
   }
   ndfs_.reserve(texels_.size());
   models_.reserve(texels_.size());
   for (const TruthTexel& t : texels_) {
     if (!(t.alpha >= 0.0 && t.alpha <= 1.0)) {
-      ThrowInvalidInput("truth material", "blend weight alpha outside [0, 1]");
+      common::ThrowInvalidInput("truth material", "blend weight alpha outside [0, 1]");
     }
-    ndfs_.push_back(MakeAnalyticNdf(ndf_name_, t.ndf));
+    ndfs_.push_back(model::MakeAnalyticNdf(ndf_name_, t.ndf));
     models_.emplace_back(eta_, t.shadowing_roughness > 0.0
-                                   ? SmithShadowing::Ggx(t.shadowing_roughness)
-                                   : SmithShadowing::None());
+                                   ? model::SmithShadowing::Ggx(t.shadowing_roughness)
+                                   : model::SmithShadowing::None());
   }
 }
 
@@ -164,7 +164,7 @@ TruthMaterial TruthMaterial::FromPattern(const std::string& pattern, int texels_
                                          double eta, uint64_t seed) {
   const PatternFunction function = FindPattern(pattern);
   if (texels_x < 1 || texels_y < 1) {
-    ThrowInvalidInput("truth material", "needs at least 1 x 1 texels");
+    common::ThrowInvalidInput("truth material", "needs at least 1 x 1 texels");
   }
   const double aspect = static_cast<double>(texels_y) / texels_x;
   std::vector<TruthTexel> texels;
@@ -177,15 +177,15 @@ TruthMaterial TruthMaterial::FromPattern(const std::string& pattern, int texels_
   return TruthMaterial(texels_x, texels_y, eta, "ggx", std::move(texels));
 }
 
-Rgb TruthMaterial::Evaluate(int index, const Vec3& i, const Vec3& o) const {
+model::Rgb TruthMaterial::Evaluate(int index, const model::Vec3& i, const model::Vec3& o) const {
   const TruthTexel& t = texels_[index];
   const double rho = models_[index].Rho(*ndfs_[index], t.alpha, i, o);
   return {t.k_s[0] * rho + t.rho_d[0], t.k_s[1] * rho + t.rho_d[1], t.k_s[2] * rho + t.rho_d[2]};
 }
 
 double TruthMaterial::MinRoughness(int index) const {
-  const AnalyticNdfParams& p = texels_[index].ndf;
+  const model::AnalyticNdfParams& p = texels_[index].ndf;
   return std::min(p.alpha_x, p.alpha_y);
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

@@ -28,7 +28,7 @@ const char* kGridPlan = R"({
 
 TEST(CapturePlan, TinyPresetDescribesTheSimulatorsCaptures) {
   const CapturePlan plan = MakePlanPreset("tiny");
-  const std::unique_ptr<SimulatedSetup> setup = MakeSimulatedSetup(MakePreset("tiny"), 1, 0);
+  const std::unique_ptr<simulate::SimulatedSetup> setup = simulate::MakeSimulatedSetup(simulate::MakePreset("tiny"), 1, 0);
   // The exposures and scenes the simulated lab planned, so that `svbtdf simulate` (this plan on the
   // simulated rig) exposes every image as the simulator meant.
   EXPECT_EQ(plan.exposures_s, setup->plan.dot_exposures_s);
@@ -106,13 +106,13 @@ TEST(CapturePlan, BadPlansAreClearErrorsNamingTheFileAndField) {
     try {
       ParseCapturePlan(text, "bad-plan.json");
       ADD_FAILURE() << "accepted: " << text;
-    } catch (const Error& e) {
-      EXPECT_EQ(e.kind(), ErrorKind::kFormat) << e.what();
+    } catch (const common::Error& e) {
+      EXPECT_EQ(e.kind(), common::ErrorKind::kFormat) << e.what();
       EXPECT_NE(std::string(e.what()).find("bad-plan.json"), std::string::npos) << e.what();
       EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
     }
   }
-  EXPECT_THROW(ReadCapturePlan("/nonexistent/plan.json"), Error);
+  EXPECT_THROW(ReadCapturePlan("/nonexistent/plan.json"), common::Error);
 }
 
 // Truncations at every byte and thousands of deterministic byte mutations: each either parses to
@@ -131,7 +131,7 @@ TEST(CapturePlan, GarbledPlansNeverCrashAndAlwaysThrowSvbtdfErrors) {
       const CapturePlan plan = ParseCapturePlan(text, "garbled.json");
       EXPECT_EQ(ExpandPlan(plan).size() > 0, true);
       ++parsed;
-    } catch (const Error& e) {
+    } catch (const common::Error& e) {
       EXPECT_NE(std::string(e.what()).find("garbled.json"), std::string::npos) << e.what();
       ++refused;
     } catch (const std::exception& e) {

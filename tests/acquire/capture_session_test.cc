@@ -28,7 +28,7 @@ class AcquireOnSimulatedRig : public ::testing::Test {
   static void SetUpTestSuite() {
     folder_ = std::make_unique<svbtdf::testing::TempFolder>("acquire");
     root_ = folder_->path();
-    setup_ = MakeSimulatedSetup(MakePreset("tiny"), 1, 0);
+    setup_ = simulate::MakeSimulatedSetup(simulate::MakePreset("tiny"), 1, 0);
     plan_ = new CapturePlan(MakePlanPreset("tiny"));
   }
   static void TearDownTestSuite() {
@@ -43,9 +43,9 @@ class AcquireOnSimulatedRig : public ::testing::Test {
     op_ = std::make_unique<SimOperator>(world_);
     options_.progress = false;
     options_.sleep = [this](double seconds) { slept_.push_back(seconds); };
-    SetInterruptRequested(false);
+    common::SetInterruptRequested(false);
   }
-  void TearDown() override { SetInterruptRequested(false); }
+  void TearDown() override { common::SetInterruptRequested(false); }
 
   AcquireResult Run(Camera& camera, const fs::path& out) {
     return Acquire(*plan_, camera, *display_, *op_, out, options_);
@@ -54,10 +54,10 @@ class AcquireOnSimulatedRig : public ::testing::Test {
   // `--camera sim:DIR` uses) is the one the tests use.
   static fs::path SimulatedSession() {
     if (!fs::exists(root_ / "sim" / "session" / "journal.jsonl")) {
-      SimulationOptions options;
+      simulate::SimulationOptions options;
       options.progress = false;
       acquire::SimulateSession(root_ / "sim", options);
-      const std::shared_ptr<const SimulatedSetup> loaded = LoadSimulation(root_ / "sim");
+      const std::shared_ptr<const simulate::SimulatedSetup> loaded = LoadSimulation(root_ / "sim");
       EXPECT_EQ(loaded->plan.dot_exposures_s, setup_->plan.dot_exposures_s);
     }
     return root_ / "sim" / "session";
@@ -78,7 +78,7 @@ class AcquireOnSimulatedRig : public ::testing::Test {
 
   static inline fs::path root_;
   static inline std::unique_ptr<svbtdf::testing::TempFolder> folder_;
-  static inline std::shared_ptr<const SimulatedSetup> setup_;
+  static inline std::shared_ptr<const simulate::SimulatedSetup> setup_;
   static inline CapturePlan* plan_ = nullptr;
   std::shared_ptr<SimWorld> world_;
   std::unique_ptr<SimDisplay> display_;
@@ -137,8 +137,8 @@ TEST_F(AcquireOnSimulatedRig, APulledCableStopsCleanlyAndTheSessionResumes) {
   try {
     Run(unplugged, out);
     FAIL() << "a dead camera did not stop the acquisition";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kHardware);
+  } catch (const common::Error& e) {
+    EXPECT_EQ(e.kind(), common::ErrorKind::kHardware);
     EXPECT_NE(std::string(e.what()).find("cable pulled"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("3 times"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("resumable"), std::string::npos) << e.what();
@@ -164,8 +164,8 @@ TEST_F(AcquireOnSimulatedRig, NotEnoughFreeSpaceIsRefusedBeforeAnythingIsWritten
   try {
     Run(*camera_, out);
     FAIL() << "acquired without the space for it";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kIo);
+  } catch (const common::Error& e) {
+    EXPECT_EQ(e.kind(), common::ErrorKind::kIo);
     EXPECT_NE(std::string(e.what()).find(out.string()), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("5.0 MB free"), std::string::npos) << e.what();
   }
@@ -180,15 +180,15 @@ TEST_F(AcquireOnSimulatedRig, ADifferentPlanIsRefusedOnResume) {
   const fs::path out = root_ / "changed";
   FaultInjectingCamera unplugged(*camera_, {20, 1, true});
   options_.retries = 0;
-  EXPECT_THROW(Run(unplugged, out), Error);
+  EXPECT_THROW(Run(unplugged, out), common::Error);
   const size_t stored = session::Session::Open(out).entries().size();
   CapturePlan longer = *plan_;
   longer.exposures_s[1] *= 2.0;  // same keys, another exposure: still another plan
   try {
     Acquire(longer, *camera_, *display_, *op_, out, options_);
     FAIL() << "resumed with another plan";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kInvalidInput);
+  } catch (const common::Error& e) {
+    EXPECT_EQ(e.kind(), common::ErrorKind::kInvalidInput);
     EXPECT_NE(std::string(e.what()).find("different capture plan"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find(out.string()), std::string::npos) << e.what();
   }
@@ -199,7 +199,7 @@ TEST_F(AcquireOnSimulatedRig, ADifferentPlanIsRefusedOnResume) {
   try {
     Run(*camera_, root_ / "foreign");
     FAIL() << "resumed a session acquire did not write";
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find("did not write"), std::string::npos) << e.what();
   }
 }
@@ -211,7 +211,7 @@ class InterruptingCamera : public Camera {
   CameraInfo Info() const override { return inner_.Info(); }
   void SetExposure(const ExposureSettings& s) override { inner_.SetExposure(s); }
   Frame Capture() override {
-    if (++calls_ == after_) SetInterruptRequested(true);
+    if (++calls_ == after_) common::SetInterruptRequested(true);
     return inner_.Capture();
   }
 
@@ -227,12 +227,12 @@ TEST_F(AcquireOnSimulatedRig, AnInterruptStopsCleanlyAndTheSessionResumesToTheSa
   try {
     Run(interrupting, out);
     FAIL() << "the interrupt was ignored";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kInterrupted);
+  } catch (const common::Error& e) {
+    EXPECT_EQ(e.kind(), common::ErrorKind::kInterrupted);
     EXPECT_NE(std::string(e.what()).find("resumable"), std::string::npos) << e.what();
   }
   EXPECT_EQ(session::Session::Open(out).entries().size(), 40u);  // the capture in flight is kept
-  SetInterruptRequested(false);
+  common::SetInterruptRequested(false);
   // A new camera (a new process): dark frames and dots are numbered as the simulator's were, as
   // the resumed part holds no dark frame.
   SimCamera fresh(world_, setup_, "sim:test");
@@ -273,7 +273,7 @@ TEST_F(AcquireOnSimulatedRig, SimDisplayRastersTheDotItShows) {
   try {
     camera_->Capture();
     FAIL();
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find("sim:test"), std::string::npos) << e.what();
   }
 }
@@ -286,7 +286,7 @@ TEST_F(AcquireOnSimulatedRig, AnyPlansDotsAreRenderedByTheSimulator) {
   own.name = "own";
   own.dot_cols = 3;
   own.dot_rows = 2;
-  const Dot& centre = setup_->rig->dots()[14];  // near the middle of the tiny 6 x 6 grid
+  const simulate::Dot& centre = setup_->rig->dots()[14];  // near the middle of the tiny 6 x 6 grid
   for (int row = 0; row < 2; ++row) {
     for (int col = 0; col < 3; ++col) own.dots_px.emplace_back(centre.monitor_x + 7.5 * col, centre.monitor_y + 5.0 * row);
   }
@@ -299,7 +299,7 @@ TEST_F(AcquireOnSimulatedRig, AnyPlansDotsAreRenderedByTheSimulator) {
   EXPECT_EQ(full.captured, 1 + 6);
   own.dot_intensity = 0.5;
   Acquire(own, *camera_, *display_, *op_, root_ / "own-half", options_);
-  const auto sum = [](const CameraImage& image) {
+  const auto sum = [](const common::CameraImage& image) {
     double total = 0;
     for (uint16_t v : image.pixels) total += v;
     return total;
@@ -316,7 +316,7 @@ TEST_F(AcquireOnSimulatedRig, ACameraOfAnotherFrameSizeCannotResumeTheSession) {
   const fs::path out = root_ / "other-camera";
   FaultInjectingCamera unplugged(*camera_, {5, 1, true});
   options_.retries = 0;
-  EXPECT_THROW(Run(unplugged, out), Error);
+  EXPECT_THROW(Run(unplugged, out), common::Error);
   // A camera that delivers half-size frames.
   class Cropping : public Camera {
    public:
@@ -336,7 +336,7 @@ TEST_F(AcquireOnSimulatedRig, ACameraOfAnotherFrameSizeCannotResumeTheSession) {
   try {
     Run(cropping, out);
     FAIL() << "mixed frame sizes in one session";
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     // The resumed run starts with the Zhang views, whole-sensor frames of the 1280 x 1024 sensor.
     EXPECT_NE(std::string(e.what()).find("1280x512x3 frames but the camera's sensor is 1280x1024x3"), std::string::npos)
         << e.what();

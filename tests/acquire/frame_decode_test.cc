@@ -33,8 +33,8 @@ TEST(FrameDecodeTest, RespectsStrideAndMasksUnusedBits) {
   try {
     DecodeImage({SampleLayout::kRaw16, 10, "", ""}, data, 9, 2, 2, 6, "cam");
     FAIL() << "a short frame must be rejected";
-  } catch (const Error& error) {
-    EXPECT_EQ(error.kind(), ErrorKind::kHardware);
+  } catch (const common::Error& error) {
+    EXPECT_EQ(error.kind(), common::ErrorKind::kHardware);
   }
 }
 

@@ -120,9 +120,9 @@ TEST(Gphoto2DriverTest, ChoosesNearestShutterAndIsoAndReportsThem) {
 TEST(Gphoto2DriverTest, RejectsExposuresOutsideTheListedRange) {
   auto state = Canon30D();
   Gphoto2Camera camera(std::make_unique<FakeGphoto2Session>(state));
-  ExpectError(ErrorKind::kInvalidInput, "outside the listed shutter speeds", [&] { camera.SetExposure({60.0, 1.0}); });
-  ExpectError(ErrorKind::kInvalidInput, "outside", [&] { camera.SetExposure({1e-5, 1.0}); });
-  ExpectError(ErrorKind::kInvalidInput, "before SetExposure", [&] { camera.Capture(); });
+  ExpectError(common::ErrorKind::kInvalidInput, "outside the listed shutter speeds", [&] { camera.SetExposure({60.0, 1.0}); });
+  ExpectError(common::ErrorKind::kInvalidInput, "outside", [&] { camera.SetExposure({1e-5, 1.0}); });
+  ExpectError(common::ErrorKind::kInvalidInput, "before SetExposure", [&] { camera.Capture(); });
 }
 
 TEST(Gphoto2DriverTest, RawOnlyCaptureIsAClearError) {
@@ -130,7 +130,7 @@ TEST(Gphoto2DriverTest, RawOnlyCaptureIsAClearError) {
   state->next_capture.pop_back();
   Gphoto2Camera camera(std::make_unique<FakeGphoto2Session>(state));
   camera.SetExposure({0.01, 1.0});
-  ExpectError(ErrorKind::kHardware, "IMG_0001.CR2", [&] { camera.Capture(); });
+  ExpectError(common::ErrorKind::kHardware, "IMG_0001.CR2", [&] { camera.Capture(); });
 }
 
 TEST(Gphoto2DriverTest, NikonStyleWidgetsAndNoManualMode) {
@@ -142,19 +142,19 @@ TEST(Gphoto2DriverTest, NikonStyleWidgetsAndNoManualMode) {
   EXPECT_EQ(state->writes, std::vector<std::string>{"imagequality=JPEG Fine"});
   camera.SetExposure({0.9, 1.0});
   EXPECT_EQ(state->values["shutterspeed2"], "10/10");
-  ExpectError(ErrorKind::kInvalidInput, "ISO", [&] { camera.SetExposure({0.9, 2.0}); });
+  ExpectError(common::ErrorKind::kInvalidInput, "ISO", [&] { camera.SetExposure({0.9, 2.0}); });
 
   auto auto_only = std::make_shared<FakeGphoto2Session::State>();
   auto_only->widgets["shutterspeed"] = {"auto"};
   Gphoto2Camera automatic(std::make_unique<FakeGphoto2Session>(auto_only));
-  ExpectError(ErrorKind::kHardware, "mode dial", [&] { automatic.SetExposure({0.01, 1.0}); });
+  ExpectError(common::ErrorKind::kHardware, "mode dial", [&] { automatic.SetExposure({0.01, 1.0}); });
 }
 
 TEST(Gphoto2RealTest, CapturesFromAConnectedCamera) {
   std::vector<CameraInfo> cameras;
   try {
     cameras = ListGphoto2Cameras();
-  } catch (const Error& error) {
+  } catch (const common::Error& error) {
     GTEST_SKIP() << "libgphoto2 unavailable: " << error.what();
   }
   if (cameras.empty()) GTEST_SKIP() << "no tethered camera connected";

@@ -14,7 +14,7 @@ namespace {
 std::string OpenError(const std::string& camera, const std::string& display) {
   try {
     OpenLabRig(camera, display, "as-is");
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     return e.what();
   }
   return "";

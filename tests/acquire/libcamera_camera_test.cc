@@ -192,15 +192,15 @@ TEST(LibcameraDriverTest, ExposureTheCameraNeverAppliesIsAHardwareError) {
   shared->exposure_cap_s = 0.001;  // e.g. frame duration limits
   auto camera = MakeCamera(shared);
   camera->SetExposure({0.002, 1.0});
-  ExpectError(ErrorKind::kHardware, "instead of the requested", [&] { camera->Capture(); });
+  ExpectError(common::ErrorKind::kHardware, "instead of the requested", [&] { camera->Capture(); });
 }
 
 TEST(LibcameraDriverTest, RangeChecksUseTheCameraControls) {
   auto shared = std::make_shared<FakeLibcameraSession::Shared>();
   auto camera = MakeCamera(shared);
-  ExpectError(ErrorKind::kInvalidInput, "outside", [&] { camera->SetExposure({2.0, 1.0}); });
-  ExpectError(ErrorKind::kInvalidInput, "analogue gain", [&] { camera->SetExposure({0.01, 32.0}); });
-  ExpectError(ErrorKind::kInvalidInput, "positive", [&] { camera->SetExposure({0.01, 0.0}); });
+  ExpectError(common::ErrorKind::kInvalidInput, "outside", [&] { camera->SetExposure({2.0, 1.0}); });
+  ExpectError(common::ErrorKind::kInvalidInput, "analogue gain", [&] { camera->SetExposure({0.01, 32.0}); });
+  ExpectError(common::ErrorKind::kInvalidInput, "positive", [&] { camera->SetExposure({0.01, 0.0}); });
 }
 
 TEST(LibcameraDriverTest, TimeoutIsAHardwareError) {
@@ -212,7 +212,7 @@ TEST(LibcameraDriverTest, TimeoutIsAHardwareError) {
   shared->stall = true;
   // Frames completed before the stall may still be waiting; the capture after them times out.
   double waited = 0.0;
-  ExpectError(ErrorKind::kHardware, "no request completed within", [&] {
+  ExpectError(common::ErrorKind::kHardware, "no request completed within", [&] {
     for (int i = 0; i < 6; ++i) {
       const auto start = std::chrono::steady_clock::now();
       try {
@@ -234,10 +234,10 @@ TEST(LibcameraDriverTest, CancelledRequestMeansTheCameraIsGone) {
   auto camera = MakeCamera(shared);
   camera->Capture();
   shared->cancel_next = true;
-  ExpectError(ErrorKind::kHardware, "cancelled", [&] {
+  ExpectError(common::ErrorKind::kHardware, "cancelled", [&] {
     for (int i = 0; i < 6; ++i) camera->Capture();  // after any frames completed before it
   });
-  ExpectError(ErrorKind::kHardware, "gone", [&] { camera->Capture(); });
+  ExpectError(common::ErrorKind::kHardware, "gone", [&] { camera->Capture(); });
 }
 
 TEST(LibcameraDriverTest, FailedFramesAreRequeuedAndSkipped) {
@@ -247,7 +247,7 @@ TEST(LibcameraDriverTest, FailedFramesAreRequeuedAndSkipped) {
   EXPECT_EQ(camera->Capture().width, 8);
   shared->fail_frames = 1000;
   // Up to four good frames completed before the sensor went bad; after those, give up.
-  ExpectError(ErrorKind::kHardware, "FrameError", [&] {
+  ExpectError(common::ErrorKind::kHardware, "FrameError", [&] {
     for (int i = 0; i < 5; ++i) camera->Capture();
   });
 }
@@ -267,7 +267,7 @@ TEST(LibcameraRealTest, CameraManagerListsWithoutCrashing) {
   std::vector<CameraInfo> cameras;
   try {
     cameras = ListLibcameraCameras();
-  } catch (const Error& error) {
+  } catch (const common::Error& error) {
     GTEST_SKIP() << "libcamera unavailable here: " << error.what();
   }
   if (cameras.empty()) GTEST_SKIP() << "no libcamera camera on this machine";

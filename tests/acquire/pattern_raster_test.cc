@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 #include <vector>
 
 #include "svbtdf/acquire/pattern_raster.h"
@@ -13,7 +14,7 @@
 namespace svbtdf::acquire {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+constexpr double kPi = std::numbers::pi;
 
 TEST(PatternRasterTest, GammaEncodingOfFlatFields) {
   Pattern white;
@@ -24,7 +25,7 @@ TEST(PatternRasterTest, GammaEncodingOfFlatFields) {
   EXPECT_EQ(codes[11], codes[0]);
   EXPECT_EQ(RasterizePattern(Pattern{}, 4, 3, 2.2), std::vector<uint8_t>(12, 0));
   white.intensity = 1.5;
-  EXPECT_THROW(RasterizePattern(white, 4, 3, 2.2), Error);
+  EXPECT_THROW(RasterizePattern(white, 4, 3, 2.2), common::Error);
 }
 
 // Decodes code values back to linear intensity and returns flux and centroid.
@@ -103,7 +104,7 @@ TEST(PatternRasterTest, AllDotsAndChessboardGeometry) {
   EXPECT_EQ(codes[static_cast<size_t>(y0 - 15.5) * w + static_cast<size_t>(x0 - 5.5)], 255)
       << "white margin around the board";
   board.board_square_px = 30;
-  EXPECT_THROW(RasterizePattern(board, w, h, 2.2), Error);
+  EXPECT_THROW(RasterizePattern(board, w, h, 2.2), common::Error);
 }
 
 }  // namespace

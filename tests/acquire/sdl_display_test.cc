@@ -23,7 +23,7 @@ TEST_F(SdlDummyTest, ListsTheDummyDisplay) {
   std::vector<DisplayInfo> displays;
   try {
     displays = ListSdlDisplays();
-  } catch (const Error& error) {
+  } catch (const common::Error& error) {
     GTEST_SKIP() << "SDL video unavailable: " << error.what();
   }
   ASSERT_FALSE(displays.empty());
@@ -35,7 +35,7 @@ TEST_F(SdlDummyTest, ShowsExactlyTheRasterisedPattern) {
   std::unique_ptr<SdlDisplay> display;
   try {
     display = std::make_unique<SdlDisplay>(0, SdlDisplayOptions{});
-  } catch (const Error& error) {
+  } catch (const common::Error& error) {
     GTEST_SKIP() << "SDL display unavailable: " << error.what();
   }
   const DisplayInfo info = display->Info();
@@ -57,16 +57,16 @@ TEST_F(SdlDummyTest, ShowsExactlyTheRasterisedPattern) {
     EXPECT_EQ(shown, RasterizePattern(pattern, info.width_px, info.height_px, info.gamma))
         << "renderer " << display->RendererName();
   }
-  EXPECT_THROW(display->Show([] { Pattern p; p.kind = Pattern::Kind::kDot; p.dot_radius_px = -1; return p; }()), Error);
+  EXPECT_THROW(display->Show([] { Pattern p; p.kind = Pattern::Kind::kDot; p.dot_radius_px = -1; return p; }()), common::Error);
 }
 
 TEST_F(SdlDummyTest, RejectsAMissingDisplayIndex) {
   try {
     SdlDisplay display(99, {});
     FAIL() << "display 99 should not exist";
-  } catch (const Error& error) {
-    if (error.kind() == ErrorKind::kHardware) GTEST_SKIP() << "SDL video unavailable: " << error.what();
-    EXPECT_EQ(error.kind(), ErrorKind::kInvalidInput);
+  } catch (const common::Error& error) {
+    if (error.kind() == common::ErrorKind::kHardware) GTEST_SKIP() << "SDL video unavailable: " << error.what();
+    EXPECT_EQ(error.kind(), common::ErrorKind::kInvalidInput);
   }
 }
 

@@ -40,10 +40,10 @@ class SimulatedSession : public ::testing::Test {
     return whole;
   }
   static void TearDownTestSuite() { folder_.reset(); }
-  void TearDown() override { SetInterruptRequested(false); }
+  void TearDown() override { common::SetInterruptRequested(false); }
 
-  static SimulationOptions& Options() {
-    static SimulationOptions options;
+  static simulate::SimulationOptions& Options() {
+    static simulate::SimulationOptions options;
     return options;
   }
 
@@ -88,7 +88,7 @@ TEST_F(SimulatedSession, ResumedBetweenTwoDarkFramesStoresTheUninterruptedBytes)
   }
   fs::copy_file(Whole() / "session" / "images" / "dark" / "e0" / "r0.png",
                 out / "session" / "images" / "dark" / "e0" / "r0.png");
-  const std::string journal = ReadTextFile(Whole() / "session" / "journal.jsonl");
+  const std::string journal = common::ReadTextFile(Whole() / "session" / "journal.jsonl");
   const std::string first_line = journal.substr(0, journal.find('\n') + 1);
   ASSERT_NE(first_line.find("\"dark/e0/r0\""), std::string::npos) << first_line;
   std::ofstream(out / "session" / "journal.jsonl", std::ios::binary) << first_line;
@@ -107,7 +107,7 @@ TEST_F(SimulatedSession, CtrlCLeavesAResumableSessionWithTheSameBytes) {
     while (!done) {
       std::error_code error;
       if (fs::file_size(journal, error) > 600 && !error) {
-        SetInterruptRequested(true);
+        common::SetInterruptRequested(true);
         return;
       }
       std::this_thread::sleep_for(std::chrono::microseconds(200));
@@ -116,12 +116,12 @@ TEST_F(SimulatedSession, CtrlCLeavesAResumableSessionWithTheSameBytes) {
   try {
     SimulateSession(out, Options());
     ADD_FAILURE() << "the interrupt was not noticed";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kInterrupted) << e.what();
+  } catch (const common::Error& e) {
+    EXPECT_EQ(e.kind(), common::ErrorKind::kInterrupted) << e.what();
   }
   done = true;
   interrupter.join();
-  SetInterruptRequested(false);
+  common::SetInterruptRequested(false);
   const SimulationOutput resumed = SimulateSession(out, Options());
   EXPECT_GT(resumed.resumed, 0);
   EXPECT_LT(resumed.resumed, resumed.images);
@@ -133,7 +133,7 @@ TEST_F(SimulatedSession, ACompleteSessionOrAForeignFolderIsNeverTouched) {
     try {
       SimulateSession(out, Options());
       ADD_FAILURE() << out << " was not refused";
-    } catch (const Error& e) {
+    } catch (const common::Error& e) {
       EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
       EXPECT_NE(std::string(e.what()).find(out.string()), std::string::npos) << e.what();
     }
@@ -148,10 +148,10 @@ TEST_F(SimulatedSession, ACompleteSessionOrAForeignFolderIsNeverTouched) {
 }
 
 TEST_F(SimulatedSession, BadOptionsAreRefusedBeforeAnythingIsWritten) {
-  SimulationOptions options = Options();
+  simulate::SimulationOptions options = Options();
   options.eta = 0.5;
   const fs::path out = folder_->path() / "bad_eta";
-  EXPECT_THROW(SimulateSession(out, options), Error);
+  EXPECT_THROW(SimulateSession(out, options), common::Error);
   EXPECT_FALSE(fs::exists(out));
 }
 

@@ -98,23 +98,23 @@ TEST(V4l2NegotiationTest, HonoursAnExplicitFormatAndRejectsAMissingOne) {
   V4l2Camera camera(fake, "/dev/video0", options);
   EXPECT_EQ(camera.format().fourcc, static_cast<uint32_t>(V4L2_PIX_FMT_YUYV));
   options.fourcc = "RGB3";
-  ExpectError(ErrorKind::kHardware, "does not offer format RGB3",
+  ExpectError(common::ErrorKind::kHardware, "does not offer format RGB3",
               [&] { V4l2Camera other(fake, "/dev/video0", options); });
 }
 
 TEST(V4l2NegotiationTest, RejectsDevicesWithoutCaptureOrDecodableFormats) {
   auto output_only = std::make_shared<FakeV4l2Device>();
   output_only->Node().device_caps = V4L2_CAP_VIDEO_OUTPUT | V4L2_CAP_STREAMING;
-  ExpectError(ErrorKind::kHardware, "not a single-planar video capture device",
+  ExpectError(common::ErrorKind::kHardware, "not a single-planar video capture device",
               [&] { V4l2Camera camera(output_only, "/dev/video0"); });
   ExpectNoLeak(*output_only);
 
   auto no_streaming = std::make_shared<FakeV4l2Device>();
   no_streaming->Node().device_caps = V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_READWRITE;
-  ExpectError(ErrorKind::kHardware, "streaming", [&] { V4l2Camera camera(no_streaming, "/dev/video0"); });
+  ExpectError(common::ErrorKind::kHardware, "streaming", [&] { V4l2Camera camera(no_streaming, "/dev/video0"); });
 
   auto undecodable = FakeWithFormats({{V4L2_PIX_FMT_NV12, {{16, 8}}}});
-  ExpectError(ErrorKind::kHardware, "NV12", [&] { V4l2Camera camera(undecodable, "/dev/video0"); });
+  ExpectError(common::ErrorKind::kHardware, "NV12", [&] { V4l2Camera camera(undecodable, "/dev/video0"); });
   ExpectNoLeak(*undecodable);
 }
 
@@ -187,10 +187,10 @@ TEST(V4l2ControlTest, RangeCheckingAgainstQueryctrl) {
   V4l2Options options;
   V4l2Camera camera(fake, "/dev/video0", options);
   fake->log.clear();
-  ExpectError(ErrorKind::kInvalidInput, "outside the camera's range", [&] { camera.SetExposure({0.6, 1.0}); });
-  ExpectError(ErrorKind::kInvalidInput, "outside the camera's range", [&] { camera.SetExposure({1e-5, 1.0}); });
-  ExpectError(ErrorKind::kInvalidInput, "gain units", [&] { camera.SetExposure({0.01, 2.0}); });
-  ExpectError(ErrorKind::kInvalidInput, "positive", [&] { camera.SetExposure({-1.0, 1.0}); });
+  ExpectError(common::ErrorKind::kInvalidInput, "outside the camera's range", [&] { camera.SetExposure({0.6, 1.0}); });
+  ExpectError(common::ErrorKind::kInvalidInput, "outside the camera's range", [&] { camera.SetExposure({1e-5, 1.0}); });
+  ExpectError(common::ErrorKind::kInvalidInput, "gain units", [&] { camera.SetExposure({0.01, 2.0}); });
+  ExpectError(common::ErrorKind::kInvalidInput, "positive", [&] { camera.SetExposure({-1.0, 1.0}); });
   EXPECT_TRUE(fake->log.empty()) << "rejected settings must not touch the device";
   camera.SetExposure({0.0123, 1.0});  // 123 units snaps to the step grid 5, 15, ..., 125
   EXPECT_EQ(fake->Control(V4L2_CID_EXPOSURE_ABSOLUTE), 125);
@@ -199,14 +199,14 @@ TEST(V4l2ControlTest, RangeCheckingAgainstQueryctrl) {
   V4l2Camera scaled(FakeWithFormats({{V4L2_PIX_FMT_GREY, {{8, 4}}}}), "/dev/video0", options);
   scaled.SetExposure({0.01, 2.0});
   EXPECT_DOUBLE_EQ(scaled.Capture().gain, 2.0);
-  ExpectError(ErrorKind::kInvalidInput, "gain 20", [&] { scaled.SetExposure({0.01, 20.0}); });
+  ExpectError(common::ErrorKind::kInvalidInput, "gain 20", [&] { scaled.SetExposure({0.01, 20.0}); });
 }
 
 TEST(V4l2ControlTest, CameraWithoutAbsoluteExposureFailsClearly) {
   auto fake = std::make_shared<FakeV4l2Device>();
   fake->Node().controls.erase(V4L2_CID_EXPOSURE_ABSOLUTE);
   V4l2Camera camera(fake, "/dev/video0");
-  ExpectError(ErrorKind::kHardware, "V4L2_CID_EXPOSURE_ABSOLUTE", [&] { camera.SetExposure({0.01, 1.0}); });
+  ExpectError(common::ErrorKind::kHardware, "V4L2_CID_EXPOSURE_ABSOLUTE", [&] { camera.SetExposure({0.01, 1.0}); });
 }
 
 TEST(V4l2DiscardTest, FramesAfterAnExposureChangeCarryTheNewExposure) {
@@ -280,7 +280,7 @@ TEST(V4l2BufferTest, DamagedAndShortFramesAreSkippedOrReportedAndRequeued) {
   mjpeg->jpeg_payload = testing::EncodeTestJpeg(16, 8);
   mjpeg->jpeg_payload.resize(mjpeg->jpeg_payload.size() / 3);  // truncated transfer
   V4l2Camera broken(mjpeg, "/dev/video0");
-  ExpectError(ErrorKind::kHardware, "JPEG", [&] { broken.Capture(); });
+  ExpectError(common::ErrorKind::kHardware, "JPEG", [&] { broken.Capture(); });
   EXPECT_EQ(mjpeg->queued_indices.size(), 4u) << "the buffer must go back after a decode failure";
 }
 
@@ -290,10 +290,10 @@ TEST(V4l2ErrorTest, UnplugMidStreamGivesHardwareErrorsAndNoLeak) {
   {
     V4l2Camera camera(fake, "/dev/video0");
     for (int i = 0; i < 3; ++i) camera.Capture();
-    ExpectError(ErrorKind::kHardware, "/dev/video0: VIDIOC_DQBUF failed: No such device",
+    ExpectError(common::ErrorKind::kHardware, "/dev/video0: VIDIOC_DQBUF failed: No such device",
                 [&] { camera.Capture(); });
-    ExpectError(ErrorKind::kHardware, "reconnect", [&] { camera.Capture(); });
-    ExpectError(ErrorKind::kHardware, "No such device", [&] { camera.SetExposure({0.02, 1.0}); });
+    ExpectError(common::ErrorKind::kHardware, "reconnect", [&] { camera.Capture(); });
+    ExpectError(common::ErrorKind::kHardware, "No such device", [&] { camera.SetExposure({0.02, 1.0}); });
   }
   ExpectNoLeak(*fake);
 }
@@ -305,7 +305,7 @@ TEST(V4l2ErrorTest, TimeoutIsAHardwareErrorAndTheCameraRecovers) {
   {
     V4l2Camera camera(fake, "/dev/video0", options);
     fake->stall = true;
-    ExpectError(ErrorKind::kHardware, "no frame within", [&] { camera.Capture(); });
+    ExpectError(common::ErrorKind::kHardware, "no frame within", [&] { camera.Capture(); });
     fake->stall = false;  // a stalled bus that comes back: the next capture works
     EXPECT_EQ(camera.Capture().pixels[0], 100);
   }
@@ -316,19 +316,19 @@ TEST(V4l2ErrorTest, SetupFailuresNameTheCallAndReleaseEverything) {
   {
     auto fake = std::make_shared<FakeV4l2Device>();
     fake->Node().open_error = EBUSY;
-    ExpectError(ErrorKind::kHardware, "open failed: Device or resource busy",
+    ExpectError(common::ErrorKind::kHardware, "open failed: Device or resource busy",
                 [&] { V4l2Camera camera(fake, "/dev/video0"); });
   }
   for (unsigned long call : {VIDIOC_S_FMT, VIDIOC_REQBUFS, VIDIOC_STREAMON, VIDIOC_QBUF}) {
     auto fake = std::make_shared<FakeV4l2Device>();
     fake->fail_ioctl[call] = EIO;
-    ExpectError(ErrorKind::kHardware, "VIDIOC_" + testing::IoctlName(call) + " failed: Input/output error",
+    ExpectError(common::ErrorKind::kHardware, "VIDIOC_" + testing::IoctlName(call) + " failed: Input/output error",
                 [&] { V4l2Camera camera(fake, "/dev/video0"); });
     ExpectNoLeak(*fake);
   }
   auto fake = std::make_shared<FakeV4l2Device>();
   fake->fail_mmap_at_index = 2;
-  ExpectError(ErrorKind::kHardware, "mmap failed", [&] { V4l2Camera camera(fake, "/dev/video0"); });
+  ExpectError(common::ErrorKind::kHardware, "mmap failed", [&] { V4l2Camera camera(fake, "/dev/video0"); });
   ExpectNoLeak(*fake);  // buffers 0 and 1 were mapped and must be unmapped again
 }
 

@@ -56,7 +56,7 @@ class BoardPhotos : public ::testing::Test {
     try {
       CalibrateFromPhotos(files, board_, {}, /*progress=*/false);
       ADD_FAILURE() << "not refused";
-    } catch (const Error& e) {
+    } catch (const common::Error& e) {
       return e.what();
     }
     return {};
@@ -82,7 +82,7 @@ TEST_F(BoardPhotos, RecoverTheCameraThatTookThem) {
 
   const std::filesystem::path json_path = folder_.path() / "camera.json";
   WriteCameraCalibration(json_path, board_, report);
-  const nlohmann::json written = nlohmann::json::parse(ReadTextFile(json_path));
+  const nlohmann::json written = nlohmann::json::parse(common::ReadTextFile(json_path));
   EXPECT_EQ(written.at("format"), kCameraCalibrationFormat);
   EXPECT_EQ(written.at("version"), kCameraCalibrationVersion);
   EXPECT_EQ(written.at("board"), board_.ToString());

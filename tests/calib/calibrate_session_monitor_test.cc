@@ -34,7 +34,7 @@ namespace fs = std::filesystem;
 // runs `right` and its pixel y axis `down`; right x down points into the screen (-z).
 struct Orientation {
   double degrees;
-  Vec3 right, down;
+  model::Vec3 right, down;
 };
 
 void PrintTo(const Orientation& o, std::ostream* out) { *out << o.degrees << " degrees"; }
@@ -56,7 +56,7 @@ fs::path Root() {
 fs::path Simulate(const std::string& name, double orientation_deg, bool mirrored) {
   const fs::path out = Root() / name;
   if (fs::exists(out / "session" / "session.json")) return out;
-  SimulationOptions options;
+  simulate::SimulationOptions options;
   options.preset = "tiny";
   options.progress = false;
   options.monitor_orientation_deg = orientation_deg;
@@ -74,18 +74,18 @@ CalibrateSessionOptions Quiet() {
 
 class PhysicalMonitorTest : public ::testing::TestWithParam<Orientation> {
  protected:
-  static void SetUpTestSuite() { ProgressBar::SetEnabled(false); }
+  static void SetUpTestSuite() { common::ProgressBar::SetEnabled(false); }
 };
 
 TEST_P(PhysicalMonitorTest, DotsLandWhereAScreenLyingSoShowsThem) {
   const Orientation& o = GetParam();
   const fs::path out = Simulate("o" + std::to_string(static_cast<int>(o.degrees)), o.degrees, false);
   const session::Session session = session::Session::Open(out / "session");
-  const RigTruth truth = ReadRigTruth(out / "truth" / "rig.json");
+  const simulate::RigTruth truth = simulate::ReadRigTruth(out / "truth" / "rig.json");
   // The screen's active area: centre, size and distance are the rig's; its axes are the test's.
-  const MonitorConfig& m = truth.monitor;
-  const Vec3 corner = Vec3(m.centre.x(), m.centre.y(), -m.distance) - 0.5 * m.width * o.right - 0.5 * m.height * o.down;
-  std::vector<Vec3> expected;
+  const simulate::MonitorConfig& m = truth.monitor;
+  const model::Vec3 corner = model::Vec3(m.centre.x(), m.centre.y(), -m.distance) - 0.5 * m.width * o.right - 0.5 * m.height * o.down;
+  std::vector<model::Vec3> expected;
   for (const auto& [i, j] : session.rig().dots.positions_px) {
     expected.push_back(corner + m.pixel_pitch * ((i + 0.5) * o.right + (j + 0.5) * o.down));
   }
@@ -115,7 +115,7 @@ TEST_P(PhysicalMonitorTest, DotsLandWhereAScreenLyingSoShowsThem) {
   process::ProcessSession(session, c, out / "processed", options);
   const fit::SliceStore store = fit::SliceStore::Open(out / "processed");
   size_t count = 0;
-  const double median = svbtdf::testing::MedianBtdfError(store, ReadMaterialTruth(out / "truth"), expected,
+  const double median = svbtdf::testing::MedianBtdfError(store, simulate::ReadMaterialTruth(out / "truth"), expected,
                                                          truth.pose.Centre(), &count);
   std::printf("orientation %3.0f: median |R/R_true - 1| %.4f over %zu samples\n", o.degrees, median, count);
   ASSERT_GT(count, 0u);
@@ -131,15 +131,15 @@ void ExpectRefused(const fs::path& session, const std::string& file, const std::
   try {
     CalibrateSession(session::Session::Open(session), Quiet());
     ADD_FAILURE() << session << " was calibrated; expected an error saying '" << words << "'";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kFormat);
+  } catch (const common::Error& e) {
+    EXPECT_EQ(e.kind(), common::ErrorKind::kFormat);
     EXPECT_NE(std::string(e.what()).find(file), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
   }
 }
 
 TEST(PhysicalMonitor, AMirroredDisplayIsRefusedNamingTheFiducialCapture) {
-  ProgressBar::SetEnabled(false);
+  common::ProgressBar::SetEnabled(false);
   const fs::path out = Simulate("mirrored", 0.0, /*mirrored=*/true);
   ExpectRefused(out / "session", "fiducials/e0.png", "mirrored");
 }
@@ -150,14 +150,14 @@ fs::path CopyWithEditedRig(const fs::path& out, const std::string& name,
   const fs::path copy = Root() / name;
   fs::remove_all(copy);
   fs::copy(out / "session", copy, fs::copy_options::recursive);
-  nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(copy / "session.json"));
+  nlohmann::json manifest = nlohmann::json::parse(common::ReadTextFile(copy / "session.json"));
   edit(manifest["rig"]);
   std::ofstream(copy / "session.json", std::ios::trunc) << manifest.dump(2);
   return copy;
 }
 
 TEST(PhysicalMonitor, ALabNoteThatContradictsTheFiducialsIsRefused) {
-  ProgressBar::SetEnabled(false);
+  common::ProgressBar::SetEnabled(false);
   const fs::path copy = CopyWithEditedRig(Simulate("o0", 0.0, false), "contradicted", [](nlohmann::json& rig) {
     rig["monitor"]["orientation_deg"] = 180.0;  // the lab noted the screen upside down
   });
@@ -167,7 +167,7 @@ TEST(PhysicalMonitor, ALabNoteThatContradictsTheFiducialsIsRefused) {
 // A misspelt emission profile would silently become isotropic and bias every dot's L_q: refused
 // before any image is read, naming the manifest and the key.
 TEST(PhysicalMonitor, AMisspeltEmissionProfileIsRefused) {
-  ProgressBar::SetEnabled(false);
+  common::ProgressBar::SetEnabled(false);
   const fs::path copy = CopyWithEditedRig(Simulate("o0", 0.0, false), "misspelt", [](nlohmann::json& rig) {
     rig["monitor"]["emission"] = "lambertain";
   });
@@ -178,7 +178,7 @@ TEST(PhysicalMonitor, AMisspeltEmissionProfileIsRefused) {
 // fit no flat grid of the stated layout: refused, naming the all-dots image, not turned into
 // wrong dot positions.
 TEST(PhysicalMonitor, DotsFarOffAnyGridOfTheStatedLayoutAreRefused) {
-  ProgressBar::SetEnabled(false);
+  common::ProgressBar::SetEnabled(false);
   const fs::path copy = CopyWithEditedRig(Simulate("o90", 90.0, false), "moved", [](nlohmann::json& rig) {
     int k = 0;
     for (nlohmann::json& p : rig["dots"]["positions_px"]) {

@@ -31,14 +31,14 @@ namespace fs = std::filesystem;
 class CalibrateSessionTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    ProgressBar::SetEnabled(false);
+    common::ProgressBar::SetEnabled(false);
     folder_ = std::make_unique<svbtdf::testing::TempFolder>("calibrate-session");
     root_ = folder_->path();
-    SimulationOptions options;
+    simulate::SimulationOptions options;
     options.preset = "tiny";
     options.progress = false;
     acquire::SimulateSession(root_ / "sim", options);
-    truth_ = ReadRigTruth(root_ / "sim" / "truth" / "rig.json");
+    truth_ = simulate::ReadRigTruth(root_ / "sim" / "truth" / "rig.json");
   }
   static void TearDownTestSuite() { folder_.reset(); }
 
@@ -61,13 +61,13 @@ class CalibrateSessionTest : public ::testing::Test {
   // and only the edited image is journalled anew (re-encoding the whole-sensor board views would
   // take most of the test's time).
   static fs::path EditedCopy(const std::string& name, const std::string& key,
-                             const std::function<void(CameraImage*)>& edit) {
+                             const std::function<void(common::CameraImage*)>& edit) {
     const fs::path copy = root_ / name;
     fs::remove_all(copy);
     const session::Session original = session::Session::Open(root_ / "sim" / "session");
     fs::copy(original.folder(), copy, fs::copy_options::recursive);
     const session::SessionEntry& entry = original.Entry(key);
-    CameraImage image = original.ReadImage(key);
+    common::CameraImage image = original.ReadImage(key);
     edit(&image);
     std::ifstream journal_in(copy / "journal.jsonl");
     std::string kept, line;
@@ -85,7 +85,7 @@ class CalibrateSessionTest : public ::testing::Test {
 
   static inline std::unique_ptr<svbtdf::testing::TempFolder> folder_;
   static inline fs::path root_;
-  static inline RigTruth truth_;
+  static inline simulate::RigTruth truth_;
 };
 
 // Issue 4's targets on the tiny rig: the paper's geometry (camera 1 m from the sample at 45
@@ -113,9 +113,9 @@ TEST_F(CalibrateSessionTest, RecoversTheRigWithinTheStatedTolerances) {
   EXPECT_LT(centre_error_mm, 10.0);
   // d is where the monitor's plane crosses the sample's normal through its centre: the screen
   // is tilted, so not its centre's depth.
-  const MonitorFrame screen = MonitorFrame::Of(truth_.monitor);
+  const simulate::MonitorFrame screen = simulate::MonitorFrame::Of(truth_.monitor);
   EXPECT_NEAR(c.monitor.distance_m, -screen.normal.dot(screen.origin) / screen.normal.z(), 0.5e-3);
-  EXPECT_LT(std::acos(std::min(1.0, c.monitor.normal.dot(screen.normal))), 0.2 * kPi / 180);  // the tilt, within 0.2 degrees
+  EXPECT_LT(std::acos(std::min(1.0, c.monitor.normal.dot(screen.normal))), 0.2 * model::kPi / 180);  // the tilt, within 0.2 degrees
   EXPECT_LT(dot_error_mm, 0.2);
   EXPECT_EQ(c.monitor.dots.size(), truth_.dots.size());
   EXPECT_NEAR(c.monitor.orientation_deg, truth_.monitor.orientation_deg, 0.2);  // the preset's 91.5
@@ -143,7 +143,7 @@ TEST_F(CalibrateSessionTest, CalibrationFileRoundTripsAndDamageIsAClearError) {
   }
   EXPECT_EQ(back.provenance, c.provenance);
 
-  const std::string original = ReadTextFile(path);
+  const std::string original = common::ReadTextFile(path);
   std::mt19937_64 rng(3);
   int refused = 0;
   for (int trial = 0; trial < 300; ++trial) {
@@ -156,7 +156,7 @@ TEST_F(CalibrateSessionTest, CalibrationFileRoundTripsAndDamageIsAClearError) {
     std::ofstream(damaged_path, std::ios::trunc) << damaged;
     try {
       ReadSessionCalibration(damaged_path);
-    } catch (const Error& e) {
+    } catch (const common::Error& e) {
       ++refused;
       EXPECT_NE(std::string(e.what()).find("damaged.json"), std::string::npos) << e.what();
     } catch (const std::exception& e) {
@@ -174,10 +174,10 @@ TEST_F(CalibrateSessionTest, ProcessingWithTheCalibrationMeasuresTheTrueBtdf) {
   process::ProcessSession(session, c, root_ / "processed", options);
   const fit::SliceStore store = fit::SliceStore::Open(root_ / "processed");
   // Measured R against the truth at the true directions of each sample (5% of the peak and up).
-  std::vector<Vec3> dots;
-  for (const Dot& dot : truth_.dots) dots.push_back(dot.position);
+  std::vector<model::Vec3> dots;
+  for (const simulate::Dot& dot : truth_.dots) dots.push_back(dot.position);
   size_t count = 0;
-  const double median = svbtdf::testing::MedianBtdfError(store, ReadMaterialTruth(root_ / "sim" / "truth"), dots,
+  const double median = svbtdf::testing::MedianBtdfError(store, simulate::ReadMaterialTruth(root_ / "sim" / "truth"), dots,
                                                          truth_.pose.Centre(), &count);
   std::printf("median |R/R_true - 1| with the calibrated rig: %.4f over %zu samples\n", median, count);
   ASSERT_GT(count, 0u);
@@ -187,7 +187,7 @@ TEST_F(CalibrateSessionTest, ProcessingWithTheCalibrationMeasuresTheTrueBtdf) {
 TEST_F(CalibrateSessionTest, MissingAndExtraDotsAreMatchedCorrectly) {
   const SessionCalibration reference = CalibrateSession(session::Session::Open(root_ / "sim" / "session"), Quiet());
   // Black out two dots and add a bright speck far from the grid.
-  const fs::path edited = EditedCopy("edited", "all_dots/e0", [&](CameraImage* image) {
+  const fs::path edited = EditedCopy("edited", "all_dots/e0", [&](common::CameraImage* image) {
     for (int q : {7, 20}) {
       const Eigen::Vector2d& p = reference.monitor.dots[q].image_px;
       for (int y = static_cast<int>(p.y()) - 5; y <= static_cast<int>(p.y()) + 5; ++y) {
@@ -215,13 +215,13 @@ TEST_F(CalibrateSessionTest, MissingAndExtraDotsAreMatchedCorrectly) {
 }
 
 TEST_F(CalibrateSessionTest, ABoardThatIsNotFoundIsAnErrorNamingTheImage) {
-  const fs::path edited = EditedCopy("no_board", "sample_plane/v00", [](CameraImage* image) {
+  const fs::path edited = EditedCopy("no_board", "sample_plane/v00", [](common::CameraImage* image) {
     std::fill(image->pixels.begin(), image->pixels.end(), 100);
   });
   try {
     CalibrateSession(session::Session::Open(edited), Quiet());
     FAIL() << "a blank sample-plane view was accepted";
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find("sample_plane/v00.png"), std::string::npos) << e.what();
   }
   // Nothing in the session was written by the failed calibration.

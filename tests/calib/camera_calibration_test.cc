@@ -48,7 +48,7 @@ TEST(BoardSpec, ParsesAndRejects) {
   EXPECT_EQ(charuco.CornerPositions().size(), 35u);
   for (const char* bad : {"chess:9x6:25", "chessboard:9x6", "chessboard:1x6:25", "chessboard:9x6:0",
                           "charuco:8x6:30:40", "charuco:8x6:30:20:NOPE", "chessboard:99999999999x6:25"}) {
-    EXPECT_THROW(BoardSpec::Parse(bad), Error) << bad;
+    EXPECT_THROW(BoardSpec::Parse(bad), common::Error) << bad;
   }
 }
 
@@ -142,7 +142,7 @@ TEST(CameraCalibration, TooFewViewsIsAClearError) {
   try {
     CalibrateCamera(detections, cv::Size(truth.width, truth.height));
     FAIL() << "expected an error";
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find("2 usable board views"), std::string::npos) << e.what();
   }
 }

@@ -110,8 +110,8 @@ TEST(DotIdentification, AMirroredScreenIsRefused) {
     try {
       IdentifyDots(scene.blob_xy, scene.blob_lit, scene.grid, std::nullopt, "SESSION/images/fiducials/e0.png");
       ADD_FAILURE() << "a mirrored screen at " << screen.orientation_deg << " degrees was accepted";
-    } catch (const Error& e) {
-      EXPECT_EQ(e.kind(), ErrorKind::kFormat);
+    } catch (const common::Error& e) {
+      EXPECT_EQ(e.kind(), common::ErrorKind::kFormat);
       EXPECT_NE(std::string(e.what()).find("fiducials/e0.png"), std::string::npos) << e.what();
       EXPECT_NE(std::string(e.what()).find("mirrored"), std::string::npos) << e.what();
     }
@@ -125,7 +125,7 @@ TEST(DotIdentification, ContradictionsAndMissingEvidenceAreRefused) {
     try {
       IdentifyDots(scene.blob_xy, lit, grid, declared, "the-source");
       ADD_FAILURE() << "accepted; expected an error saying '" << words << "'";
-    } catch (const Error& e) {
+    } catch (const common::Error& e) {
       EXPECT_NE(std::string(e.what()).find("the-source"), std::string::npos) << e.what();
       EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
     }

@@ -79,10 +79,10 @@ TEST(HdrMerge, ErrorsNameTheOffendingImage) {
   try {
     MergeExposures({{a, 0.01, 1.0, "dot/q0001/e0"}, {b, 0.1, 1.0, "dot/q0001/e1"}}, cv::Mat(), Radiometry{});
     FAIL();
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find("dot/q0001/e1"), std::string::npos);
   }
-  EXPECT_THROW(MergeExposures({{a, 0.0, 1.0, "zero"}}, cv::Mat(), Radiometry{}), Error);
+  EXPECT_THROW(MergeExposures({{a, 0.0, 1.0, "zero"}}, cv::Mat(), Radiometry{}), common::Error);
 }
 
 // The merge is the maximum-likelihood rate: the sum of the usable values over the sum of their

@@ -38,7 +38,7 @@ class AcquireCommand : public ::testing::Test {
   }
   static size_t JournalLines(const fs::path& session) {
     if (!fs::exists(session / "journal.jsonl")) return 0;
-    const std::string text = ReadTextFile(session / "journal.jsonl");
+    const std::string text = common::ReadTextFile(session / "journal.jsonl");
     return static_cast<size_t>(std::count(text.begin(), text.end(), '\n'));
   }
   // The number of images the tiny plan captures (the simulated session holds all of them).
@@ -99,7 +99,7 @@ TEST_F(AcquireCommand, AnAcquiredSessionIsFittedByRun) {
   const auto compare = RunSvbtdf("compare " + material.string() + " " + (Sim() / "truth").string() + " --json " +
                                  metrics_file.string());
   ASSERT_EQ(compare.exit_code, 0) << compare.output;
-  const nlohmann::json metrics = nlohmann::json::parse(ReadTextFile(metrics_file));
+  const nlohmann::json metrics = nlohmann::json::parse(common::ReadTextFile(metrics_file));
   std::printf("tiny acquired, run, compared: %s\n", metrics.dump().c_str());
   // Measured: rho_d 1.4%, held-out 23% (a broken chain, a lost factor or a wrong geometry, is
   // off by 100% or more).
@@ -124,7 +124,7 @@ TEST_F(AcquireCommand, KilledMidCaptureResumesWithNoMissingDuplicatedOrCorruptIm
   EXPECT_EQ(RunSvbtdf("session verify " + out.string()).exit_code, 0);
   // The journal names every planned key exactly once.
   std::map<std::string, int> times;
-  std::istringstream lines(ReadTextFile(out / "journal.jsonl"));
+  std::istringstream lines(common::ReadTextFile(out / "journal.jsonl"));
   for (std::string line; std::getline(lines, line);) {
     if (!line.empty()) ++times[nlohmann::json::parse(line).at("key").get<std::string>()];
   }
@@ -152,9 +152,9 @@ TEST_F(AcquireCommand, CtrlCStopsCleanlyWithExitCode130AndTheRunResumes) {
 TEST_F(AcquireCommand, BadArgumentsPlansAndFoldersAreClearErrors) {
   const std::string sim = "--camera sim:" + Sim().string() + " --display sim";
   const fs::path garbled = root_ / "garbled.json";
-  WriteTextAtomically(garbled, "{\"format\": \"svbtdf-capture-plan\", \"version\": 1, \"dots\": {\"cols\": 2");
+  common::WriteTextAtomically(garbled, "{\"format\": \"svbtdf-capture-plan\", \"version\": 1, \"dots\": {\"cols\": 2");
   const fs::path changed = root_ / "changed.json";
-  WriteTextAtomically(changed, R"({"format": "svbtdf-capture-plan", "version": 1,
+  common::WriteTextAtomically(changed, R"({"format": "svbtdf-capture-plan", "version": 1,
     "dots": {"cols": 2, "rows": 2, "pitch": [40, 40], "origin": [600, 400], "radius": 4},
     "exposures_s": [0.01]})");
   const fs::path partial = root_ / "partial";

@@ -19,14 +19,14 @@ TEST(BtdfEvalCommand, PrintsTheModelValuesAsJson) {
       "--wi 0.3 0.1 -1 --wo -0.2 0.1 1 --json");
   ASSERT_EQ(result.exit_code, 0) << result.output;
   const nlohmann::json json = nlohmann::json::parse(result.output);
-  const Vec3 wi = Vec3(0.3, 0.1, -1).normalized(), wo = Vec3(-0.2, 0.1, 1).normalized();
-  const GgxNdf ndf(0.3);
-  const DualMicrofacetModel model(1.5, SmithShadowing::Ggx(0.25));
+  const model::Vec3 wi = model::Vec3(0.3, 0.1, -1).normalized(), wo = model::Vec3(-0.2, 0.1, 1).normalized();
+  const model::GgxNdf ndf(0.3);
+  const model::DualMicrofacetModel model(1.5, model::SmithShadowing::Ggx(0.25));
   const double rho_T = model.RhoT(ndf, wi, wo), rho_B = model.RhoB(ndf, wi, wo);
   ASSERT_GT(rho_T, 0.0);
   EXPECT_NEAR(json["rho_T"].get<double>(), rho_T, 1e-12 * rho_T);
   EXPECT_NEAR(json["rho_B"].get<double>(), rho_B, 1e-12 * rho_B);
-  EXPECT_NEAR(json["rho"].get<double>(), LogBlend(rho_T, rho_B, 0.4), 1e-12 * rho_T);
+  EXPECT_NEAR(json["rho"].get<double>(), model::LogBlend(rho_T, rho_B, 0.4), 1e-12 * rho_T);
 }
 
 TEST(BtdfEvalCommand, BadInputIsOneClearLineAndExitCodeTwo) {

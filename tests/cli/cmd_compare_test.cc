@@ -33,7 +33,7 @@ class CompareCommand : public ::testing::Test {
     const auto result = RunSvbtdf("compare " + (root_ / name).string() + " " + (root_ / "sim" / "truth").string() +
                                   " --json " + json.string());
     EXPECT_EQ(result.exit_code, 0) << result.output;
-    return nlohmann::json::parse(ReadTextFile(json));
+    return nlohmann::json::parse(common::ReadTextFile(json));
   }
 
   static fs::path root_;
@@ -41,7 +41,7 @@ class CompareCommand : public ::testing::Test {
 fs::path CompareCommand::root_;
 
 TEST_F(CompareCommand, TheTruthItselfScoresNearPerfectly) {
-  const MaterialTruth truth = ReadMaterialTruth(root_ / "sim" / "truth");
+  const simulate::MaterialTruth truth = simulate::ReadMaterialTruth(root_ / "sim" / "truth");
   const nlohmann::json metrics = Compare(MaterialFromTruth(truth), "exact");
   std::printf("%s\n", metrics.dump().c_str());
   EXPECT_EQ(metrics["alpha_within_0_05"].get<double>(), 1.0);
@@ -53,7 +53,7 @@ TEST_F(CompareCommand, TheTruthItselfScoresNearPerfectly) {
 }
 
 TEST_F(CompareCommand, EachErrorShowsInItsOwnMetric) {
-  const MaterialTruth truth = ReadMaterialTruth(root_ / "sim" / "truth");
+  const simulate::MaterialTruth truth = simulate::ReadMaterialTruth(root_ / "sim" / "truth");
   fit::Material shifted = MaterialFromTruth(truth);
   for (float& a : shifted.alpha.pixels) a = a > 0.5f ? a - 0.1f : a + 0.1f;
   for (float& d : shifted.rho_d.pixels) d *= 1.2f;
@@ -67,10 +67,10 @@ TEST_F(CompareCommand, EachErrorShowsInItsOwnMetric) {
 }
 
 TEST_F(CompareCommand, RefusesToOverwriteItsOutputAndMismatchedSizes) {
-  const MaterialTruth truth = ReadMaterialTruth(root_ / "sim" / "truth");
+  const simulate::MaterialTruth truth = simulate::ReadMaterialTruth(root_ / "sim" / "truth");
   fit::WriteMaterial(root_ / "m", MaterialFromTruth(truth));
   const fs::path json = root_ / "exists.json";
-  WriteTextAtomically(json, "{}");
+  common::WriteTextAtomically(json, "{}");
   auto result = RunSvbtdf("compare " + (root_ / "m").string() + " " + (root_ / "sim" / "truth").string() + " --json " +
                           json.string());
   EXPECT_EQ(result.exit_code, 2) << result.output;

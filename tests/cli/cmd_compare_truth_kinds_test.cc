@@ -32,17 +32,17 @@ void WriteUniformMaterial(const fs::path& folder) {
   fit.alpha = 0.5;
   fit.k_s_rgb = {0.9, 0.9, 0.9};
   fit.k_s = 0.9;
-  const Hemicube grid(kResolution);
-  const GgxNdf ndf(0.2, 0.2);
+  const model::Hemicube grid(kResolution);
+  const model::GgxNdf ndf(0.2, 0.2);
   for (int c = 0; c < grid.num_cells(); ++c) fit.ln_d.push_back(std::log(std::max(ndf.D(grid.CellCenter(c)), 1e-6)));
-  FloatImage rho_d(kSize, kSize, 3, 0.01f);
+  common::FloatImage rho_d(kSize, kSize, 3, 0.01f);
   fit::WriteMaterial(folder, fit::AssembleMaterial(kSize, kSize, 1.5, kResolution, clustering, {fit}, rho_d));
 }
 
 nlohmann::json Compare(const fs::path& material, const fs::path& truth, const fs::path& json) {
   const auto result = RunSvbtdf("-q compare " + material.string() + " " + truth.string() + " --json " + json.string());
   EXPECT_EQ(result.exit_code, 0) << result.output;
-  return nlohmann::json::parse(ReadTextFile(json));
+  return nlohmann::json::parse(common::ReadTextFile(json));
 }
 
 TEST(CompareTruthKinds, ReportsBtdfErrorsAgainstAMonteCarloTruth) {
@@ -80,7 +80,7 @@ TEST(CompareTruthKinds, ReportsBtdfErrorsAgainstAMonteCarloTruth) {
   }
   EXPECT_FALSE(fs::exists(root / "report" / "alpha_truth.png"));
   // A truth folder that is neither kind is named.
-  WriteTextAtomically(root / "mc" / "truth" / "material.json", "{}", /*overwrite=*/true);
+  common::WriteTextAtomically(root / "mc" / "truth" / "material.json", "{}", /*overwrite=*/true);
   const auto bad = RunSvbtdf("compare " + (root / "material").string() + " " + (root / "mc" / "truth").string());
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("material.json"), std::string::npos) << bad.output;

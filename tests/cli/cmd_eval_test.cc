@@ -24,8 +24,8 @@ TEST(EvalCommand, PrintsTheMaterialsValueAtATexel) {
   const auto result = RunSvbtdf("eval " + dir.string() + " --texel 2 1 --wi 0.2 0.1 -1 --wo -0.3 0 1 --json");
   ASSERT_EQ(result.exit_code, 0) << result.output;
   const nlohmann::json json = nlohmann::json::parse(result.output);
-  const Rgb expected = fit::MaterialEvaluator(material).Evaluate(2, 1, Vec3(0.2, 0.1, -1).normalized(),
-                                                                 Vec3(-0.3, 0, 1).normalized());
+  const model::Rgb expected = fit::MaterialEvaluator(material).Evaluate(2, 1, model::Vec3(0.2, 0.1, -1).normalized(),
+                                                                 model::Vec3(-0.3, 0, 1).normalized());
   ASSERT_GT(expected[0], 0.02);
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(json["rgb"][c].get<double>(), expected[c], 1e-6 * expected[c]);
   // Outside the material, or a missing material: one clear line, exit 2 or 1.

@@ -58,7 +58,7 @@ TEST_F(FitCommand, GgxBaselineIsFittedWrittenAndEvaluated) {
   ASSERT_EQ(fitted.exit_code, 0) << fitted.output;
   EXPECT_NE(fitted.output.find("walter-ggx"), std::string::npos) << fitted.output;
   EXPECT_NE(fitted.output.find("material: " + (root_ / "ggx").string()), std::string::npos) << fitted.output;
-  const nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(root_ / "ggx" / "material.json"));
+  const nlohmann::json manifest = nlohmann::json::parse(common::ReadTextFile(root_ / "ggx" / "material.json"));
   EXPECT_EQ(manifest["btdf"], "walter-ggx");
   EXPECT_EQ(manifest["version"], 2);
   EXPECT_EQ(manifest["provenance"]["holdout"]["dots"].size(), 26u);  // 10% of 256 dots
@@ -69,8 +69,8 @@ TEST_F(FitCommand, GgxBaselineIsFittedWrittenAndEvaluated) {
   EXPECT_GT(value["baseline_alpha_x"].get<double>(), 0.0);
   // The command evaluates through the library's one path: the same value as in process.
   const fit::Material material = fit::ReadMaterial(root_ / "ggx");
-  const Rgb expected = fit::MaterialEvaluator(material).Evaluate(2, 3, Vec3(0, 0.3, -1).normalized(),
-                                                                 Vec3(0, -0.7, 0.7).normalized());
+  const model::Rgb expected = fit::MaterialEvaluator(material).Evaluate(2, 3, model::Vec3(0, 0.3, -1).normalized(),
+                                                                 model::Vec3(0, -0.7, 0.7).normalized());
   EXPECT_NEAR(value["rgb"][0].get<double>(), expected[0], 1e-6 * std::abs(expected[0]) + 1e-12);
   EXPECT_GE(value["rgb"][0].get<double>(), material.rho_d.at(2, 3, 0));
 }
@@ -79,11 +79,11 @@ TEST_F(FitCommand, AnExistingMaterialIsNeverOverwritten) {
   const auto first = RunSvbtdf(Fit("dual", "--representatives 0.1"));
   ASSERT_EQ(first.exit_code, 0) << first.output;
   EXPECT_NE(first.output.find("dual-microfacet"), std::string::npos) << first.output;
-  const std::string before = ReadTextFile(root_ / "dual" / "material.json");
+  const std::string before = common::ReadTextFile(root_ / "dual" / "material.json");
   const auto second = RunSvbtdf(Fit("dual", "--representatives 0.1"));
   EXPECT_EQ(second.exit_code, 2) << second.output;
   EXPECT_NE(second.output.find("never overwritten"), std::string::npos) << second.output;
-  EXPECT_EQ(ReadTextFile(root_ / "dual" / "material.json"), before);
+  EXPECT_EQ(common::ReadTextFile(root_ / "dual" / "material.json"), before);
   const nlohmann::json manifest = nlohmann::json::parse(before);
   EXPECT_EQ(manifest["version"], 1);  // dual-microfacet materials stay readable by version 1 readers
   EXPECT_EQ(manifest["btdf"], "dual-microfacet");

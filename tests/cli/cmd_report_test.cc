@@ -31,7 +31,7 @@ TEST(ReportCommand, WritesMapsAndNdfPicturesAndAPage) {
     EXPECT_TRUE(fs::exists(dir / "report" / file)) << file;
   }
   // Small maps are enlarged to at least 256 pixels by replication (3x2 -> 255x170 at scale 85).
-  const CameraImage alpha = ReadCameraImage(dir / "report" / "alpha.png");
+  const common::CameraImage alpha = common::ReadCameraImage(dir / "report" / "alpha.png");
   EXPECT_EQ(alpha.width, 3 * 85);
   EXPECT_EQ(alpha.height, 2 * 85);
   // A constant alpha map is one colour.

@@ -46,7 +46,7 @@ TEST_F(FitChain, OnePercentRepresentativesMeetTheHeldOutBound) {
 TEST_F(FitChain, AnInterruptedFitResumesFromItsCheckpoint) {
   const fs::path out = root_ / "resumed";
   // A checkpoint from another fit is refused, never mixed in.
-  WriteTextAtomically(root_ / "resumed.partial-fits.jsonl", "{\"fit\":{\"store\":\"elsewhere\"}}\n");
+  common::WriteTextAtomically(root_ / "resumed.partial-fits.jsonl", "{\"fit\":{\"store\":\"elsewhere\"}}\n");
   auto refused = RunSvbtdf("fit " + Processed() + " --out " + out.string() + " --representatives 0.02");
   EXPECT_EQ(refused.exit_code, 2) << refused.output;
   EXPECT_NE(refused.output.find("checkpoint"), std::string::npos) << refused.output;
@@ -80,7 +80,7 @@ TEST_F(FitChain, AnInterruptedFitResumesFromItsCheckpoint) {
   const auto direct = RunSvbtdf("fit " + Processed() + " --out " + (root_ / "direct").string() + " --representatives 0.02");
   ASSERT_EQ(direct.exit_code, 0) << direct.output;
   for (const char* map : {"alpha.exr", "k_s.exr", "shadowing_roughness.exr"}) {
-    EXPECT_EQ(ReadFloatImage(out / map).pixels, ReadFloatImage(root_ / "direct" / map).pixels) << map;
+    EXPECT_EQ(common::ReadFloatImage(out / map).pixels, common::ReadFloatImage(root_ / "direct" / map).pixels) << map;
   }
 }
 

@@ -33,7 +33,7 @@ void ExpectCompleteSimulation(const fs::path& out, const char* map = "alpha.exr"
   const session::Session session = session::Session::Open(out / "session");
   const session::SessionVerification verification = session.Verify();
   EXPECT_TRUE(verification.complete()) << verification.Summary();
-  const nlohmann::json rig = nlohmann::json::parse(ReadTextFile(out / "truth" / "rig.json"));
+  const nlohmann::json rig = nlohmann::json::parse(common::ReadTextFile(out / "truth" / "rig.json"));
   for (const char* key : {"fx", "fy", "cx", "cy", "distortion", "rms_px"}) {
     EXPECT_TRUE(rig["camera"].contains(key)) << key;
   }
@@ -105,7 +105,7 @@ TEST_F(SimulateCommand, AnInterruptedRunResumesToTheSameImages) {
 
 TEST_F(SimulateCommand, BadArgumentsAndFoldersAreClearErrors) {
   fs::create_directories(root_ / "busy");
-  WriteTextAtomically(root_ / "busy" / "notes.txt", "mine");
+  common::WriteTextAtomically(root_ / "busy" / "notes.txt", "mine");
   for (const std::string& arguments :
        {"simulate --preset nope --out " + (root_ / "x").string(), "simulate --preset tiny --out " + (root_ / "busy").string(),
         "simulate --preset tiny --eta 0.9 --out " + (root_ / "y").string(), std::string("simulate --preset tiny")}) {
@@ -113,7 +113,7 @@ TEST_F(SimulateCommand, BadArgumentsAndFoldersAreClearErrors) {
     EXPECT_EQ(result.exit_code, 2) << arguments << "\n" << result.output;
     EXPECT_NE(result.output.find("svbtdf: error: "), std::string::npos) << result.output;
   }
-  EXPECT_EQ(ReadTextFile(root_ / "busy" / "notes.txt"), "mine");
+  EXPECT_EQ(common::ReadTextFile(root_ / "busy" / "notes.txt"), "mine");
 }
 
 }  // namespace

@@ -49,7 +49,7 @@ class FitChain : public ::testing::Test {
     const auto compared = RunSvbtdf("compare " + (root_ / name).string() + " " + (root_ / "sim" / "truth").string() +
                                     " --json " + json.string());
     EXPECT_EQ(compared.exit_code, 0) << compared.output;
-    const nlohmann::json metrics = nlohmann::json::parse(ReadTextFile(json));
+    const nlohmann::json metrics = nlohmann::json::parse(common::ReadTextFile(json));
     std::printf("%s: %s\n", name.c_str(), metrics.dump().c_str());
     return metrics;
   }

@@ -49,7 +49,7 @@ class QualityCommand : public ::testing::Test {
   fs::path MislabelledSession() const {
     const fs::path bad = root_ / "bad-session";
     fs::copy(Session(), bad, fs::copy_options::recursive);
-    nlohmann::json calibration = nlohmann::json::parse(ReadTextFile(bad / "calibration.json"));
+    nlohmann::json calibration = nlohmann::json::parse(common::ReadTextFile(bad / "calibration.json"));
     nlohmann::json& dots = calibration["monitor"]["dots"];
     const nlohmann::json original = dots;
     const size_t n = dots.size();
@@ -67,7 +67,7 @@ class QualityCommand : public ::testing::Test {
     }
     calibration["monitor"]["residual_rms_mm"] = std::sqrt(sum / n);
     calibration["monitor"]["residual_max_mm"] = max;
-    WriteTextAtomically(bad / "calibration.json", calibration.dump(2));
+    common::WriteTextAtomically(bad / "calibration.json", calibration.dump(2));
     return bad;
   }
 
@@ -83,7 +83,7 @@ TEST_F(QualityCommand, AGoodTinySessionDrawsNoWarningAndRunStrictExitsZero) {
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_EQ(run.output.find("warning:"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("quality: no warnings"), std::string::npos) << run.output;
-  const nlohmann::json quality = nlohmann::json::parse(ReadTextFile(root_ / "good" / "quality.json"));
+  const nlohmann::json quality = nlohmann::json::parse(common::ReadTextFile(root_ / "good" / "quality.json"));
   EXPECT_EQ(quality["format"], "svbtdf-quality");
   EXPECT_EQ(quality["version"], 1);
   EXPECT_TRUE(quality["warnings"].empty()) << quality.dump(2);
@@ -154,9 +154,9 @@ TEST_F(QualityCommand, FitStrictChecksTheStoreItIsGivenAndRecordsEveryStage) {
   ASSERT_TRUE(fit::ReadQuality(root_ / "material", &warnings));
   EXPECT_TRUE(warnings.empty());
   // Its calibration made bad afterwards: `fit` reports the calibration it was given too.
-  nlohmann::json calibration = nlohmann::json::parse(ReadTextFile(root_ / "processed" / "calibration.json"));
+  nlohmann::json calibration = nlohmann::json::parse(common::ReadTextFile(root_ / "processed" / "calibration.json"));
   calibration["camera"]["rms_px"] = 2.5;
-  WriteTextAtomically(root_ / "processed" / "calibration.json", calibration.dump(2));
+  common::WriteTextAtomically(root_ / "processed" / "calibration.json", calibration.dump(2));
   const auto again = RunSvbtdf("-q fit --strict --representatives 0.25 " + (root_ / "processed").string() + " --out " +
                                (root_ / "material2").string());
   EXPECT_EQ(again.exit_code, fit::kQualityWarningExitCode) << again.output;

@@ -9,7 +9,7 @@
 #include "svbtdf/common/error.h"
 #include "temp_folder.h"
 
-namespace svbtdf {
+namespace svbtdf::common {
 namespace {
 
 namespace fs = std::filesystem;
@@ -55,4 +55,4 @@ TEST(AtomicFile, MissingFileErrorNamesTheFile) {
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::common

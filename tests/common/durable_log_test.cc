@@ -13,7 +13,7 @@
 #include "svbtdf/common/error.h"
 #include "temp_folder.h"
 
-namespace svbtdf {
+namespace svbtdf::common {
 namespace {
 namespace fs = std::filesystem;
 
@@ -108,4 +108,4 @@ TEST(DurableLog, AnUnwritableLogNamesItsFile) {
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::common

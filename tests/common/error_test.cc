@@ -6,7 +6,7 @@
 
 #include "svbtdf/common/error.h"
 
-namespace svbtdf {
+namespace svbtdf::common {
 namespace {
 
 TEST(Error, MessageNamesSubjectProblemAndHint) {
@@ -63,4 +63,4 @@ TEST(Error, ShorthandsThrowTheirKind) {
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::common

@@ -11,7 +11,7 @@
 #include "svbtdf/common/image_io.h"
 #include "temp_folder.h"
 
-namespace svbtdf {
+namespace svbtdf::common {
 namespace {
 namespace fs = std::filesystem;
 
@@ -97,4 +97,4 @@ TEST_F(ImageIo, NonFiniteValuesAreReportedWithTheirPixel) {
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::common

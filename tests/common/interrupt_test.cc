@@ -10,7 +10,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/interrupt.h"
 
-namespace svbtdf {
+namespace svbtdf::common {
 namespace {
 
 class Interrupt : public ::testing::Test {
@@ -77,4 +77,4 @@ TEST_F(InterruptDeathTest, ASecondSignalEndsTheProcess) {
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::common

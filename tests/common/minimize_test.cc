@@ -8,7 +8,7 @@
 
 #include "svbtdf/common/minimize.h"
 
-namespace svbtdf {
+namespace svbtdf::common {
 namespace {
 
 const double kPhi = (1.0 + std::sqrt(5.0)) / 2.0;
@@ -92,4 +92,4 @@ TEST(GoldenSectionSearch, EvaluationsGrowWithTheLogarithmOfRangeOverTolerance) {
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::common

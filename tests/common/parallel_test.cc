@@ -18,7 +18,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/parallel.h"
 
-namespace svbtdf {
+namespace svbtdf::common {
 namespace {
 
 TEST(ThreadCount, ARequestIsTakenAsIsAndZeroMeansEveryHardwareThread) {
@@ -156,4 +156,4 @@ TEST(ParallelFor, AnErrorFromAWorkerThreadKeepsItsKind) {
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::common

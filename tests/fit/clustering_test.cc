@@ -7,11 +7,10 @@
 
 #include "svbtdf/common/error.h"
 #include "svbtdf/fit/clustering.h"
+#include "svbtdf/model/vec.h"
 
 namespace svbtdf::fit {
 namespace {
-
-double Square(double x) { return x * x; }
 
 // A synthetic material: `types` distinct slice shapes (Gaussian bumps at different places of a
 // 1-D stand-in for the light hemicube), each texel one of them scaled a little, plus noise.
@@ -32,7 +31,7 @@ SyntheticSlices MakeSlices(int types, int per_type, double noise, uint64_t seed)
       std::vector<float> slice(s.dimension);
       const double scale = uniform(rng);
       for (int d = 0; d < s.dimension; ++d) {
-        slice[d] = static_cast<float>(scale * std::exp(-0.5 * Square((d - centre) / width)) + noise * gauss(rng));
+        slice[d] = static_cast<float>(scale * std::exp(-0.5 * model::Square((d - centre) / width)) + noise * gauss(rng));
       }
       s.slices.push_back(slice);
       s.type.push_back(t);
@@ -99,8 +98,8 @@ TEST(Clustering, AffineWeightsSumToOneAndBeatTheNearestRepresentative) {
     if (s.type[t] >= 0) continue;
     const auto& nearest = s.slices[c.representatives[c.cluster[t]]];
     for (int d = 0; d < s.dimension; ++d) {
-      affine_error += Square(reconstruction[d] - s.slices[t][d]);
-      nearest_error += Square(nearest[d] - s.slices[t][d]);
+      affine_error += model::Square(reconstruction[d] - s.slices[t][d]);
+      nearest_error += model::Square(nearest[d] - s.slices[t][d]);
     }
   }
   EXPECT_LT(affine_error, 0.5 * nearest_error) << "affine " << affine_error << " nearest " << nearest_error;
@@ -116,11 +115,11 @@ TEST(Clustering, SolveAffineWeightsReproducesAnAffineCombinationExactly) {
 }
 
 TEST(Clustering, RejectsAnEmptySourceAndBadFractions) {
-  EXPECT_THROW(ClusterSlices(SliceSource{}), Error);
+  EXPECT_THROW(ClusterSlices(SliceSource{}), common::Error);
   const SyntheticSlices s = MakeSlices(2, 10, 0.0, 1);
   ClusteringOptions options;
   options.representative_fraction = 0.0;
-  EXPECT_THROW(ClusterSlices(SourceOf(s), options), Error);
+  EXPECT_THROW(ClusterSlices(SourceOf(s), options), common::Error);
 }
 
 }  // namespace

@@ -43,7 +43,7 @@ Scores Score(const Material& material, const AnalyticMaterial& truth, const Slic
   }
   const std::vector<int> dots = material.provenance.at("holdout").at("dots").get<std::vector<int>>();
   const MaterialEvaluator evaluator(material);
-  const Hemicube grid(material.ndf_resolution);
+  const model::Hemicube grid(material.ndf_resolution);
   const TexelGeometry& geometry = store.geometry();
   std::vector<double> ndf_errors;
   int alpha_ok = 0;
@@ -53,17 +53,17 @@ Scores Score(const Material& material, const AnalyticMaterial& truth, const Slic
     const TexelBtdf fitted = evaluator.Texel(x, y);
     alpha_ok += std::abs(fitted.params().alpha - truth.Params(x, y).alpha) <= 0.05;
     ndf_errors.push_back(NdfRelativeL2(grid, fitted.ndf(), truth.Ndf(x, y)));
-    const Vec3 o = geometry.View(t);
+    const model::Vec3 o = geometry.View(t);
     for (int q : dots) {
-      const Vec3 i = geometry.Light(t, q);
-      const double expected = Luminance(truth.R(x, y, i, o));
-      error += Square(Luminance(fitted.Evaluate(i, o)) - expected);
-      norm += Square(expected);
+      const model::Vec3 i = geometry.Light(t, q);
+      const double expected = model::Luminance(truth.R(x, y, i, o));
+      error += model::Square(model::Luminance(fitted.Evaluate(i, o)) - expected);
+      norm += model::Square(expected);
     }
   }
   Scores s;
   s.alpha_within_0_05 = static_cast<double>(alpha_ok) / texels.size();
-  s.ndf_rel_l2_median = Median(ndf_errors);
+  s.ndf_rel_l2_median = common::Median(ndf_errors);
   s.heldout_rel_rmse = std::sqrt(error / norm);
   return s;
 }
@@ -78,7 +78,7 @@ class FitMaterialTest : public ::testing::Test {
     fs::create_directories(dir_);
   }
   void TearDown() override {
-    SetInterruptRequested(false);
+    common::SetInterruptRequested(false);
     fs::remove_all(dir_);
   }
 
@@ -227,7 +227,7 @@ TEST(SliceStoreTiles, SlicesFromATileEqualSlicesReadAlone) {
     }
   }
   std::vector<float> short_tile(10);
-  EXPECT_THROW(store.MakeTexelSlice(3, short_tile), Error);
+  EXPECT_THROW(store.MakeTexelSlice(3, short_tile), common::Error);
   fs::remove_all(dir);
 }
 
@@ -238,13 +238,13 @@ TEST(SliceStoreFormat, DamagedGeometryAndOldVersionsAreRefusedNamingTheManifest)
   fs::remove_all(dir);
   testing::WriteAnalyticStore(dir, AnalyticMaterial{4, 4}, 6, 0.0, 1.5);
   const fs::path manifest_path = dir / "processed.json";
-  const nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(manifest_path));
+  const nlohmann::json manifest = nlohmann::json::parse(common::ReadTextFile(manifest_path));
   ASSERT_EQ(SliceStore::Open(dir).geometry().dots.size(), manifest.at("geometry").at("dots").size());
   const auto open_with = [&](const nlohmann::json& changed) {
-    WriteTextAtomically(manifest_path, changed.dump(2) + "\n");
+    common::WriteTextAtomically(manifest_path, changed.dump(2) + "\n");
     try {
       SliceStore::Open(dir);
-    } catch (const Error& e) {
+    } catch (const common::Error& e) {
       return std::string(e.what());
     }
     return std::string("opened");
@@ -293,7 +293,7 @@ TEST_F(FitMaterialTest, GgxBaselineIsWorseThanDualOnADualTruthAndRoundTrips) {
   EXPECT_EQ(read.model, MaterialModel::kWalterGgx);
   EXPECT_EQ(read.baseline_alpha_x.pixels, ggx.baseline_alpha_x.pixels);
   const MaterialEvaluator before(ggx), after(read);
-  const Vec3 o = Store().geometry().View(100), i = Store().geometry().Light(100, 300);
+  const model::Vec3 o = Store().geometry().View(100), i = Store().geometry().Light(100, 300);
   EXPECT_NEAR(after.Evaluate(4, 6, i, o)[1], before.Evaluate(4, 6, i, o)[1], 1e-6 * before.Evaluate(4, 6, i, o)[1]);
   // A representative's texel holds exactly its own baseline fit (its weight on itself is 1).
   const int64_t rep = ggx.representative_texels.front();
@@ -327,14 +327,14 @@ TEST_F(FitMaterialTest, AnInterruptedFitResumesToTheSameMaterial) {
   const SliceStore& store = Store();
   auto interrupted = std::async(std::launch::async, [&] { return FitMaterial(store, options); });
   WaitForLines(options.checkpoint, 4);
-  SetInterruptRequested(true);
+  common::SetInterruptRequested(true);
   try {
     interrupted.get();
     FAIL() << "the fit was not interrupted";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kInterrupted) << e.what();
+  } catch (const common::Error& e) {
+    EXPECT_EQ(e.kind(), common::ErrorKind::kInterrupted) << e.what();
   }
-  SetInterruptRequested(false);
+  common::SetInterruptRequested(false);
   {  // what a kill in the middle of a write leaves
     std::ofstream torn(options.checkpoint, std::ios::app);
     torn << "{\"representative\": 12, \"result\": {\"alpha\": 0.";
@@ -353,10 +353,10 @@ TEST_F(FitMaterialTest, AnInterruptedFitResumesToTheSameMaterial) {
 }
 
 template <typename F>
-std::string ErrorOf(F&& f, ErrorKind kind) {
+std::string ErrorOf(F&& f, common::ErrorKind kind) {
   try {
     f();
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_EQ(e.kind(), kind) << e.what();
     return e.what();
   }
@@ -365,15 +365,15 @@ std::string ErrorOf(F&& f, ErrorKind kind) {
 }
 
 TEST_F(FitMaterialTest, ErrorsNameTheArgumentOrFile) {
-  EXPECT_NE(ErrorOf([&] { SliceStore::Open(dir_ / "missing"); }, ErrorKind::kInvalidInput).find("missing"), std::string::npos);
+  EXPECT_NE(ErrorOf([&] { SliceStore::Open(dir_ / "missing"); }, common::ErrorKind::kInvalidInput).find("missing"), std::string::npos);
   for (double holdout : {-0.1, 0.95, std::nan("")}) {
-    EXPECT_NE(ErrorOf([&] { FitMaterial(Store(), Options(0.05, holdout)); }, ErrorKind::kInvalidInput).find("--holdout"),
+    EXPECT_NE(ErrorOf([&] { FitMaterial(Store(), Options(0.05, holdout)); }, common::ErrorKind::kInvalidInput).find("--holdout"),
               std::string::npos);
   }
   // A store that does not know its eta needs --eta.
   testing::WriteAnalyticStore(dir_ / "no-eta", AnalyticMaterial{4, 4}, 12, 0.0, /*store_eta=*/0.0);
   const SliceStore no_eta = SliceStore::Open(dir_ / "no-eta");
-  EXPECT_NE(ErrorOf([&] { FitMaterial(no_eta, Options(0.5)); }, ErrorKind::kInvalidInput).find("--eta"),
+  EXPECT_NE(ErrorOf([&] { FitMaterial(no_eta, Options(0.5)); }, common::ErrorKind::kInvalidInput).find("--eta"),
             std::string::npos);
   // A checkpoint of another fit (here: another model) is refused, never mixed in.
   FitMaterialOptions options = Options(0.5);
@@ -381,7 +381,7 @@ TEST_F(FitMaterialTest, ErrorsNameTheArgumentOrFile) {
   options.checkpoint = dir_ / "fits.jsonl";
   FitMaterial(no_eta, options);
   options.model = MaterialModel::kWalterGgx;
-  EXPECT_NE(ErrorOf([&] { FitMaterial(no_eta, options); }, ErrorKind::kInvalidInput).find("checkpoint"),
+  EXPECT_NE(ErrorOf([&] { FitMaterial(no_eta, options); }, common::ErrorKind::kInvalidInput).find("checkpoint"),
             std::string::npos);
 }
 

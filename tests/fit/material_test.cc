@@ -25,18 +25,18 @@ constexpr int kDots = 32;  // per side of the dot grid
 struct SyntheticMaterial {
   std::vector<Truth> truths;
   std::vector<TexelSlice> slices;
-  FloatImage rho_d{kWidth, kHeight, 3};
+  common::FloatImage rho_d{kWidth, kHeight, 3};
 };
 
-SyntheticMaterial MakeMaterial(const Vec3& view, const RigSamples& rig) {
-  const Hemicube grid(32);
+SyntheticMaterial MakeMaterial(const model::Vec3& view, const RigSamples& rig) {
+  const model::Hemicube grid(32);
   SyntheticMaterial m;
   for (int y = 0; y < kHeight; ++y) {
     for (int x = 0; x < kWidth; ++x) {
       const int band = x * 3 / kWidth;
-      Truth truth = band == 0   ? MakeTruth(grid, GgxNdf(0.25, 0.15), 0.3)
-                    : band == 1 ? MakeTruth(grid, GgxNdf(0.15, 0.15), 0.7)
-                                : MakeTruth(grid, BeckmannNdf(0.3, 0.2), 0.5);
+      Truth truth = band == 0   ? MakeTruth(grid, model::GgxNdf(0.25, 0.15), 0.3)
+                    : band == 1 ? MakeTruth(grid, model::GgxNdf(0.15, 0.15), 0.7)
+                                : MakeTruth(grid, model::BeckmannNdf(0.3, 0.2), 0.5);
       truth.k_s = 0.7 + 0.02 * y;
       m.slices.push_back(Synthesize(truth, view, rig, 0.01, 100 + y * kWidth + x));
       m.truths.push_back(std::move(truth));
@@ -65,7 +65,7 @@ Material FitMaterial(const SyntheticMaterial& synthetic, double representative_f
   return AssembleMaterial(kWidth, kHeight, 1.5, 32, clustering, fits, synthetic.rho_d);
 }
 
-double HeldOutRelativeRmse(const Material& material, const SyntheticMaterial& synthetic, const Vec3& view) {
+double HeldOutRelativeRmse(const Material& material, const SyntheticMaterial& synthetic, const model::Vec3& view) {
   const MaterialEvaluator evaluator(material);
   const RigSamples held_out = DotGrid(view, kDots, 0.5);
   double error = 0, norm = 0;
@@ -73,10 +73,10 @@ double HeldOutRelativeRmse(const Material& material, const SyntheticMaterial& sy
     for (int x = 0; x < kWidth; ++x) {
       const Truth& truth = synthetic.truths[y * kWidth + x];
       const TexelBtdf texel = evaluator.Texel(x, y);
-      for (const Vec3& i : held_out.light) {
+      for (const model::Vec3& i : held_out.light) {
         const double expected = truth.Rho(i, view);
-        error += Square(texel.Evaluate(i, view)[0] - material.rho_d.at(x, y, 0) - expected);
-        norm += Square(expected);
+        error += model::Square(texel.Evaluate(i, view)[0] - material.rho_d.at(x, y, 0) - expected);
+        norm += model::Square(expected);
       }
     }
   }
@@ -90,7 +90,7 @@ class MaterialTest : public ::testing::Test {
 };
 
 TEST_F(MaterialTest, RepresentativesPredictHeldOutLightsAlmostAsWellAsFittingEveryTexel) {
-  const Vec3 view = SphericalDirection(kPi / 4, 0.0);
+  const model::Vec3 view = model::SphericalDirection(model::kPi / 4, 0.0);
   const SyntheticMaterial synthetic = MakeMaterial(view, DotGrid(view, kDots, 0.0));
   const Material every_texel = FitMaterial(synthetic, 1.0);
   const Material representatives = FitMaterial(synthetic, 0.125);  // 6 of 48 texels
@@ -104,39 +104,39 @@ TEST_F(MaterialTest, RepresentativesPredictHeldOutLightsAlmostAsWellAsFittingEve
 }
 
 TEST_F(MaterialTest, RoundTripsThroughDiskAndNeverOverwrites) {
-  const Vec3 view = SphericalDirection(kPi / 4, 0.0);
+  const model::Vec3 view = model::SphericalDirection(model::kPi / 4, 0.0);
   const SyntheticMaterial synthetic = MakeMaterial(view, DotGrid(view, 16, 0.0));
   Material material = FitMaterial(synthetic, 0.125);
   material.provenance = {{"test", true}};
   WriteMaterial(dir_, material);
-  EXPECT_THROW(WriteMaterial(dir_, material), Error);
+  EXPECT_THROW(WriteMaterial(dir_, material), common::Error);
   const Material read = ReadMaterial(dir_);
   EXPECT_EQ(read.representative_texels, material.representative_texels);
   EXPECT_EQ(read.alpha.pixels, material.alpha.pixels);
   EXPECT_EQ(read.weight_index.pixels, material.weight_index.pixels);
   EXPECT_EQ(read.provenance["test"], true);
   const MaterialEvaluator a(material), b(read);
-  const Vec3 i = FlipZ(SphericalDirection(0.6, kPi));
+  const model::Vec3 i = model::FlipZ(model::SphericalDirection(0.6, model::kPi));
   EXPECT_NEAR(a.Evaluate(3, 2, i, view)[1], b.Evaluate(3, 2, i, view)[1], 1e-5 * a.Evaluate(3, 2, i, view)[1]);
-  EXPECT_THROW(b.Evaluate(kWidth, 0, i, view), Error);
+  EXPECT_THROW(b.Evaluate(kWidth, 0, i, view), common::Error);
 }
 
 TEST_F(MaterialTest, DamagedMaterialsAreErrorsNamingTheFile) {
-  const Vec3 view = SphericalDirection(kPi / 4, 0.0);
+  const model::Vec3 view = model::SphericalDirection(model::kPi / 4, 0.0);
   const SyntheticMaterial synthetic = MakeMaterial(view, DotGrid(view, 16, 0.0));
   WriteMaterial(dir_, FitMaterial(synthetic, 0.125));
   fs::remove(dir_ / "k_s.exr");
   try {
     ReadMaterial(dir_);
     FAIL();
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find("k_s.exr"), std::string::npos) << e.what();
   }
-  WriteTextAtomically(dir_ / "material.json", "{\"format\": \"svbtdf-material\", \"version\": 99}");
+  common::WriteTextAtomically(dir_ / "material.json", "{\"format\": \"svbtdf-material\", \"version\": 99}");
   try {
     ReadMaterial(dir_);
     FAIL();
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find("version 99"), std::string::npos) << e.what();
   }
 }
@@ -149,9 +149,9 @@ TEST(BaselineLobes, BlendThroughSlopeMomentsAndWrapAzimuths) {
   EXPECT_NEAR(same.alpha_x, 0.3, 1e-9);
   EXPECT_NEAR(same.alpha_y, 0.1, 1e-9);
   EXPECT_NEAR(same.azimuth, 0.4, 1e-9);
-  const double near_90 = 88.0 * kPi / 180.0;
+  const double near_90 = 88.0 * model::kPi / 180.0;
   const BaselineLobe wrapped = BlendBaselineLobes({{{0.3, 0.1, near_90}, 0.5}, {{0.3, 0.1, -near_90}, 0.5}});
-  EXPECT_NEAR(std::abs(wrapped.azimuth), kPi / 2, 1e-6);
+  EXPECT_NEAR(std::abs(wrapped.azimuth), model::kPi / 2, 1e-6);
   EXPECT_NEAR(wrapped.alpha_x, 0.3, 0.01);
   // Affine weights may be negative; the lobe stays a valid GGX.
   const BaselineLobe extrapolated = BlendBaselineLobes({{{0.05, 0.05, 0.0}, 1.5}, {{0.3, 0.3, 0.0}, -0.5}});
@@ -168,13 +168,13 @@ namespace {
 // constrain), not one representative's k_s times another's D: with a sharp representative of
 // k_s 20 and a broad one of k_s 1, half and half.
 TEST(MaterialBlend, ScaledNdfsBlendAsTheirPredictions) {
-  const Hemicube grid(32);
+  const model::Hemicube grid(32);
   std::vector<TexelFitResult> fits(2);
   const std::array<double, 2> scales = {20.0, 1.0};
   const std::array<double, 2> roughness = {0.1, 0.4};
-  std::vector<TabulatedNdf> ndfs;
+  std::vector<model::TabulatedNdf> ndfs;
   for (int r = 0; r < 2; ++r) {
-    TabulatedNdf ndf(grid, GgxNdf(roughness[r]));
+    model::TabulatedNdf ndf(grid, model::GgxNdf(roughness[r]));
     ndf.Normalize();
     fits[r].ln_d = ndf.ln_d();
     fits[r].k_s = scales[r];
@@ -185,13 +185,13 @@ TEST(MaterialBlend, ScaledNdfsBlendAsTheirPredictions) {
   clustering.representatives = {0, 1};
   clustering.cluster = {0, 1, 0};
   clustering.weights = {{{{0, 1.0f}}}, {{{1, 1.0f}}}, {{{0, 0.5f}, {1, 0.5f}}}};
-  const Material material = AssembleMaterial(3, 1, 1.5, 32, clustering, fits, FloatImage(3, 1, 3, 0.0f));
+  const Material material = AssembleMaterial(3, 1, 1.5, 32, clustering, fits, common::FloatImage(3, 1, 3, 0.0f));
   const MaterialEvaluator evaluator(material);
-  const TabulatedNdf blended = evaluator.TexelNdf(2, 0);
+  const model::TabulatedNdf blended = evaluator.TexelNdf(2, 0);
   const double k_s = material.k_s.at(2, 0, 0);
   EXPECT_NEAR(k_s, 10.5, 1e-5);
   for (double theta : {0.0, 0.1, 0.3, 0.6, 1.0}) {
-    const Vec3 h(std::sin(theta), 0.0, std::cos(theta));
+    const model::Vec3 h(std::sin(theta), 0.0, std::cos(theta));
     const double expected = 0.5 * scales[0] * ndfs[0].D(h) + 0.5 * scales[1] * ndfs[1].D(h);
     EXPECT_NEAR(k_s * blended.D(h) / expected, 1.0, 0.01) << "theta " << theta;
   }

@@ -26,12 +26,12 @@ using testing::Has;
 class StoreCheck : public ::testing::Test {
  protected:
   void SetUp() override {
-    WriteTextAtomically(dir_ / "processed.json", R"({"format": "svbtdf-processed", "statistics": {"texels": 100, "valid_texels": 100}})");
+    common::WriteTextAtomically(dir_ / "processed.json", R"({"format": "svbtdf-processed", "statistics": {"texels": 100, "valid_texels": 100}})");
   }
   void WriteMap(const char* name, int zeros) {
-    FloatImage map(10, 10, 1, 1.0f);
+    common::FloatImage map(10, 10, 1, 1.0f);
     for (int t = 0; t < zeros; ++t) map.pixels[t] = 0.0f;
-    WriteFloatImage(dir_ / name, map);
+    common::WriteFloatImage(dir_ / name, map);
   }
   svbtdf::testing::TempFolder folder_;
   const fs::path dir_ = folder_.path();
@@ -58,12 +58,12 @@ TEST_F(StoreCheck, FewValidTexelsAndTexelsWithoutDotAreWarnings) {
 
 TEST_F(StoreCheck, TheManifestsCountServesWhenThereIsNoReachMap) {
   WriteMap("mask.exr", 0);
-  WriteTextAtomically(dir_ / "processed.json",
+  common::WriteTextAtomically(dir_ / "processed.json",
                       R"({"statistics": {"texels": 100, "valid_texels": 100, "texels_without_dot_beneath": 12}})");
   const auto warnings = CheckSliceStore(dir_);
   ASSERT_EQ(Checks(warnings), std::vector<std::string>{"texels-without-dot"});
   EXPECT_EQ(warnings[0].file, (dir_ / "processed.json").string());
-  WriteTextAtomically(dir_ / "processed.json",
+  common::WriteTextAtomically(dir_ / "processed.json",
                       R"({"statistics": {"texels": 100, "valid_texels": 100, "texels_without_dot_beneath": 3}})");
   EXPECT_TRUE(CheckSliceStore(dir_).empty());
 }
@@ -83,7 +83,7 @@ TEST(QualityCheck, LargeResidualsHugeKsAndAlphaAtItsBoundsAreWarnings) {
   Material m = GoodMaterial();
   m.residual.pixels = {0.37f, 0.8f, 0.04f, 0.5f, 0.03f, -1.0f};
   m.k_s.at(2, 1, 1) = 1.5e5f;
-  m.alpha = FloatImage(3, 2, 1, 1.0f);
+  m.alpha = common::FloatImage(3, 2, 1, 1.0f);
   const auto warnings = CheckMaterial(m, "MAT");
   ASSERT_EQ(Checks(warnings), (std::vector<std::string>{"fit-residual", "k_s-implausible", "alpha-at-bounds"}));
   EXPECT_EQ(warnings[0].file, "MAT/residual.exr");
@@ -99,7 +99,7 @@ TEST(QualityCheck, LargeResidualsHugeKsAndAlphaAtItsBoundsAreWarnings) {
   // The baseline has no alpha: its zero map is not a warning.
   Material baseline = GoodMaterial();
   baseline.model = MaterialModel::kWalterGgx;
-  baseline.alpha = FloatImage(3, 2, 1, 0.0f);
+  baseline.alpha = common::FloatImage(3, 2, 1, 0.0f);
   EXPECT_TRUE(CheckMaterial(baseline, "M").empty());
 }
 
@@ -119,7 +119,7 @@ TEST(QualityFile, RoundTripsAndRefusesOtherVersions) {
   EXPECT_EQ(json["format"], "svbtdf-quality");
   EXPECT_EQ(json["thresholds"]["k_s_max"], kMaxPlausibleKs);
   json["version"] = 99;
-  EXPECT_THROW(QualityFromJson(json, "q.json"), Error);
+  EXPECT_THROW(QualityFromJson(json, "q.json"), common::Error);
 }
 
 }  // namespace

@@ -38,18 +38,18 @@ Material PerturbedMaterial(const testing::AnalyticMaterial& truth, double alpha_
   m.height = truth.height;
   m.eta = truth.eta;
   m.ndf_resolution = kNdfResolution;
-  m.alpha = FloatImage(m.width, m.height, 1, 0.0f);
-  m.shadowing_roughness = FloatImage(m.width, m.height, 1, 0.2f);  // the truth's SmithShadowing::Ggx(0.2)
-  m.k_s = FloatImage(m.width, m.height, 3, 0.0f);
-  m.rho_d = FloatImage(m.width, m.height, 3, 0.0f);
-  m.residual = FloatImage(m.width, m.height, 1, -1.0f);
-  m.cluster = FloatImage(m.width, m.height, 1, 0.0f);
-  m.weight_index = FloatImage(m.width, m.height, 2, 0.0f);
-  m.weight_value = FloatImage(m.width, m.height, 2, 0.0f);
-  const Hemicube grid(kNdfResolution);
+  m.alpha = common::FloatImage(m.width, m.height, 1, 0.0f);
+  m.shadowing_roughness = common::FloatImage(m.width, m.height, 1, 0.2f);  // the truth's SmithShadowing::Ggx(0.2)
+  m.k_s = common::FloatImage(m.width, m.height, 3, 0.0f);
+  m.rho_d = common::FloatImage(m.width, m.height, 3, 0.0f);
+  m.residual = common::FloatImage(m.width, m.height, 1, -1.0f);
+  m.cluster = common::FloatImage(m.width, m.height, 1, 0.0f);
+  m.weight_index = common::FloatImage(m.width, m.height, 2, 0.0f);
+  m.weight_value = common::FloatImage(m.width, m.height, 2, 0.0f);
+  const model::Hemicube grid(kNdfResolution);
   for (int y = 0; y < m.height; ++y) {
     for (int x : {0, m.width - 1}) {
-      TabulatedNdf ndf(grid, truth.Ndf(x, y));
+      model::TabulatedNdf ndf(grid, truth.Ndf(x, y));
       ndf.Normalize();
       m.representative_texels.push_back(static_cast<int64_t>(y) * m.width + x);
       m.representative_ln_d.push_back(ndf.ln_d());
@@ -57,7 +57,7 @@ Material PerturbedMaterial(const testing::AnalyticMaterial& truth, double alpha_
   }
   for (int y = 0; y < m.height; ++y) {
     for (int x = 0; x < m.width; ++x) {
-      const DualMicrofacetParams p = truth.Params(x, y);
+      const model::DualMicrofacetParams p = truth.Params(x, y);
       const double sign = (x + y) % 2 == 0 ? 1.0 : -1.0;
       m.alpha.at(x, y) = static_cast<float>(std::clamp(p.alpha + sign * alpha_offset, 0.0, 1.0));
       for (int c = 0; c < 3; ++c) m.k_s.at(x, y, c) = static_cast<float>(k_s_factor * p.k_s[c]);
@@ -81,7 +81,7 @@ double RelativeRmse(const Material& material, const SliceStore& store, int64_t t
                                                             static_cast<int>(t / material.width));
   double error = 0, norm = 0;
   for (size_t k = 0; k < slice.light.size(); ++k) {
-    const double r = Luminance(texel.Evaluate(slice.light[k], slice.view));
+    const double r = model::Luminance(texel.Evaluate(slice.light[k], slice.view));
     error += (r - slice.rho[k]) * (r - slice.rho[k]);
     norm += slice.rho[k] * slice.rho[k];
   }
@@ -105,7 +105,7 @@ class RefineTexelsTest : public ::testing::Test {
     store_.reset();
     folder_.reset();
   }
-  void TearDown() override { SetInterruptRequested(false); }
+  void TearDown() override { common::SetInterruptRequested(false); }
 
   static std::vector<int64_t> AllTexels() {
     std::vector<int64_t> texels(kSide * kSide);
@@ -134,7 +134,7 @@ TEST_F(RefineTexelsTest, BringsAlphaAndKsBackToTheTruthAndLowersEveryResidual) {
 
   for (int64_t t : AllTexels()) {
     const int x = static_cast<int>(t % kSide), y = static_cast<int>(t / kSide);
-    const DualMicrofacetParams p = truth_.Params(x, y);
+    const model::DualMicrofacetParams p = truth_.Params(x, y);
     const double after = RelativeRmse(material, *store_, t);
     // Never worse, and the residual written is the one a reader of the material measures.
     EXPECT_LE(after, before[t] * (1 + 1e-6)) << "texel " << t;
@@ -174,7 +174,7 @@ TEST_F(RefineTexelsTest, KsOnlyLeavesAlphaAndTheRepresentativesAsTheyWere) {
   EXPECT_EQ(material.alpha.pixels, start.alpha.pixels);
   for (int64_t t : AllTexels()) {
     const int x = static_cast<int>(t % kSide), y = static_cast<int>(t / kSide);
-    const DualMicrofacetParams p = truth_.Params(x, y);
+    const model::DualMicrofacetParams p = truth_.Params(x, y);
     for (int c = 0; c < 3; ++c) {
       if (IsRepresentative(material, t)) {
         EXPECT_EQ(material.k_s.at(x, y, c), start.k_s.at(x, y, c)) << "texel " << t;
@@ -205,14 +205,14 @@ TEST_F(RefineTexelsTest, LeavesTheOtherTexelsAlone) {
 
 TEST_F(RefineTexelsTest, AnInterruptStopsItWithAnInterruptedError) {
   Material material = PerturbedMaterial(truth_, 0.25, 1.3);
-  SetInterruptRequested(true);
+  common::SetInterruptRequested(true);
   try {
     RefineTexels(*store_, {}, AllTexels(), Options(), &material);
     FAIL() << "the interrupt was not honoured";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kInterrupted);
+  } catch (const common::Error& e) {
+    EXPECT_EQ(e.kind(), common::ErrorKind::kInterrupted);
   }
-  SetInterruptRequested(false);
+  common::SetInterruptRequested(false);
   EXPECT_NO_THROW(RefineTexels(*store_, {}, AllTexels(), Options(), &material));
 }
 
@@ -223,15 +223,15 @@ TEST_F(RefineTexelsTest, RefusesAStoreOfAnotherSizeAndTexelsOutsideTheMaterial) 
   try {
     RefineTexels(*store_, {}, {0}, Options(), &material);
     FAIL() << "a material of another size was refined";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kInvalidInput);
+  } catch (const common::Error& e) {
+    EXPECT_EQ(e.kind(), common::ErrorKind::kInvalidInput);
   }
   Material right = PerturbedMaterial(truth_, 0.0, 1.0);
   try {
     RefineTexels(*store_, {}, {kSide * kSide}, Options(), &right);
     FAIL() << "a texel outside the material was refined";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kInvalidInput);
+  } catch (const common::Error& e) {
+    EXPECT_EQ(e.kind(), common::ErrorKind::kInvalidInput);
   }
 }
 

@@ -20,15 +20,15 @@ namespace {
 
 // Relative L2 error of the normalised NDF over the cells the data constrain (those whose centre
 // is the half vector of a bright sample's configuration, or next to one), weighted by solid angle.
-double NdfRelativeL2(const Hemicube& grid, const TabulatedNdf& fitted, const TabulatedNdf& truth,
+double NdfRelativeL2(const model::Hemicube& grid, const model::TabulatedNdf& fitted, const model::TabulatedNdf& truth,
                      const TexelSlice& slice, double eta) {
-  const DualMicrofacetModel model(eta);
+  const model::DualMicrofacetModel model(eta);
   double brightest = 0;
   for (double r : slice.rho) brightest = std::max(brightest, r);
   std::vector<bool> constrained(grid.num_cells(), false);
   for (size_t k = 0; k < slice.light.size(); ++k) {
     if (slice.rho[k] < 0.05 * brightest) continue;
-    for (const VirtualConfiguration& c : {model.RoughEntry(slice.light[k], slice.view), model.RoughExit(slice.light[k], slice.view)}) {
+    for (const model::VirtualConfiguration& c : {model.RoughEntry(slice.light[k], slice.view), model.RoughExit(slice.light[k], slice.view)}) {
       if (c.valid) constrained[grid.CellOf(c.h)] = true;
     }
   }
@@ -36,22 +36,22 @@ double NdfRelativeL2(const Hemicube& grid, const TabulatedNdf& fitted, const Tab
   int cells = 0;
   for (int c = 0; c < grid.num_cells(); ++c) {
     if (!constrained[c]) continue;
-    const Vec3 h = grid.CellCenter(c);
-    error += Square(fitted.D(h) - truth.D(h)) * grid.CellSolidAngle(c);
-    norm += Square(truth.D(h)) * grid.CellSolidAngle(c);
+    const model::Vec3 h = grid.CellCenter(c);
+    error += model::Square(fitted.D(h) - truth.D(h)) * grid.CellSolidAngle(c);
+    norm += model::Square(truth.D(h)) * grid.CellSolidAngle(c);
     ++cells;
   }
   EXPECT_GT(cells, 20);
   return std::sqrt(error / norm);
 }
 
-double HeldOutRelativeRmse(const FittedTexel& fitted, const Truth& truth, const Vec3& view) {
+double HeldOutRelativeRmse(const FittedTexel& fitted, const Truth& truth, const model::Vec3& view) {
   const RigSamples held_out = DotGrid(view, 40, 0.5);
   double error = 0, norm = 0;
-  for (const Vec3& i : held_out.light) {
+  for (const model::Vec3& i : held_out.light) {
     const double expected = truth.Rho(i, view);
-    error += Square(fitted.Rho(i, view) - expected);
-    norm += Square(expected);
+    error += model::Square(fitted.Rho(i, view) - expected);
+    norm += model::Square(expected);
   }
   return std::sqrt(error / norm);
 }
@@ -61,9 +61,9 @@ class TexelFitRecovery : public ::testing::TestWithParam<double> {};
 TEST_P(TexelFitRecovery, RecoversAlphaNdfAndHeldOutBtdfWithOnePercentNoise) {
   const double true_alpha = GetParam();
   const TexelFitter fitter(1.5);
-  const GgxNdf analytic(0.25, 0.15);
+  const model::GgxNdf analytic(0.25, 0.15);
   const Truth truth = MakeTruth(fitter.ndf_grid(), analytic, true_alpha);
-  const Vec3 view = SphericalDirection(kPi / 4, 0.0);
+  const model::Vec3 view = model::SphericalDirection(model::kPi / 4, 0.0);
   const TexelSlice slice = Synthesize(truth, view, DotGrid(view, 40, 0.0), 0.01, 42);
 
   const TexelFitResult fit = fitter.Fit(slice);
@@ -81,23 +81,23 @@ INSTANTIATE_TEST_SUITE_P(Alphas, TexelFitRecovery, ::testing::Values(0.15, 0.5, 
 TEST(TexelFit, RejectsMalformedSlices) {
   const TexelFitter fitter(1.5);
   TexelSlice slice;
-  slice.view = SphericalDirection(0.5, 0.0);
-  slice.light = {FlipZ(SphericalDirection(0.2, 0.0))};
-  EXPECT_THROW(fitter.Fit(slice), Error);  // rho missing
+  slice.view = model::SphericalDirection(0.5, 0.0);
+  slice.light = {model::FlipZ(model::SphericalDirection(0.2, 0.0))};
+  EXPECT_THROW(fitter.Fit(slice), common::Error);  // rho missing
   slice.rho = {1.0};
-  EXPECT_THROW(fitter.Fit(slice), Error);  // too few samples
-  slice.light = {SphericalDirection(0.2, 0.0)};
-  EXPECT_THROW(fitter.Fit(slice), Error);  // light on the camera side
-  EXPECT_THROW(TexelFitter(1.0), Error);
+  EXPECT_THROW(fitter.Fit(slice), common::Error);  // too few samples
+  slice.light = {model::SphericalDirection(0.2, 0.0)};
+  EXPECT_THROW(fitter.Fit(slice), common::Error);  // light on the camera side
+  EXPECT_THROW(TexelFitter(1.0), common::Error);
 }
 
 TEST(TexelFit, SymbolicAnalysisIsSharedAcrossTexelsOfOneView) {
   const TexelFitter fitter(1.5);
-  const Vec3 view = SphericalDirection(kPi / 4, 0.0);
+  const model::Vec3 view = model::SphericalDirection(model::kPi / 4, 0.0);
   const RigSamples rig = DotGrid(view, 24, 0.0);
   FitWorkspace workspace;
   for (double roughness : {0.15, 0.2, 0.3}) {
-    const Truth truth = MakeTruth(fitter.ndf_grid(), GgxNdf(roughness), 0.5);
+    const Truth truth = MakeTruth(fitter.ndf_grid(), model::GgxNdf(roughness), 0.5);
     fitter.Fit(Synthesize(truth, view, rig, 0.0, 1), &workspace);
   }
   EXPECT_GT(workspace.factorizations(), 6);

@@ -13,7 +13,7 @@
 #include "svbtdf/model/ndf_factory.h"
 #include "svbtdf/model/shadowing.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 namespace {
 
 std::unique_ptr<Ndf> Ggx(double alpha_x, double alpha_y) {
@@ -167,13 +167,13 @@ TEST(SmithShadowing, IsOneAtNormalIncidenceAndFallsTowardGrazing) {
   EXPECT_DOUBLE_EQ(g.G1(FlipZ(SphericalDirection(0.7, 0.3)) * -1.0, h),
                    g.G1(SphericalDirection(0.7, 0.3) * 1.0, h));
   EXPECT_EQ(g.G1(SphericalDirection(1.2, 0.0), SphericalDirection(1.0, kPi)), 0.0);  // back-facing
-  EXPECT_THROW(SmithShadowing::Ggx(-0.1), Error);
+  EXPECT_THROW(SmithShadowing::Ggx(-0.1), common::Error);
 }
 
 TEST(DualMicrofacet, RejectsAnIndexOfRefractionNotAboveOne) {
-  EXPECT_THROW(DualMicrofacetModel(1.0), Error);
-  EXPECT_THROW(DualMicrofacetModel(0.7), Error);
-  EXPECT_THROW(DualMicrofacetModel(std::nan("")), Error);
+  EXPECT_THROW(DualMicrofacetModel(1.0), common::Error);
+  EXPECT_THROW(DualMicrofacetModel(0.7), common::Error);
+  EXPECT_THROW(DualMicrofacetModel(std::nan("")), common::Error);
 }
 
 TEST(DualMicrofacet, JacobianMatchesFiniteDifferences) {
@@ -349,4 +349,4 @@ TEST(DualMicrofacet, MaterialAddsDiffuseToTheScaledRefractivePart) {
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::model

@@ -9,7 +9,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/model/hemicube.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 namespace {
 
 Vec3 RandomUpperDirection(std::mt19937_64& rng) {
@@ -53,8 +53,8 @@ TEST(Hemicube, CellLookupIsConsistentWithCentresAndPoints) {
       for (double fv : {0.05, 0.95}) EXPECT_EQ(cube.CellOf(cube.CellPoint(c, fu, fv)), c);
     }
   }
-  EXPECT_THROW(Hemicube(5), Error);
-  EXPECT_THROW(Hemicube(2), Error);
+  EXPECT_THROW(Hemicube(5), common::Error);
+  EXPECT_THROW(Hemicube(2), common::Error);
 }
 
 TEST(Hemicube, NeighboursAreSymmetricAndAdjacent) {
@@ -161,4 +161,4 @@ TEST(Hemicube, InterpolationIsContinuousAcrossFaceSeams) {
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::model

@@ -13,7 +13,7 @@
 #include "svbtdf/model/ggx.h"
 #include "svbtdf/model/ndf_factory.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 namespace {
 
 struct NdfCase {
@@ -180,26 +180,26 @@ TEST(Ndf, MaskingIsABoundedIndicatorOfFrontFacingFacets) {
 TEST(Ndf, FactoryRejectsBadParameters) {
   AnalyticNdfParams p;
   p.alpha_x = -0.1;
-  EXPECT_THROW(MakeAnalyticNdf("ggx", p), Error);
+  EXPECT_THROW(MakeAnalyticNdf("ggx", p), common::Error);
   p.alpha_x = 0.2;
   p.alpha_y = 0.0;
-  EXPECT_THROW(MakeAnalyticNdf("beckmann", p), Error);
+  EXPECT_THROW(MakeAnalyticNdf("beckmann", p), common::Error);
   p.alpha_y = 0.2;
   p.theta_x = std::nan("");
-  EXPECT_THROW(MakeAnalyticNdf("ellipsoid", p), Error);
-  EXPECT_THROW(MakeAnalyticNdf("cauchy", AnalyticNdfParams{}), Error);
+  EXPECT_THROW(MakeAnalyticNdf("ellipsoid", p), common::Error);
+  EXPECT_THROW(MakeAnalyticNdf("cauchy", AnalyticNdfParams{}), common::Error);
   AnalyticNdfParams vmf;
   vmf.kappa = 0.0;
-  EXPECT_THROW(MakeAnalyticNdf("vmf", vmf), Error);
+  EXPECT_THROW(MakeAnalyticNdf("vmf", vmf), common::Error);
   vmf.kappa = 10.0;
   vmf.mean = Vec3(1.0, 0.0, -0.1);
-  EXPECT_THROW(MakeAnalyticNdf("vmf", vmf), Error);
+  EXPECT_THROW(MakeAnalyticNdf("vmf", vmf), common::Error);
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::model
 
-namespace svbtdf {
+namespace svbtdf::model {
 namespace {
 
 // A sampler that draws from GGX(0.3) but reports the density of GGX(0.33): the chi-square check
@@ -227,4 +227,4 @@ TEST(Ndf, TheSamplerCheckDetectsATenPercentRoughnessMismatch) {
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::model

@@ -9,7 +9,7 @@
 #include "svbtdf/model/hemicube.h"
 #include "svbtdf/model/ndf.h"
 
-namespace svbtdf::testing {
+namespace svbtdf::model::testing {
 
 struct SamplerCheck {
   double chi2 = 0;
@@ -70,4 +70,4 @@ inline SamplerCheck CheckSampler(const Ndf& ndf, const Vec3& v, int samples, uin
   return check;
 }
 
-}  // namespace svbtdf::testing
+}  // namespace svbtdf::model::testing

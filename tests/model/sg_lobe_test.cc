@@ -8,7 +8,7 @@
 #include "svbtdf/model/hemicube.h"
 #include "svbtdf/model/sg_lobe.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 namespace {
 
 struct Slice {
@@ -53,10 +53,10 @@ TEST(SphericalGaussian, SummarisesADualMicrofacetSliceWithinAQuarter) {
 }
 
 TEST(SphericalGaussian, RejectsEmptyOrMismatchedSlices) {
-  EXPECT_THROW(FitSphericalGaussian({}, {}, {}), Error);
+  EXPECT_THROW(FitSphericalGaussian({}, {}, {}), common::Error);
   const Slice zero = LightHemicube([](const Vec3&) { return 0.0; });
-  EXPECT_THROW(FitSphericalGaussian(zero.directions, zero.values, zero.weights), Error);
+  EXPECT_THROW(FitSphericalGaussian(zero.directions, zero.values, zero.weights), common::Error);
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::model

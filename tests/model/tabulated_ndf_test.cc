@@ -10,7 +10,7 @@
 #include "svbtdf/model/ggx.h"
 #include "svbtdf/model/tabulated_ndf.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 namespace {
 
 // Integral of f over the upper hemisphere on a fine (cos theta, phi) grid: a quadrature unrelated
@@ -153,11 +153,11 @@ TEST(TabulatedNdf, SamplerMatchesItsPdfAndWeightsAreAtMostOne) {
 }
 
 TEST(TabulatedNdf, RejectsTablesOfTheWrongSize) {
-  EXPECT_THROW(TabulatedNdf(Hemicube(8), std::vector<double>(10, 0.0)), Error);
+  EXPECT_THROW(TabulatedNdf(Hemicube(8), std::vector<double>(10, 0.0)), common::Error);
   std::vector<double> bad(Hemicube(8).num_cells(), 0.0);
   bad[3] = std::nan("");
-  EXPECT_THROW(TabulatedNdf(Hemicube(8), bad), Error);
+  EXPECT_THROW(TabulatedNdf(Hemicube(8), bad), common::Error);
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::model

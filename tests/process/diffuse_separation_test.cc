@@ -47,11 +47,11 @@ class NoisyCamera {
   explicit NoisyCamera(uint64_t seed) : rng_(seed) {}
 
   // True R at every dot and its s_q -> measured R.
-  std::vector<Rgb> Measure(const std::vector<Rgb>& truth, const std::vector<double>& scale) {
+  std::vector<model::Rgb> Measure(const std::vector<model::Rgb>& truth, const std::vector<double>& scale) {
     double peak_rate = 0;
-    for (size_t q = 0; q < truth.size(); ++q) peak_rate = std::max(peak_rate, Luminance(truth[q]) / scale[q]);
+    for (size_t q = 0; q < truth.size(); ++q) peak_rate = std::max(peak_rate, model::Luminance(truth[q]) / scale[q]);
     const double base = 0.9 * kWell / peak_rate;  // electrons per unit rate at 1x
-    std::vector<Rgb> out(truth.size());
+    std::vector<model::Rgb> out(truth.size());
     for (size_t q = 0; q < truth.size(); ++q) {
       for (int c = 0; c < 3; ++c) {
         double sum = 0, time = 0;
@@ -74,9 +74,9 @@ class NoisyCamera {
 };
 
 // The paper's eq. 14 (the store's estimator before): per channel, the minimum R.
-Rgb Minimum(const std::vector<Rgb>& r) {
-  Rgb m = {1e300, 1e300, 1e300};
-  for (const Rgb& v : r) {
+model::Rgb Minimum(const std::vector<model::Rgb>& r) {
+  model::Rgb m = {1e300, 1e300, 1e300};
+  for (const model::Rgb& v : r) {
     for (int c = 0; c < 3; ++c) m[c] = std::min(m[c], v[c]);
   }
   return m;
@@ -87,18 +87,18 @@ TEST(EstimateDiffuse, UnbiasedUnderShotNoiseWhereTheMinimumIsNot) {
   // centre, a GGX 0.25 dual-microfacet lobe on a diffuse floor of 0.01.
   const calib::SessionCalibration calibration = testing::AnalyticCalibration(20);
   const TexelGeometry g = MakeTexelGeometry(calibration, 1, 1);
-  const GgxNdf ndf(0.25, 0.25);
-  DualMicrofacetParams params;
+  const model::GgxNdf ndf(0.25, 0.25);
+  model::DualMicrofacetParams params;
   params.eta = 1.5;
   params.alpha = 0.5;
-  params.shadowing = SmithShadowing::Ggx(0.2);
+  params.shadowing = model::SmithShadowing::Ggx(0.2);
   params.k_s = {0.8, 0.8, 0.8};
   params.rho_d = {0.01, 0.012, 0.008};
-  std::vector<Rgb> truth;
+  std::vector<model::Rgb> truth;
   std::vector<double> scale;
   for (int q = 0; q < static_cast<int>(g.dots.size()); ++q) {
-    const Vec3 to_dot = g.dots[q] - g.TexelCentre(0);
-    truth.push_back(EvaluateMaterial(ndf, params, g.Light(0, q), g.View(0)));
+    const model::Vec3 to_dot = g.dots[q] - g.TexelCentre(0);
+    truth.push_back(model::EvaluateMaterial(ndf, params, g.Light(0, q), g.View(0)));
     scale.push_back(to_dot.squaredNorm() / std::abs(to_dot.normalized().z()));
   }
   // Noise-free, the floor is the diffuse term (the lobe's tails add a little).
@@ -108,17 +108,17 @@ TEST(EstimateDiffuse, UnbiasedUnderShotNoiseWhereTheMinimumIsNot) {
 
   NoisyCamera camera(3);
   constexpr int kTrials = 300;
-  Rgb mean = {0, 0, 0}, mean_minimum = {0, 0, 0};
+  model::Rgb mean = {0, 0, 0}, mean_minimum = {0, 0, 0};
   std::vector<double> errors;
   for (int trial = 0; trial < kTrials; ++trial) {
-    const std::vector<Rgb> measured = camera.Measure(truth, scale);
-    const Rgb estimate = EstimateDiffuse(measured, scale, neighbour).rho_d;
-    const Rgb minimum = Minimum(measured);
+    const std::vector<model::Rgb> measured = camera.Measure(truth, scale);
+    const model::Rgb estimate = EstimateDiffuse(measured, scale, neighbour).rho_d;
+    const model::Rgb minimum = Minimum(measured);
     for (int c = 0; c < 3; ++c) {
       mean[c] += estimate[c] / kTrials;
       mean_minimum[c] += minimum[c] / kTrials;
     }
-    errors.push_back(std::abs(Luminance(estimate) / Luminance(params.rho_d) - 1));
+    errors.push_back(std::abs(model::Luminance(estimate) / model::Luminance(params.rho_d) - 1));
   }
   for (int c = 0; c < 3; ++c) {
     const double bias = mean[c] / params.rho_d[c] - 1, bias_minimum = mean_minimum[c] / params.rho_d[c] - 1;
@@ -126,20 +126,20 @@ TEST(EstimateDiffuse, UnbiasedUnderShotNoiseWhereTheMinimumIsNot) {
     EXPECT_LT(std::abs(bias), 0.02) << c;
     EXPECT_LT(bias_minimum, -0.05) << c;  // what the paper's eq. 14 does with these samples
   }
-  std::printf("median |rho_d / true - 1| of one texel: %.4f\n", Median(errors));
-  EXPECT_LT(Median(errors), 0.02);
+  std::printf("median |rho_d / true - 1| of one texel: %.4f\n", common::Median(errors));
+  EXPECT_LT(common::Median(errors), 0.02);
 }
 
 TEST(EstimateDiffuse, EdgeCases) {
   EXPECT_EQ(EstimateDiffuse({}, {}, {}).floor_samples, 0);
-  EXPECT_THROW(EstimateDiffuse({{1, 1, 1}}, {}, {}), Error);
+  EXPECT_THROW(EstimateDiffuse({{1, 1, 1}}, {}, {}), common::Error);
   // Identical samples: their value.
   const DiffuseEstimate same =
       EstimateDiffuse({{0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}}, {1, 2, 3}, {{{-1, -1}}, {{0, 2}}, {{-1, -1}}});
   EXPECT_DOUBLE_EQ(same.rho_d[0], 0.5);
   // A floor with a bright lobe on a third of the dots: the lobe is clipped away, and the
   // differences between neighbours give the noise.
-  std::vector<Rgb> r;
+  std::vector<model::Rgb> r;
   std::vector<double> s;
   std::vector<std::array<int, 2>> next;
   std::mt19937_64 rng(5);
@@ -166,38 +166,38 @@ struct ReachRig {
   static constexpr double kSample = 0.08, kDepth = 0.04, kPitch = 0.01;
   static constexpr int kCols = 6, kRows = 12, kHoleCol = 2, kHoleRow = 6;
   static constexpr double kX0 = -0.045;  // x of the first column
-  Vec3 camera{0.0, -std::sin(kPi / 6), std::cos(kPi / 6)};
+  model::Vec3 camera{0.0, -std::sin(model::kPi / 6), std::cos(model::kPi / 6)};
   double y0 = 0;  // y of the first row
 
   calib::SessionCalibration Calibration() {
     calib::SessionCalibration c = testing::AnalyticCalibration(2);
     c.sample_plane.translation = -camera;
     c.monitor.dots.clear();
-    const double centre_y = kDepth * std::tan(kPi / 6);
+    const double centre_y = kDepth * std::tan(model::kPi / 6);
     y0 = centre_y - 0.5 * (kRows - 1) * kPitch;
     for (int row = 0; row < kRows; ++row) {
       for (int col = 0; col < kCols; ++col) {
         if (col == kHoleCol && row == kHoleRow) continue;
         calib::DotPosition dot;
-        dot.position = Vec3(kX0 + col * kPitch, y0 + row * kPitch, -kDepth);
+        dot.position = model::Vec3(kX0 + col * kPitch, y0 + row * kPitch, -kDepth);
         dot.monitor_px = {static_cast<double>(col), static_cast<double>(row)};
         c.monitor.dots.push_back(dot);
       }
     }
     return c;
   }
-  Eigen::Vector2d Hit(const Vec3& x) const {
-    const Vec3 m = x + (kDepth / camera.z()) * (x - camera);
+  Eigen::Vector2d Hit(const model::Vec3& x) const {
+    const model::Vec3 m = x + (kDepth / camera.z()) * (x - camera);
     return {m.x(), m.y()};
   }
   // Expected: inside the grid's rectangle grown by half a spacing (the hit points stay well inside
   // it in y), and not in the hole: within half a cell diagonal of some dot.
-  bool Expected(const Vec3& x, const std::vector<Vec3>& dots) const {
+  bool Expected(const model::Vec3& x, const std::vector<model::Vec3>& dots) const {
     const Eigen::Vector2d m = Hit(x);
     if (m.x() < kX0 - 0.5 * kPitch || m.x() > kX0 + (kCols - 1) * kPitch + 0.5 * kPitch) return false;
     if (m.y() < y0 - 0.5 * kPitch || m.y() > y0 + (kRows - 1) * kPitch + 0.5 * kPitch) return false;
     double nearest = 1e300;
-    for (const Vec3& p : dots) nearest = std::min(nearest, (m - Eigen::Vector2d(p.x(), p.y())).norm());
+    for (const model::Vec3& p : dots) nearest = std::min(nearest, (m - Eigen::Vector2d(p.x(), p.y())).norm());
     return nearest <= kPitch / std::sqrt(2.0);
   }
 };
@@ -210,7 +210,7 @@ TEST(DotBeneath, FlagsTexelsWhoseContinuedViewRayMissesTheDots) {
   ASSERT_EQ(static_cast<int64_t>(reach.size()), g.num_texels());
   int64_t without = 0, in_hole = 0;
   for (int64_t t = 0; t < g.num_texels(); ++t) {
-    const Vec3 x = g.TexelCentre(t);
+    const model::Vec3 x = g.TexelCentre(t);
     const Eigen::Vector2d m = rig.Hit(x);
     // Every hit point is inside the grid's y range, so only the x edges and the hole decide.
     ASSERT_GT(m.y(), rig.y0 - 0.5 * ReachRig::kPitch);
@@ -242,17 +242,17 @@ TEST(DotBeneath, StoreWritesReachAndCountsItAndTheDiffuseComesFromTheNearestTexe
   SliceStoreWriter writer(folder, info, calibration);
   // rho_d grows along x, so that a wrong neighbour shows; the lobe is a GGX one.
   const auto truth_rho_d = [&](int64_t t) { return 0.01 * (1.0 + 0.05 * static_cast<double>(t % kTexels)); };
-  const GgxNdf ndf(0.2, 0.2);
+  const model::GgxNdf ndf(0.2, 0.2);
   std::vector<float> rgb(3 * g.num_texels());
   for (int q = 0; q < info.num_dots; ++q) {
     for (int64_t t = 0; t < g.num_texels(); ++t) {
-      DualMicrofacetParams params;
+      model::DualMicrofacetParams params;
       params.eta = 1.5;
       params.alpha = 0.5;
       params.k_s = {0.8, 0.8, 0.8};
       const double d = truth_rho_d(t);
       params.rho_d = {d, d, d};
-      const Rgb r = EvaluateMaterial(ndf, params, g.Light(t, q), g.View(t));
+      const model::Rgb r = model::EvaluateMaterial(ndf, params, g.Light(t, q), g.View(t));
       for (int c = 0; c < 3; ++c) rgb[3 * t + c] = static_cast<float>(r[c]);
     }
     writer.WriteDot(q, rgb);
@@ -268,7 +268,7 @@ TEST(DotBeneath, StoreWritesReachAndCountsItAndTheDiffuseComesFromTheNearestTexe
   const nlohmann::json manifest = nlohmann::json::parse(std::ifstream(folder / "processed.json"));
   EXPECT_EQ(manifest.at("statistics").at("texels_without_dot_beneath").get<int64_t>(), expected_without);
   EXPECT_EQ(manifest.at("files").at("reach"), "reach.exr");
-  const FloatImage reach = ReadFloatImage(folder / "reach.exr");
+  const common::FloatImage reach = common::ReadFloatImage(folder / "reach.exr");
   ASSERT_EQ(reach.channels, 1);
   std::vector<double> floor_errors;
   for (int64_t t = 0; t < g.num_texels(); ++t) {
@@ -292,8 +292,8 @@ TEST(DotBeneath, StoreWritesReachAndCountsItAndTheDiffuseComesFromTheNearestTexe
   // tails into the floor: a few texels are 2-6% high.
   ASSERT_GT(floor_errors.size(), 10u);
   std::printf("%zu texels with a floor: median |rho_d / true - 1| %.4f, worst %.4f\n", floor_errors.size(),
-              Median(floor_errors), *std::max_element(floor_errors.begin(), floor_errors.end()));
-  EXPECT_LT(Median(floor_errors), 0.02);
+              common::Median(floor_errors), *std::max_element(floor_errors.begin(), floor_errors.end()));
+  EXPECT_LT(common::Median(floor_errors), 0.02);
   // The unreached texels take the diffuse term of the nearest texel with a dot beneath, along
   // the row here (the hole is not on any texel centre's hit point: every such texel is at the
   // +x side): that is the last reached column of the row, never the floor of their own tails.
@@ -312,7 +312,7 @@ TEST(DotBeneath, StoreWritesReachAndCountsItAndTheDiffuseComesFromTheNearestTexe
   try {
     SliceStore::Open(folder);
     ADD_FAILURE() << "opened a store without reach.exr";
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find("reach.exr"), std::string::npos) << e.what();
   }
 }

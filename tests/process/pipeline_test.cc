@@ -30,7 +30,7 @@ class Pipeline : public ::testing::Test {
   // process of its own under ctest: the others do not pay for it).
   static void Simulate() {
     if (fs::exists(folder_->path() / "sim" / "session" / "journal.jsonl")) return;
-    SimulationOptions simulation;
+    simulate::SimulationOptions simulation;
     simulation.progress = false;
     acquire::SimulateSession(folder_->path() / "sim", simulation);
   }
@@ -78,7 +78,7 @@ TEST_F(Pipeline, CalibratesProcessesAndFitsInOrderThenReusesTheFinishedSteps) {
   EXPECT_TRUE(fs::exists(folder_->path() / "first" / "material.json"));
   EXPECT_FALSE(fs::exists(FitCheckpointPath(folder_->path() / "first")));  // removed once written
   // quality.json holds exactly the warnings the stages reported, in order.
-  const nlohmann::json quality = nlohmann::json::parse(ReadTextFile(folder_->path() / "first" / "quality.json"));
+  const nlohmann::json quality = nlohmann::json::parse(common::ReadTextFile(folder_->path() / "first" / "quality.json"));
   ASSERT_EQ(quality.at("warnings").size(), first.warnings.size()) << quality.dump(1);
   ASSERT_EQ(warned_.size(), first.warnings.size());
   for (size_t k = 0; k < warned_.size(); ++k) EXPECT_EQ(warned_[k].Line(), first.warnings[k].Line());
@@ -100,13 +100,13 @@ TEST_F(Pipeline, ANonEmptyOutputIsRefusedBeforeAnyStep) {
   try {
     Run(options);
     ADD_FAILURE() << "not refused";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kInvalidInput);
+  } catch (const common::Error& e) {
+    EXPECT_EQ(e.kind(), common::ErrorKind::kInvalidInput);
     EXPECT_NE(std::string(e.what()).find(out.string()), std::string::npos) << e.what();
   }
   EXPECT_TRUE(lines_.empty());
   EXPECT_FALSE(fs::exists(options.work));
-  EXPECT_EQ(ReadTextFile(out / "notes.txt"), "keep\n");
+  EXPECT_EQ(common::ReadTextFile(out / "notes.txt"), "keep\n");
 }
 
 TEST_F(Pipeline, AnIncompleteSessionIsRefusedNamingIt) {
@@ -124,7 +124,7 @@ TEST_F(Pipeline, AnIncompleteSessionIsRefusedNamingIt) {
   try {
     Run(options);
     ADD_FAILURE() << "not refused";
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find("not a complete session"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find(session.string()), std::string::npos) << e.what();
   }

@@ -49,9 +49,9 @@ struct Simulation {
 };
 
 Simulation Simulate(const std::string& name, bool noise) {
-  ProgressBar::SetEnabled(false);
+  common::ProgressBar::SetEnabled(false);
   Simulation s{TestFolder(name), {}};
-  SimulationOptions options;
+  simulate::SimulationOptions options;
   options.preset = "tiny";
   options.noise = noise;
   options.progress = false;
@@ -70,7 +70,7 @@ struct Accuracy {
 // the samples whose truth is at least 5% of the texel's brightest (the directions the fit uses;
 // fainter ones are dominated by noise by design).
 Accuracy MeasureAccuracy(const SliceStore& store, const fs::path& truth_folder) {
-  const MaterialTruth truth = ReadMaterialTruth(truth_folder);
+  const simulate::MaterialTruth truth = simulate::ReadMaterialTruth(truth_folder);
   const TexelGeometry& g = store.geometry();
   std::vector<double> errors, rho_d_errors;
   Accuracy a;
@@ -80,12 +80,12 @@ Accuracy MeasureAccuracy(const SliceStore& store, const fs::path& truth_folder) 
     if (store.mask().at(col, row) == 0) continue;
     ++a.texels;
     const auto ndf = truth.TexelNdf(col, row);
-    const DualMicrofacetParams params = truth.Params(col, row);
+    const model::DualMicrofacetParams params = truth.Params(col, row);
     store.ReadSamples(t, &samples);
     std::vector<double> expected(g.dots.size()), measured(g.dots.size());
     double peak = 0;
     for (size_t q = 0; q < g.dots.size(); ++q) {
-      expected[q] = Luminance(EvaluateMaterial(*ndf, params, g.Light(t, static_cast<int>(q)), g.View(t)));
+      expected[q] = model::Luminance(model::EvaluateMaterial(*ndf, params, g.Light(t, static_cast<int>(q)), g.View(t)));
       measured[q] = (samples[3 * q] + samples[3 * q + 1] + samples[3 * q + 2]) / 3.0;
       peak = std::max(peak, expected[q]);
     }
@@ -93,13 +93,13 @@ Accuracy MeasureAccuracy(const SliceStore& store, const fs::path& truth_folder) 
       if (expected[q] < 0.05 * peak || !std::isfinite(measured[q])) continue;
       errors.push_back(std::abs(measured[q] / expected[q] - 1.0));
     }
-    const double true_rho_d = Luminance(params.rho_d);
+    const double true_rho_d = model::Luminance(params.rho_d);
     const double rho_d = (store.rho_d().at(col, row, 0) + store.rho_d().at(col, row, 1) + store.rho_d().at(col, row, 2)) / 3;
     rho_d_errors.push_back(std::abs(rho_d / true_rho_d - 1.0));
   }
   a.samples = static_cast<int64_t>(errors.size());
-  a.median_relative_error = Median(errors);
-  a.rho_d_median_relative_error = Median(rho_d_errors);
+  a.median_relative_error = common::Median(errors);
+  a.rho_d_median_relative_error = common::Median(rho_d_errors);
   return a;
 }
 
@@ -168,10 +168,10 @@ TEST(ProcessSession, DefaultNoiseWithinThreePercentAndResumesWhereItStopped) {
 
   // An interruption before it started is a clean, resumable stop.
   const fs::path resumed = sim.folder / "resumed";
-  SetInterruptRequested(true);
-  EXPECT_THROW(ProcessSession(session, sim.calibration, resumed, QuietOptions()), Error);
-  SetInterruptRequested(false);
-  EXPECT_THROW(SliceStore::Open(resumed), Error);  // unfinished: refused
+  common::SetInterruptRequested(true);
+  EXPECT_THROW(ProcessSession(session, sim.calibration, resumed, QuietOptions()), common::Error);
+  common::SetInterruptRequested(false);
+  EXPECT_THROW(SliceStore::Open(resumed), common::Error);  // unfinished: refused
   // The state a crash after 20 dots leaves: the first 20 dots journalled (the rest of the file
   // holds whatever was there), the manifest not complete.
   fs::remove_all(resumed);
@@ -200,7 +200,7 @@ TEST(ProcessSession, ErrorsNameTheFile) {
   try {
     ProcessSession(session, sim.calibration, out, QuietOptions());
     FAIL() << "a finished store was processed again";
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find(out.string()), std::string::npos) << e.what();
   }
   // A calibrated camera of another size than the images.
@@ -209,7 +209,7 @@ TEST(ProcessSession, ErrorsNameTheFile) {
   try {
     ProcessSession(session, wrong, sim.folder / "processed_wrong", QuietOptions());
     FAIL() << "mismatched image size accepted";
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find(".png"), std::string::npos) << e.what();
   }
   // A corrupt image: the reader names it.
@@ -219,7 +219,7 @@ TEST(ProcessSession, ErrorsNameTheFile) {
   try {
     ProcessSession(session, sim.calibration, sim.folder / "processed_corrupt", QuietOptions());
     FAIL() << "corrupt image accepted";
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find("q0007"), std::string::npos) << e.what();
   }
 }

@@ -18,10 +18,10 @@ namespace svbtdf::process {
 namespace {
 
 struct Samples {
-  std::vector<Vec3> light;  // i.z < 0
+  std::vector<model::Vec3> light;  // i.z < 0
   std::vector<float> values, weights;
-  void Add(const Vec3& upper, float value, float weight = 1.0f) {
-    light.push_back(FlipZ(upper.normalized()));
+  void Add(const model::Vec3& upper, float value, float weight = 1.0f) {
+    light.push_back(model::FlipZ(upper.normalized()));
     values.push_back(value);
     weights.push_back(weight);
   }
@@ -40,39 +40,39 @@ Resampled Resample(const PushPullResampler& resampler, const Samples& samples) {
 }
 
 // Uniform directions on the upper hemisphere (z > 0.01, clear of the horizon).
-std::vector<Vec3> UniformUpper(int count, uint64_t seed) {
+std::vector<model::Vec3> UniformUpper(int count, uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::vector<Vec3> out;
+  std::vector<model::Vec3> out;
   while (static_cast<int>(out.size()) < count) {
-    const double z = u(rng), phi = 2 * kPi * u(rng), r = std::sqrt(std::max(0.0, 1 - z * z));
+    const double z = u(rng), phi = 2 * model::kPi * u(rng), r = std::sqrt(std::max(0.0, 1 - z * z));
     if (z > 0.01) out.emplace_back(r * std::cos(phi), r * std::sin(phi), z);
   }
   return out;
 }
 
 // A smooth function of the (upper) direction, between 0.2 and 1.2.
-double Smooth(const Vec3& d) { return 0.6 + 0.3 * d.x() - 0.2 * d.y() + 0.3 * d.z() * d.z(); }
+double Smooth(const model::Vec3& d) { return 0.6 + 0.3 * d.x() - 0.2 * d.y() + 0.3 * d.z() * d.z(); }
 
 TEST(PushPull, RefusesAResolutionThatIsNotAPowerOfTwoAndMismatchedInputs) {
-  EXPECT_THROW(PushPullResampler(Hemicube(12)), Error);
-  const PushPullResampler resampler{Hemicube(8)};
+  EXPECT_THROW(PushPullResampler(model::Hemicube(12)), common::Error);
+  const PushPullResampler resampler{model::Hemicube(8)};
   std::vector<float> values, confidence;
   try {
-    resampler.Resample({Vec3(0, 0, -1)}, {1.0f, 2.0f}, {1.0f}, &values, &confidence);
+    resampler.Resample({model::Vec3(0, 0, -1)}, {1.0f, 2.0f}, {1.0f}, &values, &confidence);
     FAIL() << "mismatched lengths were accepted";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kInvalidInput);
+  } catch (const common::Error& e) {
+    EXPECT_EQ(e.kind(), common::ErrorKind::kInvalidInput);
   }
 }
 
 TEST(PushPull, AConstantStaysConstantEverywhere) {
-  const PushPullResampler resampler{Hemicube(16)};
+  const PushPullResampler resampler{model::Hemicube(16)};
   Samples samples;
   // Sparse, clumped samples (a quarter of the hemisphere) with uneven weights.
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<float> weight(0.1f, 3.0f);
-  for (const Vec3& d : UniformUpper(400, 1)) {
+  for (const model::Vec3& d : UniformUpper(400, 1)) {
     if (d.x() > 0 && d.y() > 0) samples.Add(d, 0.75f, weight(rng));
   }
   ASSERT_GT(samples.light.size(), 50u);
@@ -82,8 +82,8 @@ TEST(PushPull, AConstantStaysConstantEverywhere) {
 
 TEST(PushPull, SamplesAtCellCentresAreReproduced) {
   for (int resolution : {4, 16}) {
-    const PushPullResampler resampler{Hemicube(resolution)};
-    const Hemicube& grid = resampler.grid();
+    const PushPullResampler resampler{model::Hemicube(resolution)};
+    const model::Hemicube& grid = resampler.grid();
     Samples samples;
     std::mt19937_64 rng(resolution);
     std::uniform_real_distribution<float> value(0.0f, 5.0f);
@@ -101,13 +101,13 @@ TEST(PushPull, SamplesAtCellCentresAreReproduced) {
 }
 
 TEST(PushPull, MissingWeightsAndNonFiniteValuesAreIgnored) {
-  const PushPullResampler resampler{Hemicube(8)};
+  const PushPullResampler resampler{model::Hemicube(8)};
   Samples clean;
-  for (const Vec3& d : UniformUpper(300, 5)) clean.Add(d, static_cast<float>(Smooth(d)));
+  for (const model::Vec3& d : UniformUpper(300, 5)) clean.Add(d, static_cast<float>(Smooth(d)));
   Samples noisy = clean;
-  noisy.Add(Vec3(0.1, 0.2, 1), 1000.0f, 0.0f);      // weight 0: missing
-  noisy.Add(Vec3(-0.3, 0.1, 1), std::nanf(""), 1.0f);  // not a number
-  noisy.Add(Vec3(0.5, -0.5, 0.3), INFINITY, 2.0f);
+  noisy.Add(model::Vec3(0.1, 0.2, 1), 1000.0f, 0.0f);      // weight 0: missing
+  noisy.Add(model::Vec3(-0.3, 0.1, 1), std::nanf(""), 1.0f);  // not a number
+  noisy.Add(model::Vec3(0.5, -0.5, 0.3), INFINITY, 2.0f);
   const Resampled a = Resample(resampler, clean), b = Resample(resampler, noisy);
   EXPECT_EQ(a.values, b.values);
   EXPECT_EQ(a.confidence, b.confidence);
@@ -115,9 +115,9 @@ TEST(PushPull, MissingWeightsAndNonFiniteValuesAreIgnored) {
 
 // One sample anywhere: every cell takes its value (the pull reaches the top of the pyramid).
 TEST(PushPull, ASingleSampleFillsTheWholeHemicube) {
-  const PushPullResampler resampler{Hemicube(16)};
+  const PushPullResampler resampler{model::Hemicube(16)};
   Samples samples;
-  samples.Add(Vec3(0.3, -0.7, 0.4), 2.5f);
+  samples.Add(model::Vec3(0.3, -0.7, 0.4), 2.5f);
   const Resampled out = Resample(resampler, samples);
   int supported = 0;
   for (size_t c = 0; c < out.values.size(); ++c) {
@@ -131,31 +131,31 @@ TEST(PushPull, ASingleSampleFillsTheWholeHemicube) {
 // Empty cells take their values from the nearest data: of two samples (1 near +x, 0 near -x),
 // the side of each is filled with values nearer its own; nothing leaves the input range.
 TEST(PushPull, EmptyCellsAreFilledFromTheirNeighboursWithinTheInputRange) {
-  const PushPullResampler resampler{Hemicube(16)};
-  const Hemicube& grid = resampler.grid();
+  const PushPullResampler resampler{model::Hemicube(16)};
+  const model::Hemicube& grid = resampler.grid();
   Samples samples;
-  samples.Add(Vec3(1, 0.2, 0.2), 1.0f);
-  samples.Add(Vec3(-1, -0.2, 0.2), 0.0f);
+  samples.Add(model::Vec3(1, 0.2, 0.2), 1.0f);
+  samples.Add(model::Vec3(-1, -0.2, 0.2), 0.0f);
   const Resampled out = Resample(resampler, samples);
   for (size_t c = 0; c < out.values.size(); ++c) {
     ASSERT_GE(out.values[c], 0.0f) << "cell " << c;
     ASSERT_LE(out.values[c], 1.0f) << "cell " << c;
   }
   // Three cells above each sample: outside its bilinear footprint.
-  const int near_one = grid.CellOf(Vec3(1, 0.2, 0.6)), near_zero = grid.CellOf(Vec3(-1, -0.2, 0.6));
+  const int near_one = grid.CellOf(model::Vec3(1, 0.2, 0.6)), near_zero = grid.CellOf(model::Vec3(-1, -0.2, 0.6));
   EXPECT_EQ(out.confidence[near_one], 0.0f);  // not under either sample's footprint
   EXPECT_EQ(out.confidence[near_zero], 0.0f);
   EXPECT_GT(out.values[near_one], 0.5f);
   EXPECT_LT(out.values[near_zero], 0.5f);
-  EXPECT_NEAR(out.values[grid.CellOf(Vec3(1, 0.2, 0.2))], 1.0f, 1e-5f);
-  EXPECT_NEAR(out.values[grid.CellOf(Vec3(-1, -0.2, 0.2))], 0.0f, 1e-5f);
+  EXPECT_NEAR(out.values[grid.CellOf(model::Vec3(1, 0.2, 0.2))], 1.0f, 1e-5f);
+  EXPECT_NEAR(out.values[grid.CellOf(model::Vec3(-1, -0.2, 0.2))], 0.0f, 1e-5f);
 
   // Random sparse data of a wide range: every cell, covered or not, stays within it.
   Samples sparse;
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<float> value(-2.0f, 7.0f);
   float lo = 1e9f, hi = -1e9f;
-  for (const Vec3& d : UniformUpper(60, 12)) {
+  for (const model::Vec3& d : UniformUpper(60, 12)) {
     sparse.Add(d, value(rng));
     lo = std::min(lo, sparse.values.back());
     hi = std::max(hi, sparse.values.back());
@@ -175,12 +175,12 @@ TEST(PushPull, EmptyCellsAreFilledFromTheirNeighboursWithinTheInputRange) {
 // at every cell centre (measured: within 0.005), and a hole of radius 25 degrees cut out of the
 // data is filled close to it.
 TEST(PushPull, ASmoothFunctionIsReproducedAtResolution16) {
-  const PushPullResampler resampler{Hemicube(16)};
-  const Hemicube& grid = resampler.grid();
-  const Vec3 hole_centre = Vec3(0.4, 0.3, 0.6).normalized();
-  const double hole_cos = std::cos(25.0 * kPi / 180.0);
+  const PushPullResampler resampler{model::Hemicube(16)};
+  const model::Hemicube& grid = resampler.grid();
+  const model::Vec3 hole_centre = model::Vec3(0.4, 0.3, 0.6).normalized();
+  const double hole_cos = std::cos(25.0 * model::kPi / 180.0);
   Samples dense, holed;
-  for (const Vec3& d : UniformUpper(30000, 21)) {
+  for (const model::Vec3& d : UniformUpper(30000, 21)) {
     dense.Add(d, static_cast<float>(Smooth(d)));
     if (d.dot(hole_centre) < hole_cos) holed.Add(d, static_cast<float>(Smooth(d)));
   }
@@ -188,9 +188,9 @@ TEST(PushPull, ASmoothFunctionIsReproducedAtResolution16) {
   double worst = 0, worst_in_hole = 0;
   int in_hole = 0;
   for (int c = 0; c < grid.num_cells(); ++c) {
-    const Vec3 centre = grid.CellCenter(c);
+    const model::Vec3 centre = grid.CellCenter(c);
     worst = std::max(worst, std::abs(out.values[c] - Smooth(centre)));
-    if (centre.dot(hole_centre) > std::cos(15.0 * kPi / 180.0)) {
+    if (centre.dot(hole_centre) > std::cos(15.0 * model::kPi / 180.0)) {
       ++in_hole;
       EXPECT_EQ(filled.confidence[c], 0.0f) << "cell " << c;
       worst_in_hole = std::max(worst_in_hole, std::abs(filled.values[c] - Smooth(centre)));

@@ -47,10 +47,10 @@ struct Errors {
 };
 
 Errors Measure(const std::string& preset) {
-  ProgressBar::SetEnabled(false);
+  common::ProgressBar::SetEnabled(false);
   const fs::path folder = Folder(preset);
   if (!fs::exists(folder / "simulated")) {
-    SimulationOptions options;
+    simulate::SimulationOptions options;
     options.preset = preset;
     options.progress = false;
     acquire::SimulateSession(folder, options);  // resumes an interrupted one
@@ -85,7 +85,7 @@ Errors Measure(const std::string& preset) {
     writer.Finish(finish);
   }
   const SliceStore store = SliceStore::Open(out);
-  const MaterialTruth truth = ReadMaterialTruth(folder / "truth");
+  const simulate::MaterialTruth truth = simulate::ReadMaterialTruth(folder / "truth");
   const TexelGeometry& g = store.geometry();
   const double threshold = store.info().provenance.value("diffuse_threshold", 0.05);
   std::vector<double> store_errors, minimum_errors;
@@ -95,7 +95,7 @@ Errors Measure(const std::string& preset) {
     const int col = static_cast<int>(t % g.texels_x), row = static_cast<int>(t / g.texels_x);
     if (store.reach().at(col, row) == 0) ++e.without_dot_beneath;
     if (store.mask().at(col, row) == 0 || store.reach().at(col, row) == 0) continue;
-    const double true_rho_d = Luminance(truth.Params(col, row).rho_d);
+    const double true_rho_d = model::Luminance(truth.Params(col, row).rho_d);
     const double rho_d = (store.rho_d().at(col, row, 0) + store.rho_d().at(col, row, 1) + store.rho_d().at(col, row, 2)) / 3;
     store_errors.push_back(std::abs(rho_d / true_rho_d - 1));
     // The paper's eq. 14 as the store computed it before: the minimum over the dots whose pixel
@@ -107,7 +107,7 @@ Errors Measure(const std::string& preset) {
     int n = 0;
     for (size_t q = 0; q < g.dots.size(); ++q) {
       if (!std::isfinite(samples[3 * q]) || !std::isfinite(samples[3 * q + 1]) || !std::isfinite(samples[3 * q + 2])) continue;
-      const Vec3 to_dot = g.dots[q] - g.TexelCentre(t);
+      const model::Vec3 to_dot = g.dots[q] - g.TexelCentre(t);
       value[q] = (samples[3 * q] + samples[3 * q + 1] + samples[3 * q + 2]) / 3.0;
       pixel[q] = value[q] * std::abs(to_dot.normalized().z()) / to_dot.squaredNorm();
       mean += pixel[q];
@@ -121,8 +121,8 @@ Errors Measure(const std::string& preset) {
     minimum_errors.push_back(std::abs(std::max(0.0, minimum) / true_rho_d - 1));
   }
   e.texels = static_cast<int64_t>(store_errors.size());
-  e.store = Median(store_errors);
-  e.minimum = Median(minimum_errors);
+  e.store = common::Median(store_errors);
+  e.minimum = common::Median(minimum_errors);
   std::printf("%s: %lld texels (dot beneath, valid), %lld without a dot beneath; median |rho_d/true - 1|: store %.4f, "
               "minimum (eq. 14) %.4f\n",
               preset.c_str(), static_cast<long long>(e.texels), static_cast<long long>(e.without_dot_beneath), e.store,

@@ -70,8 +70,8 @@ TEST(Compare, AgainstAnAnalyticTruth) {
     try {
       Compare(SmallMaterial(), truth, Named("/where/the/material/is"));
       ADD_FAILURE() << "a 3x2 material was compared with a 32x32 truth";
-    } catch (const Error& e) {
-      EXPECT_EQ(e.kind(), ErrorKind::kInvalidInput);
+    } catch (const common::Error& e) {
+      EXPECT_EQ(e.kind(), common::ErrorKind::kInvalidInput);
       EXPECT_EQ(e.subject(), "/where/the/material/is");
       EXPECT_NE(e.problem().find("3x2"), std::string::npos) << e.what();
     }
@@ -83,7 +83,7 @@ TEST(Compare, AgainstAnAnalyticTruth) {
     try {
       Compare(held, truth, Named("held"));
       ADD_FAILURE() << "a held-out dot outside the rig was accepted";
-    } catch (const Error& e) {
+    } catch (const common::Error& e) {
       EXPECT_EQ(e.subject(), "held");
       EXPECT_NE(e.problem().find("held-out dot"), std::string::npos) << e.what();
     }
@@ -121,11 +121,11 @@ TEST(ReadTruth, AFolderOfNeitherKindNamesItsManifest) {
   const fs::path folder = fs::temp_directory_path() / ("svbtdf-bad-truth-" + std::to_string(::getpid()));
   fs::remove_all(folder);
   fs::create_directories(folder);
-  WriteTextAtomically(folder / "material.json", "{}");
+  common::WriteTextAtomically(folder / "material.json", "{}");
   try {
     ReadTruth(folder);
     FAIL() << "a truth of no kind was read";
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find("material.json"), std::string::npos) << e.what();
   }
   fs::remove_all(folder);

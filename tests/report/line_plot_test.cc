@@ -39,7 +39,7 @@ TEST_F(PngFigures, ALinePlotReadsBackAtItsSizeWithItsColours) {
   EXPECT_DOUBLE_EQ(plot.y_max, 1.05 * 0.5);
   plot.WritePng(dir_ / "plot.png");
 
-  const CameraImage image = ReadCameraImage(dir_ / "plot.png");
+  const common::CameraImage image = common::ReadCameraImage(dir_ / "plot.png");
   EXPECT_EQ(image.width, 320);
   EXPECT_EQ(image.height, 200);
   EXPECT_EQ(image.channels, 3);
@@ -58,7 +58,7 @@ TEST_F(PngFigures, ALinePlotReadsBackAtItsSizeWithItsColours) {
 TEST_F(PngFigures, APngIsNeverOverwritten) {
   LinePlot plot;
   plot.WritePng(dir_ / "plot.png");
-  EXPECT_THROW(plot.WritePng(dir_ / "plot.png"), Error);
+  EXPECT_THROW(plot.WritePng(dir_ / "plot.png"), common::Error);
 }
 
 TEST_F(PngFigures, AnEnlargedPictureReplicatesItsPixels) {
@@ -68,7 +68,7 @@ TEST_F(PngFigures, AnEnlargedPictureReplicatesItsPixels) {
   EXPECT_EQ(big.width, 256);
   EXPECT_EQ(big.height, 128);
   big.WritePng(dir_ / "picture.png");
-  const CameraImage image = ReadCameraImage(dir_ / "picture.png");
+  const common::CameraImage image = common::ReadCameraImage(dir_ / "picture.png");
   EXPECT_EQ(image.width, 256);
   EXPECT_EQ(image.at(0, 127, 0), 255);  // white where nothing was drawn
   EXPECT_EQ(image.at(255, 0, 0), 253);  // the ramp's yellow end

@@ -38,7 +38,7 @@ class ReportPage : public ::testing::Test {
     options.out = dir_ / "report";
     options.truth_folder = truth_folder;
     WriteMaterialReport(options);
-    const std::string html = ReadTextFile(dir_ / "report" / "index.html");
+    const std::string html = common::ReadTextFile(dir_ / "report" / "index.html");
     std::set<std::string> figures;
     const std::regex image("<img src=\"([^\"]+)\">");
     for (auto it = std::sregex_iterator(html.begin(), html.end(), image); it != std::sregex_iterator(); ++it) {
@@ -70,7 +70,7 @@ TEST_F(ReportPage, NamesTheMaterialsFiguresAndWritesThem) {
   EXPECT_FALSE(figures.count("alpha_truth.png"));
   ExpectFiguresWritten(figures);
   // Small maps are enlarged to at least 256 pixels by replication (3x2 -> 255x170 at scale 85).
-  const CameraImage alpha = ReadCameraImage(dir_ / "report" / "alpha.png");
+  const common::CameraImage alpha = common::ReadCameraImage(dir_ / "report" / "alpha.png");
   EXPECT_EQ(alpha.width, 3 * 85);
   EXPECT_EQ(alpha.height, 2 * 85);
   EXPECT_EQ(alpha.channels, 3);
@@ -95,7 +95,7 @@ TEST_F(ReportPage, ShowsAnAnalyticTruthsMapsAndNdfsAndRefusesATruthOfAnotherSize
   try {
     WriteMaterialReport(options);
     ADD_FAILURE() << "a 3x2 material was reported beside a 32x32 truth";
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_EQ(e.subject(), options.material_folder);
     EXPECT_NE(e.problem().find("3x2"), std::string::npos) << e.what();
   }
@@ -111,7 +111,7 @@ TEST_F(ReportPage, ShowsAMonteCarloTruthsRhoDAndSlabMaterials) {
   // It has no alpha and no NDF to show.
   for (const char* file : {"alpha_truth.png", "alpha_error.png", "ndf_0_truth.png"}) EXPECT_FALSE(figures.count(file)) << file;
   ExpectFiguresWritten(figures);
-  const std::string html = ReadTextFile(dir_ / "report" / "index.html");
+  const std::string html = common::ReadTextFile(dir_ / "report" / "index.html");
   EXPECT_NE(html.find("Monte Carlo truth has no alpha"), std::string::npos);
   EXPECT_NE(html.find("frosted"), std::string::npos);  // the slab materials are listed
 }
@@ -124,7 +124,7 @@ TEST_F(ReportPage, RefusesAFolderThatHoldsSomething) {
   try {
     WriteMaterialReport(options);
     ADD_FAILURE() << "the report wrote into a folder that holds a report";
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_EQ(e.subject(), options.out.string());
     EXPECT_NE(e.problem().find("is not empty"), std::string::npos) << e.what();
   }

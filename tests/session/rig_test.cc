@@ -71,7 +71,7 @@ TEST(RigDescription, AFieldOfTheWrongTypeIsNamedWithItsFile) {
   const auto message = [](const json& rig) {
     try {
       ParseRigDescription(rig, "/lab/s1/session.json");
-    } catch (const Error& e) {
+    } catch (const common::Error& e) {
       return std::string(e.what());
     }
     return std::string("not refused");

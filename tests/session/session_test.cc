@@ -16,8 +16,8 @@ namespace fs = std::filesystem;
 
 class SessionTest : public ::testing::Test {
  protected:
-  static CameraImage Frame(uint16_t value) {
-    CameraImage image;
+  static common::CameraImage Frame(uint16_t value) {
+    common::CameraImage image;
     image.width = 8;
     image.height = 4;
     image.pixels.assign(32, value);
@@ -51,9 +51,9 @@ TEST_F(SessionTest, ImagesAreJournalledAndSurviveReopening) {
 TEST_F(SessionTest, NothingIsOverwritten) {
   session::Session session = session::Session::Create(folder_, rig_, plan_);
   session.AddImage("dark/e0", Frame(3), 0.1, 1.0);
-  EXPECT_THROW(session.AddImage("dark/e0", Frame(4), 0.1, 1.0), Error);
-  EXPECT_THROW(session::Session::Create(folder_, rig_, plan_), Error);  // the folder is not empty
-  EXPECT_THROW(session.AddImage("dot/q9999/e0/r0", Frame(1), 1.0, 1.0), Error);  // not planned
+  EXPECT_THROW(session.AddImage("dark/e0", Frame(4), 0.1, 1.0), common::Error);
+  EXPECT_THROW(session::Session::Create(folder_, rig_, plan_), common::Error);  // the folder is not empty
+  EXPECT_THROW(session.AddImage("dot/q9999/e0/r0", Frame(1), 1.0, 1.0), common::Error);  // not planned
   EXPECT_EQ(session::Session::Open(folder_).ReadImage("dark/e0").pixels, Frame(3).pixels);
 }
 
@@ -62,14 +62,14 @@ TEST_F(SessionTest, VerifyFindsCorruptAndMissingFiles) {
   for (const std::string& key : plan_) session.AddImage(key, Frame(7), 1.0, 1.0);
   // Flip one byte of one image (same size): only the CRC can tell.
   const fs::path file = folder_ / session::Session::FileForKey("board/v00");
-  std::string bytes = ReadTextFile(file);
+  std::string bytes = common::ReadTextFile(file);
   bytes[bytes.size() / 2] ^= 0x5a;
   std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
   fs::remove(folder_ / session::Session::FileForKey("dark/e0"));
   const session::SessionVerification report = session::Session::Open(folder_).Verify();
   EXPECT_FALSE(report.complete());
   EXPECT_EQ(report.corrupt, (std::vector<std::string>{"dark/e0", "board/v00"}));
-  EXPECT_THROW(session::Session::Open(folder_).ReadImage("board/v00", true), Error);
+  EXPECT_THROW(session::Session::Open(folder_).ReadImage("board/v00", true), common::Error);
 }
 
 TEST_F(SessionTest, ACrashMidAppendLeavesAReadableJournal) {
@@ -93,10 +93,10 @@ TEST_F(SessionTest, AppendingAfterACrashMidAppendKeepsTheJournalReadable) {
     resumed.AddImage("board/v00", Frame(4), 0.1, 1.0);
   }
   // A complete last line that lost its newline is kept, and the next one starts a new line.
-  std::string text = ReadTextFile(folder_ / "journal.jsonl");
+  std::string text = common::ReadTextFile(folder_ / "journal.jsonl");
   ASSERT_EQ(text.back(), '\n');
   text.pop_back();
-  WriteTextAtomically(folder_ / "journal.jsonl", text);
+  common::WriteTextAtomically(folder_ / "journal.jsonl", text);
   {
     session::Session resumed = session::Session::Open(folder_);
     EXPECT_EQ(resumed.entries().size(), 2u);
@@ -118,7 +118,7 @@ TEST_F(SessionTest, BrokenJournalLinesAreErrorsNamingFileAndLine) {
   try {
     session::Session::Open(folder_);
     FAIL();
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find("journal.jsonl:2"), std::string::npos) << e.what();
   }
 }
@@ -131,22 +131,22 @@ TEST_F(SessionTest, RandomlyDamagedFilesNeverCrashTheReader) {
   std::mt19937_64 rng(1);
   for (const char* name : {"session.json", "plan.json", "journal.jsonl"}) {
     const fs::path path = folder_ / name;
-    const std::string original = ReadTextFile(path);
+    const std::string original = common::ReadTextFile(path);
     for (int trial = 0; trial < 200; ++trial) {
       std::string damaged = original;
       const int mode = trial % 3;
       if (mode == 0) damaged.resize(rng() % (damaged.size() + 1));
       if (mode == 1) damaged[rng() % damaged.size()] = static_cast<char>(rng() % 256);
       if (mode == 2) damaged.insert(rng() % damaged.size(), std::string(1 + rng() % 5, "{}[]\",:0e9-x\n"[rng() % 13]));
-      WriteTextAtomically(path, damaged);
+      common::WriteTextAtomically(path, damaged);
       try {
         session::Session::Open(folder_).Verify();
-      } catch (const Error&) {
+      } catch (const common::Error&) {
       } catch (const std::exception& e) {
         FAIL() << name << " trial " << trial << ": " << e.what();
       }
     }
-    WriteTextAtomically(path, original);
+    common::WriteTextAtomically(path, original);
   }
 }
 

@@ -15,7 +15,7 @@
 #include "svbtdf/simulate/truth_material.h"
 #include "temp_folder.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 namespace {
 
 struct TinyCapture {
@@ -30,7 +30,7 @@ TEST(Capture, BrightestDotImageIsExposedAsPlanned) {
   TinyCapture tiny;
   // The probe dot's shortest exposure peaks at peak_fill of the well (noise aside).
   const double peak = tiny.renderer.ProbePeakRadiance();
-  const double electrons = tiny.renderer.MeanElectrons(peak, Vec2(tiny.rig.config().intrinsics.cx,
+  const double electrons = tiny.renderer.MeanElectrons(peak, model::Vec2(tiny.rig.config().intrinsics.cx,
                                                                   tiny.rig.config().intrinsics.cy),
                                                        tiny.plan.dot_exposures_s[0]);
   EXPECT_NEAR(electrons / tiny.rig.config().sensor.full_well, tiny.preset.peak_fill, 1e-9);
@@ -50,13 +50,13 @@ TEST(Capture, BoardImagesAreFoundAtTheTrueCorners) {
     const PinholeCamera& camera = holder ? tiny.rig.camera() : tiny.rig.sensor_camera();
     const CaptureId id{holder ? session::CaptureKey::SamplePlaneView(0) : session::CaptureKey::BoardView(0),
                        tiny.plan.board_exposure_s};
-    FloatImage radiance;
+    common::FloatImage radiance;
     if (holder) {
       tiny.renderer.RenderHolderBoard(pose, &radiance);
     } else {
       tiny.renderer.RenderZhangBoard(pose, &radiance);
     }
-    const CameraImage stored =
+    const common::CameraImage stored =
         tiny.renderer.Expose(radiance, tiny.plan.board_exposure_s, 1, 1, CaptureWindowOrigin(tiny.rig, id));
     ASSERT_EQ(stored.width, camera.intrinsics().width);
     cv::Mat gray(stored.height, stored.width, CV_8U);
@@ -70,22 +70,22 @@ TEST(Capture, BoardImagesAreFoundAtTheTrueCorners) {
     ASSERT_TRUE(cv::findChessboardCorners(gray, cv::Size(b.inner_cols, b.inner_rows), found));
     cv::cornerSubPix(gray, found, cv::Size(3, 3), cv::Size(-1, -1),
                      cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-4));
-    const std::vector<Vec3> corners = BoardCorners(pose, b);
+    const std::vector<model::Vec3> corners = BoardCorners(pose, b);
     // OpenCV may list the corners in reverse; compare with the nearer ordering.
     double forward = 0.0, backward = 0.0;
     for (size_t n = 0; n < corners.size(); ++n) {
-      const Vec2 truth = *camera.Project(corners[n]);
+      const model::Vec2 truth = *camera.Project(corners[n]);
       const cv::Point2f& f = found[n];
       const cv::Point2f& r = found[corners.size() - 1 - n];
       forward = std::max(forward, std::hypot(f.x - truth.x(), f.y - truth.y()));
       backward = std::max(backward, std::hypot(r.x - truth.x(), r.y - truth.y()));
     }
     worst = std::max(worst, std::min(forward, backward));
-    Vec2 mean = Vec2::Zero();
+    model::Vec2 mean = model::Vec2::Zero();
     for (size_t n = 0; n < corners.size(); ++n) {
-      const Vec2 truth = *camera.Project(corners[n]);
+      const model::Vec2 truth = *camera.Project(corners[n]);
       const cv::Point2f& f = forward < backward ? found[n] : found[corners.size() - 1 - n];
-      mean += (Vec2(f.x, f.y) - truth) / corners.size();
+      mean += (model::Vec2(f.x, f.y) - truth) / corners.size();
     }
     // No systematic shift (a half-pixel convention error would show here); the oblique holder
     // view (small foreshortened squares) is allowed more.
@@ -99,7 +99,7 @@ TEST(Capture, RigTruthRoundTrip) {
   const svbtdf::testing::TempFolder dir;
   const auto path = dir / "rig.json";
   WriteRigTruth(path, tiny.rig, tiny.plan);
-  EXPECT_THROW(WriteRigTruth(path, tiny.rig, tiny.plan), Error);  // never overwritten
+  EXPECT_THROW(WriteRigTruth(path, tiny.rig, tiny.plan), common::Error);  // never overwritten
   const RigTruth truth = ReadRigTruth(path);
   EXPECT_EQ(truth.camera.fx, tiny.rig.config().intrinsics.fx);
   EXPECT_EQ(truth.camera.cy, tiny.rig.config().intrinsics.cy);
@@ -110,8 +110,8 @@ TEST(Capture, RigTruthRoundTrip) {
   EXPECT_EQ(truth.dots[7].position, tiny.rig.dots()[7].position);
   EXPECT_EQ(truth.capture.dot_exposures_s, tiny.plan.dot_exposures_s);
   EXPECT_EQ(truth.capture.zhang_boards.size(), tiny.plan.zhang_boards.size());
-  EXPECT_THROW(ReadRigTruth(dir / "missing.json"), Error);
+  EXPECT_THROW(ReadRigTruth(dir / "missing.json"), common::Error);
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

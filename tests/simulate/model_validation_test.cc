@@ -9,7 +9,7 @@
 #include "svbtdf/simulate/model_validation.h"
 #include "test_ndfs.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 namespace {
 
 std::vector<ValidationCase> Validate(RoughSides sides) {
@@ -20,7 +20,7 @@ std::vector<ValidationCase> Validate(RoughSides sides) {
   options.fit_blend_roughness = false;
   options.slice.paths = 1000000;
   options.slice.seed = 5;
-  return ValidateModel(options, Hemicube(32));
+  return ValidateModel(options, model::Hemicube(32));
 }
 
 void Print(const ValidationCase& c) {
@@ -61,28 +61,28 @@ TEST(ValidateModel, EqualRoughnessWantsAnIntermediateAlphaAndBeatsTheSingleInter
 }
 
 TEST(MinimiseOnInterval, FindsTheMinimumOfAUnimodalFunction) {
-  EXPECT_NEAR(MinimiseOnInterval([](double x) { return Square(x - 0.37); }, 0.0, 1.0), 0.37, 1e-4);
+  EXPECT_NEAR(MinimiseOnInterval([](double x) { return model::Square(x - 0.37); }, 0.0, 1.0), 0.37, 1e-4);
   EXPECT_NEAR(MinimiseOnInterval([](double x) { return std::abs(x + 2.0); }, -3.0, 5.0), -2.0, 1e-4);
   // At the end of the interval.
   EXPECT_NEAR(MinimiseOnInterval([](double x) { return x; }, 0.0, 1.0), 0.0, 1e-4);
 }
 
 TEST(CellAverager, AveragesReproduceSolidAngleIntegrals) {
-  const Hemicube grid(16);
+  const model::Hemicube grid(16);
   const CellAverager averager(grid, 4);
   // Integral of |i.z| over the lower hemisphere is pi; of 1 is 2 pi.
-  const std::vector<double> cosine = averager.Average([](const Vec3& i) { return std::abs(i.z()); });
-  const std::vector<double> one = averager.Average([](const Vec3&) { return 1.0; });
+  const std::vector<double> cosine = averager.Average([](const model::Vec3& i) { return std::abs(i.z()); });
+  const std::vector<double> one = averager.Average([](const model::Vec3&) { return 1.0; });
   double cosine_integral = 0.0, solid_angle = 0.0;
   for (int c = 0; c < grid.num_cells(); ++c) {
     cosine_integral += cosine[c] * grid.CellSolidAngle(c);
     solid_angle += one[c] * grid.CellSolidAngle(c);
     EXPECT_NEAR(one[c], 1.0, 1e-12);
   }
-  EXPECT_NEAR(solid_angle, kTwoPi, 1e-9);
+  EXPECT_NEAR(solid_angle, model::kTwoPi, 1e-9);
   // The sub-cell midpoint rule is second order: sub-cells 1/64 of a face wide leave ~1e-4.
-  EXPECT_NEAR(cosine_integral, kPi, 5e-4);
+  EXPECT_NEAR(cosine_integral, model::kPi, 5e-4);
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

@@ -24,7 +24,7 @@
 #include "svbtdf/simulate/truth_io.h"
 #include "temp_folder.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 namespace {
 namespace fs = std::filesystem;
 
@@ -54,13 +54,13 @@ std::vector<int> TexelPerMaterial(const MonteCarloTruth& truth) {
 TEST(MonteCarloTruth, ViewGridSpansTheSampleAndInterpolatesExactlyAtNodes) {
   const ViewGrid views = TinyViews();
   const SimulationPreset preset = MakePreset("tiny");
-  const Vec3 camera = Rig(preset.rig).camera().Centre();
+  const model::Vec3 camera = Rig(preset.rig).camera().Centre();
   // The sample spans a few degrees of view direction; every texel's o lies inside the grid.
   const double spread = std::acos(views.Node(0).dot(views.Node(views.num_nodes() - 1)));
-  EXPECT_GT(spread, 2.0 * kPi / 180);
-  EXPECT_LT(spread, 10.0 * kPi / 180);
-  for (const Vec3& p : {Vec3(-0.04, 0.04, 0), Vec3(0.04, -0.04, 0), Vec3(0, 0, 0)}) {
-    const Vec3 o = (camera - p).normalized();
+  EXPECT_GT(spread, 2.0 * model::kPi / 180);
+  EXPECT_LT(spread, 10.0 * model::kPi / 180);
+  for (const model::Vec3& p : {model::Vec3(-0.04, 0.04, 0), model::Vec3(0.04, -0.04, 0), model::Vec3(0, 0, 0)}) {
+    const model::Vec3 o = (camera - p).normalized();
     EXPECT_GT(o.x(), views.x0);
     EXPECT_LT(o.x(), views.x1);
     EXPECT_GT(o.y(), views.y0);
@@ -78,14 +78,14 @@ TEST(MonteCarloTruth, ViewGridSpansTheSampleAndInterpolatesExactlyAtNodes) {
 // trace of the same slab with another seed.
 TEST(MonteCarloTruth, AtGridNodesItIsTheTracedSliceWithinItsStandardError) {
   const MonteCarloTruth truth = SmallTruth(3, 2, int64_t{1} << 18);
-  const Hemicube& grid = truth.hemicube();
+  const model::Hemicube& grid = truth.hemicube();
   const std::vector<int> texels = TexelPerMaterial(truth);
   for (int m = 0; m < static_cast<int>(texels.size()); ++m) {
     ASSERT_GE(texels[m], 0) << "material " << m << " missing from the layout";
     for (int node : {0, 4, 8}) {
-      const Vec3 o = truth.views().Node(node);
+      const model::Vec3 o = truth.views().Node(node);
       for (int cell = 0; cell < grid.num_cells(); cell += 7) {
-        const Rgb value = truth.Evaluate(texels[m], FlipZ(grid.CellCenter(cell)), o);
+        const model::Rgb value = truth.Evaluate(texels[m], model::FlipZ(grid.CellCenter(cell)), o);
         for (int c = 0; c < 3; ++c) {
           const double expected = truth.SliceValue(m, node, cell)[c] + truth.rho_d(texels[m])[c];
           EXPECT_NEAR(value[c], expected, 1e-6 * expected + 1e-9) << m << " " << node << " " << cell;
@@ -106,7 +106,7 @@ TEST(MonteCarloTruth, AtGridNodesItIsTheTracedSliceWithinItsStandardError) {
     if (slice.hits[cell] < 200) continue;  // the normal approximation of the error needs hits
     const double a = truth.SliceValue(1, 4, cell)[0] / material.tint[0];
     const double sa = truth.SliceError(1, 4, cell)[0] / material.tint[0];
-    const double z2 = Square(a - slice.rho[cell]) / (Square(sa) + Square(slice.standard_error[cell]));
+    const double z2 = model::Square(a - slice.rho[cell]) / (model::Square(sa) + model::Square(slice.standard_error[cell]));
     chi2 += z2;
     beyond_4_sigma += z2 > 16;
     ++dof;
@@ -124,12 +124,12 @@ TEST(MonteCarloTruth, ContinuousInViewAndLightDirections) {
   const MonteCarloTruth truth = SmallTruth(4);
   const int texel = TexelPerMaterial(truth)[2];
   const ViewGrid& v = truth.views();
-  const Vec3 i = Vec3(0.1, 0.45, -1).normalized();
+  const model::Vec3 i = model::Vec3(0.1, 0.45, -1).normalized();
   const auto largest_jump = [&](int steps, auto&& path) {
     double jump = 0, scale = 0;
-    Rgb previous = path(0.0);
+    model::Rgb previous = path(0.0);
     for (int k = 1; k <= steps; ++k) {
-      const Rgb value = path(static_cast<double>(k) / steps);
+      const model::Rgb value = path(static_cast<double>(k) / steps);
       jump = std::max(jump, std::abs(value[1] - previous[1]));
       scale = std::max(scale, value[1]);
       previous = value;
@@ -140,14 +140,14 @@ TEST(MonteCarloTruth, ContinuousInViewAndLightDirections) {
   const auto view_path = [&](double t) {
     const double ox = v.x0 - 0.1 * (v.x1 - v.x0) + 1.2 * t * (v.x1 - v.x0);
     const double oy = v.y0 - 0.1 * (v.y1 - v.y0) + 1.2 * t * (v.y1 - v.y0);
-    return truth.Evaluate(texel, i, Vec3(ox, oy, std::sqrt(1 - ox * ox - oy * oy)));
+    return truth.Evaluate(texel, i, model::Vec3(ox, oy, std::sqrt(1 - ox * ox - oy * oy)));
   };
   // i sweeping from the top face across the seam onto the +y side face of FlipZ(i).
   const auto light_path = [&](double t) {
-    const double angle = (20 + 60 * t) * kPi / 180;
-    return truth.Evaluate(texel, Vec3(0.05, std::sin(angle), -std::cos(angle)), v.Node(4));
+    const double angle = (20 + 60 * t) * model::kPi / 180;
+    return truth.Evaluate(texel, model::Vec3(0.05, std::sin(angle), -std::cos(angle)), v.Node(4));
   };
-  for (const auto& path : {std::function<Rgb(double)>(view_path), std::function<Rgb(double)>(light_path)}) {
+  for (const auto& path : {std::function<model::Rgb(double)>(view_path), std::function<model::Rgb(double)>(light_path)}) {
     const double coarse = largest_jump(2000, path), fine = largest_jump(4000, path);
     std::printf("largest relative jump: %.2e (2000 steps), %.2e (4000 steps)\n", coarse, fine);
     EXPECT_LT(coarse, 0.01);
@@ -174,16 +174,16 @@ class MonteCarloTruthFiles : public ::testing::Test {
   std::string ReadError() {
     try {
       ReadMonteCarloTruth(folder_);
-    } catch (const Error& e) {
+    } catch (const common::Error& e) {
       return e.what();
     }
     ADD_FAILURE() << "a malformed truth was accepted";
     return {};
   }
   void EditManifest(const std::function<void(nlohmann::json&)>& edit) {
-    nlohmann::json manifest = nlohmann::json::parse(ReadTextFile(folder_ / "material.json"));
+    nlohmann::json manifest = nlohmann::json::parse(common::ReadTextFile(folder_ / "material.json"));
     edit(manifest);
-    WriteTextAtomically(folder_ / "material.json", manifest.dump(), /*overwrite=*/true);
+    common::WriteTextAtomically(folder_ / "material.json", manifest.dump(), /*overwrite=*/true);
   }
   svbtdf::testing::TempFolder temp_;
   const fs::path folder_ = temp_.path();
@@ -200,32 +200,32 @@ TEST_F(MonteCarloTruthFiles, RoundTripIsExact) {
   EXPECT_EQ(back.materials()[2].entry.ndf, "ellipsoid");
   for (int t = 0; t < truth.num_texels(); ++t) {
     EXPECT_EQ(back.material_of(t), truth.material_of(t));
-    for (const Vec3& i : {Vec3(0.2, 0.5, -1).normalized(), Vec3(-0.6, 0.1, -0.4).normalized()}) {
-      const Vec3 o = Vec3(0.01, -0.7, 0.71).normalized();
+    for (const model::Vec3& i : {model::Vec3(0.2, 0.5, -1).normalized(), model::Vec3(-0.6, 0.1, -0.4).normalized()}) {
+      const model::Vec3 o = model::Vec3(0.01, -0.7, 0.71).normalized();
       EXPECT_EQ(back.Evaluate(t, i, o), truth.Evaluate(t, i, o)) << t;
     }
   }
   // Never overwritten.
-  EXPECT_THROW(WriteMonteCarloTruth(folder_, truth), Error);
+  EXPECT_THROW(WriteMonteCarloTruth(folder_, truth), common::Error);
   // The analytic reader refuses it, naming the manifest.
   try {
     ReadMaterialTruth(folder_);
     ADD_FAILURE() << "read as analytic";
-  } catch (const Error& e) {
+  } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find("material.json"), std::string::npos) << e.what();
   }
 }
 
 TEST_F(MonteCarloTruthFiles, MalformedFilesAreRejectedNamingTheFile) {
   WriteMonteCarloTruth(folder_, SmallTruth(9));
-  const std::string good = ReadTextFile(folder_ / "material.json");
-  const auto restore = [&] { WriteTextAtomically(folder_ / "material.json", good, true); };
+  const std::string good = common::ReadTextFile(folder_ / "material.json");
+  const auto restore = [&] { common::WriteTextAtomically(folder_ / "material.json", good, true); };
   const auto expect_named = [&](const std::string& file, const std::string& what) {
     const std::string message = ReadError();
     EXPECT_NE(message.find(file), std::string::npos) << what << ": " << message;
   };
 
-  WriteTextAtomically(folder_ / "material.json", "{\"format\": \"svbtdf-truth-material\", ", true);
+  common::WriteTextAtomically(folder_ / "material.json", "{\"format\": \"svbtdf-truth-material\", ", true);
   expect_named("material.json", "truncated JSON");
   restore();
   EditManifest([](nlohmann::json& m) { m["ndf"]["kind"] = "analytic"; });
@@ -241,21 +241,21 @@ TEST_F(MonteCarloTruthFiles, MalformedFilesAreRejectedNamingTheFile) {
   expect_named("slices.exr", "slices of another resolution");
   restore();
 
-  const FloatImage index = ReadFloatImage(folder_ / "index.exr");
-  FloatImage bad_index = index;
+  const common::FloatImage index = common::ReadFloatImage(folder_ / "index.exr");
+  common::FloatImage bad_index = index;
   bad_index.pixels[5] = 7.0f;
-  WriteFloatImage(folder_ / "index.exr", bad_index, false, true);
+  common::WriteFloatImage(folder_ / "index.exr", bad_index, false, true);
   expect_named("index.exr", "material index out of range");
-  WriteFloatImage(folder_ / "index.exr", index, false, true);
+  common::WriteFloatImage(folder_ / "index.exr", index, false, true);
 
-  const FloatImage slices = ReadFloatImage(folder_ / "slices.exr");
-  FloatImage negative = slices;
+  const common::FloatImage slices = common::ReadFloatImage(folder_ / "slices.exr");
+  common::FloatImage negative = slices;
   negative.pixels[10] = -1.0f;
-  WriteFloatImage(folder_ / "slices.exr", negative, false, true);
+  common::WriteFloatImage(folder_ / "slices.exr", negative, false, true);
   expect_named(folder_.string(), "negative slice value");
   fs::remove(folder_ / "slices.exr");
   expect_named("slices.exr", "missing slices");
-  WriteFloatImage(folder_ / "slices.exr", slices, false, true);
+  common::WriteFloatImage(folder_ / "slices.exr", slices, false, true);
   EXPECT_NO_THROW(ReadMonteCarloTruth(folder_));
 }
 
@@ -285,23 +285,23 @@ TEST(SimulateMonteCarlo, TinyPresetWritesAReadableTruth) {
   for (int t = 0; t < truth.num_texels(); ++t) ++count[truth.material_of(t)];
   for (int c : count) EXPECT_GT(c, 50);
   // A complete simulation is never redone.
-  EXPECT_THROW(acquire::SimulateSession(out, options), Error);
+  EXPECT_THROW(acquire::SimulateSession(out, options), common::Error);
   // Without its session, the folder is an unfinished simulation: the truth is read back, not
   // traced again, and renders exactly the same images (what resuming an interrupted run relies on).
   const fs::path first_folder = temp / "out-first";
   fs::rename(result.session, first_folder);
   const session::Session first = session::Session::Open(first_folder);
-  const std::string manifest = ReadTextFile(result.truth / "material.json");
+  const std::string manifest = common::ReadTextFile(result.truth / "material.json");
   acquire::SimulateSession(out, options);
-  EXPECT_EQ(ReadTextFile(result.truth / "material.json"), manifest);
+  EXPECT_EQ(common::ReadTextFile(result.truth / "material.json"), manifest);
   const session::Session second = session::Session::Open(result.session);
   ASSERT_EQ(first.entries().size(), second.entries().size());
   for (const session::SessionEntry& entry : first.entries()) EXPECT_EQ(entry.crc32, second.Entry(entry.key).crc32) << entry.key;
   // A truth of other settings in the folder is refused rather than rendered.
   fs::remove_all(result.session);
   options.seed = 3;
-  EXPECT_THROW(acquire::SimulateSession(out, options), Error);
+  EXPECT_THROW(acquire::SimulateSession(out, options), common::Error);
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

@@ -17,7 +17,7 @@
 #include "svbtdf/simulate/rig.h"
 #include "svbtdf/simulate/truth_material.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 namespace {
 
 // A noise-free copy of the tiny preset's rig.
@@ -59,13 +59,13 @@ TEST(PinholeCamera, ProjectionMatchesOpenCv) {
 
   double worst = 0.0;
   for (size_t n = 0; n < points.size(); ++n) {
-    const auto px = camera.Project(Vec3(points[n].x, points[n].y, points[n].z));
+    const auto px = camera.Project(model::Vec3(points[n].x, points[n].y, points[n].z));
     ASSERT_TRUE(px.has_value());
     worst = std::max(worst, std::hypot(px->x() - expected[n].x, px->y() - expected[n].y));
     // The pixel ray is the inverse of the projection.
     const auto ray = camera.PixelRay(*px);
     ASSERT_TRUE(ray.has_value());
-    const Vec3 direction = (Vec3(points[n].x, points[n].y, points[n].z) - camera.Centre()).normalized();
+    const model::Vec3 direction = (model::Vec3(points[n].x, points[n].y, points[n].z) - camera.Centre()).normalized();
     EXPECT_LT((*ray - direction).norm(), 1e-9);
   }
   EXPECT_LT(worst, 1e-6) << "largest difference from cv::projectPoints, px";
@@ -73,11 +73,11 @@ TEST(PinholeCamera, ProjectionMatchesOpenCv) {
 
 TEST(Rig, PaperGeometryByDefault) {
   const Rig rig(MakePreset("tiny").rig);
-  const Vec3 c = rig.camera().Centre();
+  const model::Vec3 c = rig.camera().Centre();
   EXPECT_NEAR(c.norm(), 1.0, 1e-9);
-  EXPECT_NEAR(rig.CameraTheta(), kPi / 4, 1e-9);
+  EXPECT_NEAR(rig.CameraTheta(), model::kPi / 4, 1e-9);
   // The sample centre is on the optical axis.
-  const auto px = rig.camera().Project(Vec3::Zero());
+  const auto px = rig.camera().Project(model::Vec3::Zero());
   EXPECT_NEAR(px->x(), rig.config().intrinsics.cx, 1e-6);
   EXPECT_NEAR(px->y(), rig.config().intrinsics.cy, 1e-6);
   // Every dot lies on the (turned and tilted) screen.
@@ -97,7 +97,7 @@ TEST(Rig, PaperGeometryByDefault) {
   }
   const double pitch = rig.config().monitor.pixel_pitch;
   EXPECT_NEAR(x_max - x_min, 1.2 * 0.08, 2 * pitch);
-  EXPECT_NEAR(y_mean, 0.04 * std::cos(kPi / 4), pitch);
+  EXPECT_NEAR(y_mean, 0.04 * std::cos(model::kPi / 4), pitch);
 }
 
 TEST(Rig, ImpossibleGeometryIsRejected) {
@@ -105,16 +105,16 @@ TEST(Rig, ImpossibleGeometryIsRejected) {
     try {
       Rig rig(config);
       ADD_FAILURE() << "no error for " << subject;
-    } catch (const Error& e) {
-      EXPECT_EQ(e.kind(), ErrorKind::kInvalidInput);
+    } catch (const common::Error& e) {
+      EXPECT_EQ(e.kind(), common::ErrorKind::kInvalidInput);
       EXPECT_NE(e.subject().find(subject), std::string::npos) << e.what();
     }
   };
   RigConfig below = NoiseFreeTiny();
-  below.pose = CameraPose::LookAt(Vec3(0, -0.7, -0.7), Vec3::Zero(), Vec3::UnitZ());
+  below.pose = CameraPose::LookAt(model::Vec3(0, -0.7, -0.7), model::Vec3::Zero(), model::Vec3::UnitZ());
   expect_error(below, "camera pose");
   RigConfig away = NoiseFreeTiny();
-  away.pose = CameraPose::LookAt(Vec3(0, -0.7, 0.7), Vec3(0, -1.4, 1.4), Vec3::UnitZ());
+  away.pose = CameraPose::LookAt(model::Vec3(0, -0.7, 0.7), model::Vec3(0, -1.4, 1.4), model::Vec3::UnitZ());
   expect_error(away, "camera");
   RigConfig narrow = NoiseFreeTiny();
   narrow.intrinsics.fx = narrow.intrinsics.fy = 9000.0;
@@ -128,7 +128,7 @@ TEST(Rig, ImpossibleGeometryIsRejected) {
   RigConfig bad_profile = NoiseFreeTiny();
   bad_profile.monitor.emission.kind = "oled";
   expect_error(bad_profile, "monitor.emission");
-  EXPECT_THROW(MakePreset("huge"), Error);
+  EXPECT_THROW(MakePreset("huge"), common::Error);
 }
 
 // The measurement equation inverted at pixels that see one texel gives back the truth:
@@ -141,16 +141,16 @@ struct Inversion {
 };
 Inversion InvertDotImages(const RigConfig& config, const Rig& rig, const SpatialBtdf& material) {
   const RigRenderer renderer(rig, &material, 2);
-  const Vec3 camera = rig.camera().Centre();
+  const model::Vec3 camera = rig.camera().Centre();
   const int n = config.pixel_samples;
   Inversion result;
   for (int q : {0, 14, 21, 35}) {
     const Dot& dot = rig.dots()[q];
-    FloatImage radiance;
+    common::FloatImage radiance;
     renderer.RenderDot(dot, &radiance);
     const float peak = *std::max_element(radiance.pixels.begin(), radiance.pixels.end());
     const double exposure = 0.8 * config.sensor.full_well / (peak * config.sensor.sensitivity);
-    const CameraImage image = renderer.Expose(radiance, exposure, 1, q);
+    const common::CameraImage image = renderer.Expose(radiance, exposure, 1, q);
     const double max_value = std::ldexp(1.0, image.bits_per_sample) - 1.0;
     for (int y = 0; y < radiance.height; ++y) {
       for (int x = 0; x < radiance.width; ++x) {
@@ -158,23 +158,23 @@ Inversion InvertDotImages(const RigConfig& config, const Rig& rig, const Spatial
         std::optional<std::array<int, 2>> texel;
         bool single = true;
         for (int s = 0; s < n * n && single; ++s) {
-          const auto hit = rig.SampleHit(Vec2(x + (s % n + 0.5) / n - 0.5, y + (s / n + 0.5) / n - 0.5));
+          const auto hit = rig.SampleHit(model::Vec2(x + (s % n + 0.5) / n - 0.5, y + (s / n + 0.5) / n - 0.5));
           const auto t = hit ? rig.TexelAt(*hit) : std::nullopt;
           single = t.has_value() && (!texel || *t == *texel);
           texel = t;
         }
         if (!single) continue;
-        const Vec3 x_hit = *rig.SampleHit(Vec2(x, y));
-        const Vec3 to_light = dot.position - x_hit;
-        const Vec3 i = to_light.normalized();
-        const Vec3 o = (camera - x_hit).normalized();
-        const Rgb truth = material.Evaluate(material.Index((*texel)[0], (*texel)[1]), i, o);
+        const model::Vec3 x_hit = *rig.SampleHit(model::Vec2(x, y));
+        const model::Vec3 to_light = dot.position - x_hit;
+        const model::Vec3 i = to_light.normalized();
+        const model::Vec3 o = (camera - x_hit).normalized();
+        const model::Rgb truth = material.Evaluate(material.Index((*texel)[0], (*texel)[1]), i, o);
         for (int c = 0; c < 3; ++c) {
           const uint16_t stored = image.pixels[(size_t(y) * image.width + x) * 3 + c];
           if (stored < 0.02 * max_value) continue;  // quantisation dominates below
           const double electrons = stored / max_value * config.sensor.full_well;
           const double pixel_radiance = electrons / (exposure * config.sensor.sensitivity *
-                                                     renderer.Vignetting(Vec2(x, y)));
+                                                     renderer.Vignetting(model::Vec2(x, y)));
           const double measured = pixel_radiance * to_light.squaredNorm() /
                                   (std::abs(i.z()) * rig.DotIntensityToward(dot, x_hit));
           result.worst = std::max(result.worst, std::abs(measured / truth[c] - 1.0));
@@ -222,7 +222,7 @@ TEST(RigRenderer, DotImageInvertsToMonteCarloTruth) {
 // distance 1, one corner above the point (Howell's catalogue, B-8).
 double CornerFormFactor(double a, double b) {
   const double sa = std::sqrt(1 + a * a), sb = std::sqrt(1 + b * b);
-  return (a / sa * std::atan(b / sa) + b / sb * std::atan(a / sb)) / kTwoPi;
+  return (a / sa * std::atan(b / sa) + b / sb * std::atan(a / sb)) / model::kTwoPi;
 }
 // Signed extension to any rectangle [x0, x1] x [y0, y1] by inclusion-exclusion.
 double RectangleFormFactor(double x0, double x1, double y0, double y1, double d) {
@@ -250,7 +250,7 @@ TEST(RigRenderer, DotsTilingTheMonitorGiveItsIrradiance) {
   config.pose = RigConfig::PaperPose(1.0, 0.1);  // nearly overhead: the whole grid is in view
   const double spacing = 1.2 * 0.08 / 23;
   config.monitor.width = config.monitor.height = 24 * spacing;
-  config.monitor.centre = Vec2::Zero();
+  config.monitor.centre = model::Vec2::Zero();
   const Rig rig(config);
   std::vector<TruthTexel> texels(32 * 32);
   for (TruthTexel& t : texels) {
@@ -259,24 +259,24 @@ TEST(RigRenderer, DotsTilingTheMonitorGiveItsIrradiance) {
   }
   const TruthMaterial material(32, 32, 1.5, "ggx", texels);
   const RigRenderer renderer(rig, &material, 2);
-  FloatImage sum(config.intrinsics.width, config.intrinsics.height, 3), one;
+  common::FloatImage sum(config.intrinsics.width, config.intrinsics.height, 3), one;
   for (const Dot& dot : rig.dots()) {
     renderer.RenderDot(dot, &one);
     for (size_t k = 0; k < one.pixels.size(); ++k) sum.pixels[k] += one.pixels[k];
   }
-  const double dot_area = kPi * Square(rig.dots()[0].radius);
+  const double dot_area = model::kPi * model::Square(rig.dots()[0].radius);
   const double half = config.monitor.width / 2;
   int checked = 0;
   double worst = 0;
   for (int y = 0; y < sum.height; y += 7) {
     for (int x = 0; x < sum.width; x += 7) {
-      const auto hit = rig.SampleHit(Vec2(x, y));
-      if (!hit || !rig.SampleHit(Vec2(x - 1, y - 1)) || !rig.SampleHit(Vec2(x + 1, y + 1))) continue;
+      const auto hit = rig.SampleHit(model::Vec2(x, y));
+      if (!hit || !rig.SampleHit(model::Vec2(x - 1, y - 1)) || !rig.SampleHit(model::Vec2(x + 1, y + 1))) continue;
       const double irradiance =
-          kPi * config.monitor.white_exitance *
+          model::kPi * config.monitor.white_exitance *
           RectangleFormFactor(-half - hit->x(), half - hit->x(), -half - hit->y(), half - hit->y(), 0.04);
       for (int c = 0; c < 3; ++c) {
-        const double measured = sum.at(x, y, c) * Square(spacing) / dot_area;
+        const double measured = sum.at(x, y, c) * model::Square(spacing) / dot_area;
         worst = std::max(worst, std::abs(measured / (texels[0].rho_d[c] * irradiance) - 1));
         ++checked;
       }
@@ -291,13 +291,13 @@ TEST(RigRenderer, DotsTilingTheMonitorGiveItsIrradiance) {
 TEST(RigRenderer, FlatFieldOfIsotropicMonitor) {
   const Rig rig(NoiseFreeTiny());
   const RigRenderer renderer(rig, nullptr, 2);
-  FloatImage image;
+  common::FloatImage image;
   renderer.RenderFlatField(1.0, &image);
   const double exitance = rig.config().monitor.white_exitance;
-  const Vec3 normal = rig.monitor_frame().normal;  // the preset's screen is tilted a little
+  const model::Vec3 normal = rig.monitor_frame().normal;  // the preset's screen is tilted a little
   for (int y = 5; y < image.height; y += 20) {
     for (int x = 5; x < image.width; x += 20) {
-      const Vec3 ray = *rig.camera().PixelRay(Vec2(x, y));
+      const model::Vec3 ray = *rig.camera().PixelRay(model::Vec2(x, y));
       const double cos_e = -normal.dot(ray);
       EXPECT_NEAR(image.at(x, y, 1), exitance / cos_e, 1e-4 * exitance / cos_e);
     }
@@ -311,12 +311,12 @@ TEST(RigRenderer, SensorNoiseStatisticsAndDeterminism) {
   config.sensor.bit_depth = 16;
   const Rig rig(config);
   const RigRenderer renderer(rig, nullptr, 2);
-  FloatImage flat(200, 200, 1);
+  common::FloatImage flat(200, 200, 1);
   std::fill(flat.pixels.begin(), flat.pixels.end(), 1.0f);
   const double exposure = 0.25 * config.sensor.full_well / config.sensor.sensitivity;
-  const CameraImage a = renderer.Expose(flat, exposure, 42, 3);
-  const CameraImage b = renderer.Expose(flat, exposure, 42, 3);
-  const CameraImage c = renderer.Expose(flat, exposure, 43, 3);
+  const common::CameraImage a = renderer.Expose(flat, exposure, 42, 3);
+  const common::CameraImage b = renderer.Expose(flat, exposure, 42, 3);
+  const common::CameraImage c = renderer.Expose(flat, exposure, 43, 3);
   EXPECT_EQ(a.pixels, b.pixels);
   EXPECT_NE(a.pixels, c.pixels);
   const double scale = (std::ldexp(1.0, 16) - 1) / config.sensor.full_well;  // DN per electron
@@ -326,7 +326,7 @@ TEST(RigRenderer, SensorNoiseStatisticsAndDeterminism) {
   for (int y = 50; y < 150; ++y) {
     for (int x = 50; x < 150; ++x) {
       mean += a.pixels[y * 200 + x];
-      mean_expected += renderer.MeanElectrons(1.0, Vec2(x, y), exposure) * scale;
+      mean_expected += renderer.MeanElectrons(1.0, model::Vec2(x, y), exposure) * scale;
       ++count;
     }
   }
@@ -334,12 +334,12 @@ TEST(RigRenderer, SensorNoiseStatisticsAndDeterminism) {
   mean_expected /= count;
   double variance = 0;
   for (int y = 50; y < 150; ++y) {
-    for (int x = 50; x < 150; ++x) variance += Square(a.pixels[y * 200 + x] - mean);
+    for (int x = 50; x < 150; ++x) variance += model::Square(a.pixels[y * 200 + x] - mean);
   }
   variance /= count - 1;
   const double electrons = mean_expected / scale;
   const double variance_expected =
-      (electrons + Square(config.sensor.read_noise)) * scale * scale + 1.0 / 12.0;
+      (electrons + model::Square(config.sensor.read_noise)) * scale * scale + 1.0 / 12.0;
   EXPECT_NEAR(mean, mean_expected, 4 * std::sqrt(variance_expected / count));
   // Standard error of a variance estimate ~ sqrt(2 / n).
   EXPECT_NEAR(variance / variance_expected, 1.0, 4 * std::sqrt(2.0 / count));
@@ -356,7 +356,7 @@ TEST(RigRenderer, ZhangPosesAreVariedAndInView) {
     min_tilt = std::min(min_tilt, tilt);
     max_tilt = std::max(max_tilt, tilt);
     // Zhang views are taken on the whole sensor.
-    for (const Vec3& corner : BoardCorners(pose, rig.config().board)) {
+    for (const model::Vec3& corner : BoardCorners(pose, rig.config().board)) {
       const auto px = rig.sensor_camera().Project(corner);
       ASSERT_TRUE(px.has_value());
       EXPECT_GT(px->x(), 0);
@@ -365,8 +365,8 @@ TEST(RigRenderer, ZhangPosesAreVariedAndInView) {
       EXPECT_LT(px->y(), rig.sensor_camera().intrinsics().height);
     }
   }
-  EXPECT_GT(min_tilt, 10 * kPi / 180);
-  EXPECT_LT(max_tilt, 45 * kPi / 180);
+  EXPECT_GT(min_tilt, 10 * model::kPi / 180);
+  EXPECT_LT(max_tilt, 45 * model::kPi / 180);
 }
 
 // Every preset can be captured: its Zhang board fits the whole sensor at every planned pose, and
@@ -382,9 +382,9 @@ TEST(RigRenderer, EveryPresetsBoardsFitTheirView) {
     const BoardConfig& h = rig.config().holder_board;
     const BoardPose holder = renderer.HolderBoardPose();
     const CameraIntrinsics& k = rig.config().intrinsics;
-    for (const Vec2& outline : {Vec2(-2, -2), Vec2(h.inner_cols + 1, -2), Vec2(-2, h.inner_rows + 1),
-                                Vec2(h.inner_cols + 1, h.inner_rows + 1)}) {
-      const std::optional<Vec2> px = rig.camera().Project(holder.ToWorld(outline * h.square));
+    for (const model::Vec2& outline : {model::Vec2(-2, -2), model::Vec2(h.inner_cols + 1, -2), model::Vec2(-2, h.inner_rows + 1),
+                                model::Vec2(h.inner_cols + 1, h.inner_rows + 1)}) {
+      const std::optional<model::Vec2> px = rig.camera().Project(holder.ToWorld(outline * h.square));
       ASSERT_TRUE(px.has_value()) << name;
       EXPECT_GT(px->x(), 1.0) << name;
       EXPECT_GT(px->y(), 1.0) << name;
@@ -395,4 +395,4 @@ TEST(RigRenderer, EveryPresetsBoardsFitTheirView) {
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

@@ -13,15 +13,15 @@
 #include "svbtdf/simulate/slab_tracer.h"
 #include "test_ndfs.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 namespace {
 
-Vec3 ViewDirection(double theta_deg, double phi_deg = 0.0) {
-  return SphericalDirection(theta_deg * kPi / 180.0, phi_deg * kPi / 180.0);
+model::Vec3 ViewDirection(double theta_deg, double phi_deg = 0.0) {
+  return model::SphericalDirection(theta_deg * model::kPi / 180.0, phi_deg * model::kPi / 180.0);
 }
 
-Vec3 LightDirection(double theta_deg, double phi_deg = 0.0) {
-  return FlipZ(ViewDirection(theta_deg, phi_deg));
+model::Vec3 LightDirection(double theta_deg, double phi_deg = 0.0) {
+  return model::FlipZ(ViewDirection(theta_deg, phi_deg));
 }
 
 TEST(SlabTracer, EveryPathsEnergyIsAccountedFor) {
@@ -31,11 +31,11 @@ TEST(SlabTracer, EveryPathsEnergyIsAccountedFor) {
   slab.exit = SlabInterface::Rough(*RoughNdf(0.6));
   slab.optical_depth = 0.3;
   const SlabTracer tracer(slab);
-  Pcg32 rng(7, 0);
+  common::Pcg32 rng(7, 0);
   int left = 0, capped = 0, masked = 0;
   for (int p = 0; p < 50000; ++p) {
-    const Vec3 arrival = p % 2 == 0 ? Vec3(-ViewDirection(70.0 * (p % 7) / 6, 13.0 * p))
-                                    : Vec3(-LightDirection(70.0 * (p % 5) / 4, 29.0 * p));
+    const model::Vec3 arrival = p % 2 == 0 ? model::Vec3(-ViewDirection(70.0 * (p % 7) / 6, 13.0 * p))
+                                    : model::Vec3(-LightDirection(70.0 * (p % 5) / 4, 29.0 * p));
     const PathRecord path = tracer.TracePath(arrival, rng, /*max_interactions=*/4);
     const EnergyFractions& e = path.energy;
     ASSERT_NEAR(e.Total(), 1.0, 1e-12) << "path " << p;
@@ -68,17 +68,17 @@ TEST(SlabTracer, SmoothSlabMatchesTheFresnelSeries) {
       slab.eta = 1.5;
       slab.optical_depth = tau;
       const SlabTracer tracer(slab);
-      const Vec3 o = ViewDirection(theta, 30.0);
-      const double f = FresnelDielectric(o.z(), slab.eta);
-      const double cos_t = std::sqrt(1.0 - (1.0 - o.z() * o.z()) / Square(slab.eta));
+      const model::Vec3 o = ViewDirection(theta, 30.0);
+      const double f = model::FresnelDielectric(o.z(), slab.eta);
+      const double cos_t = std::sqrt(1.0 - (1.0 - o.z() * o.z()) / model::Square(slab.eta));
       const double a = std::exp(-tau / cos_t);
-      const double transmitted = Square(1.0 - f) * a / (1.0 - Square(f * a));
-      const double reflected = f + Square(1.0 - f) * f * a * a / (1.0 - Square(f * a));
+      const double transmitted = model::Square(1.0 - f) * a / (1.0 - model::Square(f * a));
+      const double reflected = f + model::Square(1.0 - f) * f * a * a / (1.0 - model::Square(f * a));
 
       SliceOptions options;
       options.paths = 400000;
       options.seed = 3;
-      const BtdfSlice slice = tracer.SliceForView(o, Hemicube(8), options);
+      const BtdfSlice slice = tracer.SliceForView(o, model::Hemicube(8), options);
       const EnergyFractions& e = slice.fractions;
       const EnergyFractions& se = slice.fractions_standard_error;
       EXPECT_NEAR(e.Total(), 1.0, 1e-12);
@@ -88,8 +88,8 @@ TEST(SlabTracer, SmoothSlabMatchesTheFresnelSeries) {
       EXPECT_EQ(e.masked, 0.0);
       EXPECT_LT(e.capped, 1e-12);
       // All transmitted light leaves straight through, along i = -o.
-      const Hemicube grid(8);
-      const int straight = grid.CellOf(FlipZ(-o));
+      const model::Hemicube grid(8);
+      const int straight = grid.CellOf(model::FlipZ(-o));
       EXPECT_NEAR(slice.energy[straight], e.transmitted, 1e-12);
     }
   }
@@ -99,7 +99,7 @@ TEST(SlabTracer, SmoothSlabMatchesTheFresnelSeries) {
 // MC noise: over well-sampled cells (>= 200 paths) chi^2 / dof must be 1 within 5 of its own
 // standard deviations sqrt(2 / dof), and the solid-angle-weighted relative L2 error must be at
 // most twice the one that the standard errors alone predict.
-void ExpectAgreement(const BtdfSlice& mc, const std::vector<double>& model, const Hemicube& grid,
+void ExpectAgreement(const BtdfSlice& mc, const std::vector<double>& model, const model::Hemicube& grid,
                      const std::string& what) {
   double chi2 = 0.0;
   int dof = 0;
@@ -108,10 +108,10 @@ void ExpectAgreement(const BtdfSlice& mc, const std::vector<double>& model, cons
   std::vector<double> solid_angles(grid.num_cells());
   for (int c = 0; c < grid.num_cells(); ++c) {
     solid_angles[c] = grid.CellSolidAngle(c);
-    noise += solid_angles[c] * Square(mc.standard_error[c]);
-    norm += solid_angles[c] * Square(mc.rho[c]);
+    noise += solid_angles[c] * model::Square(mc.standard_error[c]);
+    norm += solid_angles[c] * model::Square(mc.rho[c]);
     if (mc.hits[c] < 200) continue;
-    chi2 += Square((mc.rho[c] - model[c]) / mc.standard_error[c]);
+    chi2 += model::Square((mc.rho[c] - model[c]) / mc.standard_error[c]);
     ++dof;
   }
   ASSERT_GT(dof, 30) << what;
@@ -127,41 +127,41 @@ void ExpectAgreement(const BtdfSlice& mc, const std::vector<double>& model, cons
 // inter-reflections out), the dual-microfacet configurations are exact: rho_T for a rough entry,
 // rho_B for a rough exit.
 TEST(SlabTracer, RoughEntryOnlyMatchesRhoT) {
-  const std::unique_ptr<Ndf> ndf = SkewedNdf();
+  const std::unique_ptr<model::Ndf> ndf = SkewedNdf();
   Slab slab;
   slab.eta = 1.5;
   slab.entry = SlabInterface::Rough(*ndf);
   const SlabTracer tracer(slab);
-  const Hemicube grid(32);
+  const model::Hemicube grid(32);
   const CellAverager averager(grid, 6);
   for (double theta : {30.0, 60.0}) {
-    const Vec3 o = ViewDirection(theta, 20.0);
+    const model::Vec3 o = ViewDirection(theta, 20.0);
     SliceOptions options;
     options.paths = 2000000;
     options.max_interactions = 2;
     const BtdfSlice mc = tracer.SliceForView(o, grid, options);
     const std::vector<double> model =
-        averager.Average([&](const Vec3& i) { return RhoTWithNdfShadowing(*ndf, slab.eta, i, o); });
+        averager.Average([&](const model::Vec3& i) { return RhoTWithNdfShadowing(*ndf, slab.eta, i, o); });
     ExpectAgreement(mc, model, grid, "rough entry, theta " + std::to_string(theta));
   }
 }
 
 TEST(SlabTracer, RoughExitOnlyMatchesRhoB) {
-  const std::unique_ptr<Ndf> ndf = SkewedNdf();
+  const std::unique_ptr<model::Ndf> ndf = SkewedNdf();
   Slab slab;
   slab.eta = 1.5;
   slab.exit = SlabInterface::Rough(*ndf);
   const SlabTracer tracer(slab);
-  const Hemicube grid(32);
+  const model::Hemicube grid(32);
   const CellAverager averager(grid, 6);
   for (double theta : {30.0, 60.0}) {
-    const Vec3 o = ViewDirection(theta, 20.0);
+    const model::Vec3 o = ViewDirection(theta, 20.0);
     SliceOptions options;
     options.paths = 2000000;
     options.max_interactions = 2;
     const BtdfSlice mc = tracer.SliceForView(o, grid, options);
     const std::vector<double> model =
-        averager.Average([&](const Vec3& i) { return RhoBWithNdfShadowing(*ndf, slab.eta, i, o); });
+        averager.Average([&](const model::Vec3& i) { return RhoBWithNdfShadowing(*ndf, slab.eta, i, o); });
     ExpectAgreement(mc, model, grid, "rough exit, theta " + std::to_string(theta));
   }
 }
@@ -172,7 +172,7 @@ TEST(SlabTracer, SameSeedGivesTheSameSliceOnAnyNumberOfThreads) {
   slab.exit = SlabInterface::Rough(*SkewedNdf());
   slab.optical_depth = 0.1;
   const SlabTracer tracer(slab);
-  const Hemicube grid(16);
+  const model::Hemicube grid(16);
   SliceOptions options;
   options.paths = 5 * SlabTracer::kChunkPaths + 123;  // a partial last chunk too
   options.seed = 11;
@@ -190,12 +190,12 @@ TEST(SlabTracer, SameSeedGivesTheSameSliceOnAnyNumberOfThreads) {
 }
 
 // Uniform direction in the cone of half-angle `radius` around `axis`, by solid angle.
-Vec3 SampleCone(const Vec3& axis, double radius, Pcg32& rng) {
+model::Vec3 SampleCone(const model::Vec3& axis, double radius, common::Pcg32& rng) {
   const double cos_theta = 1.0 - rng.NextDouble() * (1.0 - std::cos(radius));
   const double sin_theta = std::sqrt(std::max(0.0, 1.0 - cos_theta * cos_theta));
-  const double phi = kTwoPi * rng.NextDouble();
-  Vec3 t, b;
-  OrthonormalBasis(axis, &t, &b);
+  const double phi = model::kTwoPi * rng.NextDouble();
+  model::Vec3 t, b;
+  model::OrthonormalBasis(axis, &t, &b);
   return cos_theta * axis + sin_theta * (std::cos(phi) * t + std::sin(phi) * b);
 }
 
@@ -207,15 +207,15 @@ struct Estimate {
 // (1 / (Omega_A Omega_B)) integral over cone A of light directions and cone B of view directions
 // of rho(i, o), traced from the side of `source` (the cone whose direction is drawn) to `target`
 // (the cone the exit direction is binned in). Both cones have half-angle `radius`.
-Estimate ConeToCone(const SlabTracer& tracer, const Vec3& source_axis, const Vec3& target_axis,
+Estimate ConeToCone(const SlabTracer& tracer, const model::Vec3& source_axis, const model::Vec3& target_axis,
                     double radius, int64_t paths, uint64_t seed) {
-  const double cone_solid_angle = kTwoPi * (1.0 - std::cos(radius));
+  const double cone_solid_angle = model::kTwoPi * (1.0 - std::cos(radius));
   const double cos_radius = std::cos(radius);
-  Pcg32 rng(seed, 0);
+  common::Pcg32 rng(seed, 0);
   double sum = 0.0;
   double sum_squares = 0.0;
   for (int64_t p = 0; p < paths; ++p) {
-    const Vec3 source = SampleCone(source_axis, radius, rng);
+    const model::Vec3 source = SampleCone(source_axis, radius, rng);
     const PathRecord path = tracer.TracePath(-source, rng, 100);
     if (!path.transmitted || path.direction.dot(target_axis) < cos_radius) continue;
     const double x = path.energy.transmitted / (std::abs(path.direction.z()) * cone_solid_angle);
@@ -236,9 +236,9 @@ TEST(SlabTracer, IsReciprocal) {
   slab.exit = SlabInterface::Rough(*RoughNdf(0.4));
   slab.optical_depth = 0.2;
   const SlabTracer tracer(slab);
-  const double radius = 8.0 * kPi / 180.0;
+  const double radius = 8.0 * model::kPi / 180.0;
   const struct {
-    Vec3 i, o;
+    model::Vec3 i, o;
   } pairs[] = {
       {LightDirection(30.0, 180.0), ViewDirection(30.0)},
       {LightDirection(10.0, 200.0), ViewDirection(50.0, 10.0)},
@@ -262,7 +262,7 @@ TEST(SlabTracer, StopsOnceTheDominantCellsReachTheTargetError) {
   SliceOptions options;
   options.paths = int64_t{1} << 26;
   options.target_relative_error = 0.03;
-  const BtdfSlice slice = tracer.SliceForView(ViewDirection(45.0), Hemicube(32), options);
+  const BtdfSlice slice = tracer.SliceForView(ViewDirection(45.0), model::Hemicube(32), options);
   EXPECT_LE(slice.DominantRelativeError(0.9), 0.03);
   EXPECT_LT(slice.paths, options.paths);
   EXPECT_EQ(slice.paths % SlabTracer::kBatchPaths, 0);
@@ -271,16 +271,16 @@ TEST(SlabTracer, StopsOnceTheDominantCellsReachTheTargetError) {
 TEST(SlabTracer, RejectsInvalidInput) {
   Slab slab;
   slab.eta = 1.0;
-  EXPECT_THROW(SlabTracer{slab}, Error);
+  EXPECT_THROW(SlabTracer{slab}, common::Error);
   slab.eta = 1.5;
   slab.optical_depth = -1.0;
-  EXPECT_THROW(SlabTracer{slab}, Error);
+  EXPECT_THROW(SlabTracer{slab}, common::Error);
   slab.optical_depth = 0.0;
   const SlabTracer tracer(slab);
-  EXPECT_THROW(tracer.SliceForView(LightDirection(10.0), Hemicube(8), SliceOptions{}), Error);
-  EXPECT_THROW(tracer.SliceForLight(ViewDirection(10.0), Hemicube(8), SliceOptions{}), Error);
-  EXPECT_THROW(tracer.SliceForView(Vec3(0.0, 0.0, 2.0), Hemicube(8), SliceOptions{}), Error);
+  EXPECT_THROW(tracer.SliceForView(LightDirection(10.0), model::Hemicube(8), SliceOptions{}), common::Error);
+  EXPECT_THROW(tracer.SliceForLight(ViewDirection(10.0), model::Hemicube(8), SliceOptions{}), common::Error);
+  EXPECT_THROW(tracer.SliceForView(model::Vec3(0.0, 0.0, 2.0), model::Hemicube(8), SliceOptions{}), common::Error);
 }
 
 }  // namespace
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

@@ -27,31 +27,31 @@ struct AnalyticMaterial {
   double V(int y) const { return height > 1 ? y / (height - 1.0) : 0.5; }
   bool rough = false;  // rice-paper-like lobes: GGX 0.25-0.45 across, 1.1-1.6x that along
 
-  GgxNdf Ndf(int x, int y) const {
+  model::GgxNdf Ndf(int x, int y) const {
     if (rough) {
       const double across = 0.25 + 0.20 * U(x);
-      return GgxNdf(across, across * (1.1 + 0.5 * V(y)));
+      return model::GgxNdf(across, across * (1.1 + 0.5 * V(y)));
     }
-    return GgxNdf(0.18 + 0.10 * U(x), 0.16 + 0.06 * V(y));
+    return model::GgxNdf(0.18 + 0.10 * U(x), 0.16 + 0.06 * V(y));
   }
-  DualMicrofacetParams Params(int x, int y) const {
-    DualMicrofacetParams p;
+  model::DualMicrofacetParams Params(int x, int y) const {
+    model::DualMicrofacetParams p;
     p.eta = eta;
     p.alpha = 0.3 + 0.2 * U(x) + 0.2 * V(y);
-    p.shadowing = SmithShadowing::Ggx(0.2);
+    p.shadowing = model::SmithShadowing::Ggx(0.2);
     const double scale = 0.8 + 0.1 * V(y);
     p.k_s = {scale, 0.95 * scale, 0.9 * scale};
     p.rho_d = {0.0, 0.0, 0.0};
     return p;
   }
-  Rgb R(int x, int y, const Vec3& i, const Vec3& o) const { return EvaluateMaterial(Ndf(x, y), Params(x, y), i, o); }
+  model::Rgb R(int x, int y, const model::Vec3& i, const model::Vec3& o) const { return model::EvaluateMaterial(Ndf(x, y), Params(x, y), i, o); }
 };
 
 // The hand-made calibration of the rig above (only the geometry matters to the store).
 inline calib::SessionCalibration AnalyticCalibration(int dots_per_side) {
   constexpr double kSample = 0.08, kDepth = 0.04, kCamera = 1.0;
-  const double theta = kPi / 4;
-  const Vec3 camera(0.0, -kCamera * std::sin(theta), kCamera * std::cos(theta));
+  const double theta = model::kPi / 4;
+  const model::Vec3 camera(0.0, -kCamera * std::sin(theta), kCamera * std::cos(theta));
   calib::SessionCalibration c;
   // A plausible camera: the store only keeps it, the geometry below is what the fit uses.
   c.camera.camera.width = 640;
@@ -68,7 +68,7 @@ inline calib::SessionCalibration AnalyticCalibration(int dots_per_side) {
   for (int row = 0; row < dots_per_side; ++row) {
     for (int col = 0; col < dots_per_side; ++col) {
       calib::DotPosition dot;
-      dot.position = Vec3(-0.5 * span + (col + 0.5) * pitch, centre_y - 0.5 * span + (row + 0.5) * pitch, -kDepth);
+      dot.position = model::Vec3(-0.5 * span + (col + 0.5) * pitch, centre_y - 0.5 * span + (row + 0.5) * pitch, -kDepth);
       dot.monitor_px = {static_cast<double>(col), static_cast<double>(row)};
       c.monitor.dots.push_back(dot);
     }
@@ -95,7 +95,7 @@ inline void WriteAnalyticStore(const std::filesystem::path& folder, const Analyt
   for (int q = 0; q < info.num_dots; ++q) {
     for (int64_t t = 0; t < geometry.num_texels(); ++t) {
       const int x = static_cast<int>(t % truth.width), y = static_cast<int>(t / truth.width);
-      const Rgb r = truth.R(x, y, geometry.Light(t, q), geometry.View(t));
+      const model::Rgb r = truth.R(x, y, geometry.Light(t, q), geometry.View(t));
       const double factor = 1.0 + noise * gauss(rng);
       for (int c = 0; c < 3; ++c) rgb[3 * t + c] = static_cast<float>(r[c] * factor);
     }

@@ -10,11 +10,11 @@
 namespace svbtdf::testing {
 
 template <typename Body>
-void ExpectError(ErrorKind kind, const std::string& text, Body body) {
+void ExpectError(common::ErrorKind kind, const std::string& text, Body body) {
   try {
     body();
     FAIL() << "expected an error containing '" << text << "'";
-  } catch (const Error& error) {
+  } catch (const common::Error& error) {
     EXPECT_EQ(error.kind(), kind) << error.what();
     EXPECT_NE(std::string(error.what()).find(text), std::string::npos) << error.what();
   }

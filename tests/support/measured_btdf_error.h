@@ -15,8 +15,8 @@ namespace svbtdf::testing {
 
 // Median |R / R_true - 1| over the samples of `store`; the dots' true positions are `dots` and the
 // camera's true centre `camera`. Returns NaN when no sample qualifies; `count` receives their number.
-inline double MedianBtdfError(const fit::SliceStore& store, const MaterialTruth& material, const std::vector<Vec3>& dots,
-                              const Vec3& camera, size_t* count = nullptr) {
+inline double MedianBtdfError(const fit::SliceStore& store, const simulate::MaterialTruth& material, const std::vector<model::Vec3>& dots,
+                              const model::Vec3& camera, size_t* count = nullptr) {
   std::vector<double> errors;
   std::vector<float> samples;
   const fit::TexelGeometry& g = store.geometry();
@@ -25,11 +25,11 @@ inline double MedianBtdfError(const fit::SliceStore& store, const MaterialTruth&
     if (store.mask().at(x, y) == 0) continue;
     store.ReadSamples(t, &samples);
     const auto ndf = material.TexelNdf(x, y);
-    const DualMicrofacetParams params = material.Params(x, y);
-    const Vec3 centre = g.TexelCentre(t);
-    const Vec3 view = (camera - centre).normalized();
+    const model::DualMicrofacetParams params = material.Params(x, y);
+    const model::Vec3 centre = g.TexelCentre(t);
+    const model::Vec3 view = (camera - centre).normalized();
     std::vector<double> r_true;
-    for (const Vec3& p : dots) r_true.push_back(Luminance(EvaluateMaterial(*ndf, params, (p - centre).normalized(), view)));
+    for (const model::Vec3& p : dots) r_true.push_back(model::Luminance(model::EvaluateMaterial(*ndf, params, (p - centre).normalized(), view)));
     const double peak = *std::max_element(r_true.begin(), r_true.end());
     for (size_t q = 0; q < r_true.size(); ++q) {
       const double measured = (samples[3 * q] + samples[3 * q + 1] + samples[3 * q + 2]) / 3.0;

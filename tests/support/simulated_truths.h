@@ -21,7 +21,7 @@ class SimulatedTruths {
     auto [it, made] = truths.folders_.try_emplace(kind);
     if (made) {
       const std::filesystem::path out = truths.root_ / kind;
-      SimulationOptions options;
+      simulate::SimulationOptions options;
       options.preset = "tiny";
       options.truth = kind;
       options.threads = 2;

@@ -14,18 +14,18 @@ inline fit::Material SmallMaterial(int width = 3, int height = 2) {
   m.height = height;
   m.eta = 1.45;
   m.ndf_resolution = 16;
-  TabulatedNdf ndf(Hemicube(16), GgxNdf(0.25, 0.18));
+  model::TabulatedNdf ndf(model::Hemicube(16), model::GgxNdf(0.25, 0.18));
   ndf.Normalize();
   m.representative_texels = {4};
   m.representative_ln_d = {ndf.ln_d()};
-  m.alpha = FloatImage(width, height, 1, 0.6f);
-  m.shadowing_roughness = FloatImage(width, height, 1, 0.2f);
-  m.k_s = FloatImage(width, height, 3, 0.8f);
-  m.rho_d = FloatImage(width, height, 3, 0.02f);
-  m.residual = FloatImage(width, height, 1, -1.0f);
-  m.cluster = FloatImage(width, height, 1, 0.0f);
-  m.weight_index = FloatImage(width, height, 1, 0.0f);
-  m.weight_value = FloatImage(width, height, 1, 1.0f);
+  m.alpha = common::FloatImage(width, height, 1, 0.6f);
+  m.shadowing_roughness = common::FloatImage(width, height, 1, 0.2f);
+  m.k_s = common::FloatImage(width, height, 3, 0.8f);
+  m.rho_d = common::FloatImage(width, height, 3, 0.02f);
+  m.residual = common::FloatImage(width, height, 1, -1.0f);
+  m.cluster = common::FloatImage(width, height, 1, 0.0f);
+  m.weight_index = common::FloatImage(width, height, 1, 0.0f);
+  m.weight_value = common::FloatImage(width, height, 1, 1.0f);
   return m;
 }
 

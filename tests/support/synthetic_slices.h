@@ -17,21 +17,21 @@ namespace svbtdf::fit {
 // straight-through point of the view ray. `offset` shifts the grid by a fraction of its pitch
 // (0.5 gives the held-out directions between the fitted ones).
 struct RigSamples {
-  std::vector<Vec3> light;
+  std::vector<model::Vec3> light;
   std::vector<double> solid_angle;
 };
 
-inline RigSamples DotGrid(const Vec3& view, int dots_per_side, double offset) {
+inline RigSamples DotGrid(const model::Vec3& view, int dots_per_side, double offset) {
   constexpr double kDepth = 0.04, kSpan = 0.096;
   const double pitch = kSpan / dots_per_side;
-  const Vec3 centre = -view * (kDepth / view.z());
+  const model::Vec3 centre = -view * (kDepth / view.z());
   RigSamples rig;
   for (int a = 0; a < dots_per_side; ++a) {
     for (int b = 0; b < dots_per_side; ++b) {
-      const Vec3 p(centre.x() + (a + offset + 0.5 - 0.5 * dots_per_side) * pitch,
+      const model::Vec3 p(centre.x() + (a + offset + 0.5 - 0.5 * dots_per_side) * pitch,
                    centre.y() + (b + offset + 0.5 - 0.5 * dots_per_side) * pitch, -kDepth);
       const double r2 = p.squaredNorm();
-      const Vec3 i = p.normalized();
+      const model::Vec3 i = p.normalized();
       rig.light.push_back(i);
       rig.solid_angle.push_back(pitch * pitch * std::abs(i.z()) / r2);
     }
@@ -40,27 +40,27 @@ inline RigSamples DotGrid(const Vec3& view, int dots_per_side, double offset) {
 }
 
 struct Truth {
-  std::unique_ptr<TabulatedNdf> ndf;
+  std::unique_ptr<model::TabulatedNdf> ndf;
   double eta = 1.5;
   double alpha = 0.3;
   double shadowing_roughness = 0.2;
   double k_s = 0.8;
 
-  double Rho(const Vec3& i, const Vec3& o) const {
-    const DualMicrofacetModel model(eta, SmithShadowing::Ggx(shadowing_roughness));
+  double Rho(const model::Vec3& i, const model::Vec3& o) const {
+    const model::DualMicrofacetModel model(eta, model::SmithShadowing::Ggx(shadowing_roughness));
     return k_s * model.Rho(*ndf, alpha, i, o);
   }
 };
 
-inline Truth MakeTruth(const Hemicube& grid, const Ndf& analytic, double alpha) {
+inline Truth MakeTruth(const model::Hemicube& grid, const model::Ndf& analytic, double alpha) {
   Truth truth;
-  truth.ndf = std::make_unique<TabulatedNdf>(grid, analytic);
+  truth.ndf = std::make_unique<model::TabulatedNdf>(grid, analytic);
   truth.ndf->Normalize();
   truth.alpha = alpha;
   return truth;
 }
 
-inline TexelSlice Synthesize(const Truth& truth, const Vec3& view, const RigSamples& rig, double noise,
+inline TexelSlice Synthesize(const Truth& truth, const model::Vec3& view, const RigSamples& rig, double noise,
                       uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> gauss(0.0, 1.0);
@@ -68,7 +68,7 @@ inline TexelSlice Synthesize(const Truth& truth, const Vec3& view, const RigSamp
   slice.view = view;
   slice.light = rig.light;
   slice.solid_angle = rig.solid_angle;
-  for (const Vec3& i : rig.light) slice.rho.push_back(truth.Rho(i, view) * (1.0 + noise * gauss(rng)));
+  for (const model::Vec3& i : rig.light) slice.rho.push_back(truth.Rho(i, view) * (1.0 + noise * gauss(rng)));
   return slice;
 }
 

@@ -14,7 +14,7 @@ namespace svbtdf {
 
 // `simulation` is the folder holding session/ and truth/.
 inline calib::SessionCalibration CalibrationFromTruth(const std::filesystem::path& simulation) {
-  const RigTruth truth = ReadRigTruth(simulation / "truth" / "rig.json");
+  const simulate::RigTruth truth = simulate::ReadRigTruth(simulation / "truth" / "rig.json");
   const session::Session session = session::Session::Open(simulation / "session");
   calib::SessionCalibration c;
   calib::CameraModel& camera = c.camera.camera;
@@ -29,13 +29,13 @@ inline calib::SessionCalibration CalibrationFromTruth(const std::filesystem::pat
   c.sample_plane.translation = truth.pose.translation;
   c.sample_plane.width_m = truth.sample.width;
   c.sample_plane.height_m = truth.sample.height();
-  c.monitor.normal = MonitorFrame::Of(truth.monitor).normal;  // the screen may be tilted
+  c.monitor.normal = simulate::MonitorFrame::Of(truth.monitor).normal;  // the screen may be tilted
   c.monitor.distance_m = truth.monitor.distance;
   c.monitor.pixel_pitch_m = truth.monitor.pixel_pitch;
   c.monitor.dot_radius_m = truth.dots.front().radius;
   c.monitor.emission = truth.monitor.emission.kind;
   c.monitor.emission_exponent = truth.monitor.emission.exponent;
-  for (const Dot& dot : truth.dots) {
+  for (const simulate::Dot& dot : truth.dots) {
     calib::DotPosition p;
     p.position = dot.position;
     p.monitor_px = {dot.monitor_x, dot.monitor_y};

@@ -15,7 +15,7 @@
 
 #include "svbtdf/acquire/display.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 struct SimulatedSetup;
 }
 
@@ -97,7 +97,7 @@ nlohmann::json CapturePlanToJson(const CapturePlan& plan);
 // and dots), so that an acquisition with them is calibrated and fitted like a simulation.
 std::vector<std::string> PlanPresetNames();
 CapturePlan MakePlanPreset(const std::string& name);
-CapturePlan PlanFromSimulation(const SimulatedSetup& setup);
+CapturePlan PlanFromSimulation(const simulate::SimulatedSetup& setup);
 
 // The captures in the order they are taken: dark frames, board views, sample plane, all dots,
 // flat white (grouped so that the operator changes the scene as rarely as possible), then the

@@ -21,7 +21,7 @@
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/session/capture_key.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 struct SimulatedSetup;
 }
 
@@ -56,7 +56,7 @@ class SimDisplay : public Display {
 };
 
 // The display of the simulated rig: the monitor's size and gamma.
-DisplayInfo SimDisplayInfo(const SimulatedSetup& setup);
+DisplayInfo SimDisplayInfo(const simulate::SimulatedSetup& setup);
 
 class SimOperator : public Operator {
  public:
@@ -76,7 +76,7 @@ class SimOperator : public Operator {
 // noise streams of their own.
 class SimCamera : public Camera {
  public:
-  SimCamera(std::shared_ptr<SimWorld> world, std::shared_ptr<const SimulatedSetup> setup, std::string id);
+  SimCamera(std::shared_ptr<SimWorld> world, std::shared_ptr<const simulate::SimulatedSetup> setup, std::string id);
   CameraInfo Info() const override;
   void SetExposure(const ExposureSettings& settings) override;
   Frame Capture() override;
@@ -87,16 +87,16 @@ class SimCamera : public Camera {
   int ExposureIndex() const;
 
   std::shared_ptr<SimWorld> world_;
-  std::shared_ptr<const SimulatedSetup> setup_;
+  std::shared_ptr<const simulate::SimulatedSetup> setup_;
   std::string id_;
   ExposureSettings settings_;
   std::map<std::pair<std::string, int>, int> taken_;  // captures per (scene, bracket)
-  FloatImage radiance_;   // of the last capture
+  common::FloatImage radiance_;   // of the last capture
   std::string rendered_;  // its scene (SceneOf), empty when it cannot be reused
 };
 
 // `sim:DIR`: loads the simulation in DIR (simulate/capture_render.h, LoadSimulatedSetup).
-std::shared_ptr<const SimulatedSetup> LoadSimulation(const std::filesystem::path& dir);
+std::shared_ptr<const simulate::SimulatedSetup> LoadSimulation(const std::filesystem::path& dir);
 
 // A camera wrapper that injects faults, for tests: capture number `fail_at` (1-based, counting
 // every Capture() call) fails with Error(kHardware) `fail_count` times in a row (then captures

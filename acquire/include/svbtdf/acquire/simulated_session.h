@@ -23,6 +23,6 @@ struct SimulationOutput {
 // of the same settings is resumed (byte-identical to an uninterrupted run); any other non-empty
 // OUT is refused (svbtdf::Error(kInvalidInput)), and a complete session is never touched again.
 // Ctrl-C ends it between images with Error(kInterrupted), leaving a resumable session.
-SimulationOutput SimulateSession(const std::filesystem::path& out, const SimulationOptions& options);
+SimulationOutput SimulateSession(const std::filesystem::path& out, const simulate::SimulationOptions& options);
 
 }  // namespace svbtdf::acquire

@@ -26,17 +26,17 @@ inline constexpr int kCalibrationFormatVersion = 1;
 // lying in the sample holder (centred on the sample, its rows along the sample's x axis).
 struct SamplePlane {
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  // R: sample frame -> camera frame
-  Vec3 translation = Vec3::Zero();                          // t, metres
+  model::Vec3 translation = model::Vec3::Zero();                          // t, metres
   double rms_px = 0.0;  // reprojection RMS of the holder board's corners
   double width_m = 0.08, height_m = 0.08;  // the sample's extent (nominal, from session.json)
 
-  Vec3 CameraCentre() const { return -rotation.transpose() * translation; }  // V, sample frame
-  Vec3 ToCamera(const Vec3& x_sample) const { return rotation * x_sample + translation; }
+  model::Vec3 CameraCentre() const { return -rotation.transpose() * translation; }  // V, sample frame
+  model::Vec3 ToCamera(const model::Vec3& x_sample) const { return rotation * x_sample + translation; }
 };
 
 // One displayed dot.
 struct DotPosition {
-  Vec3 position = Vec3::Zero();             // p_q in the sample frame (on the monitor plane)
+  model::Vec3 position = model::Vec3::Zero();             // p_q in the sample frame (on the monitor plane)
   Eigen::Vector2d image_px{0.0, 0.0};       // its centroid in the all-dots image
   Eigen::Vector2d monitor_px{0.0, 0.0};     // where it was displayed (monitor pixels)
   double residual_mm = 0.0;                 // |back-projected - fitted grid| on the monitor plane
@@ -44,7 +44,7 @@ struct DotPosition {
 
 // The monitor as measured: its plane and the dots on it.
 struct MonitorCalibration {
-  Vec3 normal = Vec3::UnitZ();  // unit, sample frame, pointing toward the sample
+  model::Vec3 normal = model::Vec3::UnitZ();  // unit, sample frame, pointing toward the sample
   double distance_m = 0.04;     // d: distance of the monitor plane behind the sample plane
   double pixel_pitch_m = 2.5e-4;
   double dot_radius_m = 5e-4;   // radius of a displayed dot (its lit area is pi r^2)
@@ -85,6 +85,6 @@ SessionCalibration ReadSessionCalibration(const std::filesystem::path& path);
 void WriteSessionCalibration(const std::filesystem::path& path, const SessionCalibration& calibration);
 
 // Projects sample-frame points to distorted image pixels with the calibrated camera.
-std::vector<Eigen::Vector2d> ProjectToImage(const SessionCalibration& calibration, const std::vector<Vec3>& points);
+std::vector<Eigen::Vector2d> ProjectToImage(const SessionCalibration& calibration, const std::vector<model::Vec3>& points);
 
 }  // namespace svbtdf::calib

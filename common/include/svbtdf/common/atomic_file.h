@@ -7,7 +7,7 @@
 #include <functional>
 #include <string_view>
 
-namespace svbtdf {
+namespace svbtdf::common {
 
 // Calls `write(temp_path)` to produce the file, fsyncs it, renames it to `path` and fsyncs the
 // folder. If `write` throws, the temporary file is removed and the exception propagates.
@@ -23,4 +23,4 @@ void WriteTextAtomically(const std::filesystem::path& path, std::string_view con
 // Reads a whole file; throws an Io error naming the file when it cannot.
 std::string ReadTextFile(const std::filesystem::path& path);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

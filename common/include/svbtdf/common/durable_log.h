@@ -14,7 +14,7 @@
 #include <string_view>
 #include <vector>
 
-namespace svbtdf {
+namespace svbtdf::common {
 
 class DurableLog {
  public:
@@ -52,4 +52,4 @@ class DurableLog {
 // object is one, whereas "1" is a prefix of "12": logs of bare values cannot tell.)
 bool IsJsonObjectLine(std::string_view line);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace svbtdf {
+namespace svbtdf::common {
 
 enum class ErrorKind {
   kInvalidInput,  // a bad argument or a bad value in a file the user handed in
@@ -45,4 +45,4 @@ class Error : public std::runtime_error {
 // Process exit code for an error of this kind (2 for bad input, 130 for interruption, else 1).
 int ExitCodeFor(ErrorKind kind);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace svbtdf {
+namespace svbtdf::common {
 
 // Camera-native values in [0, 2^bits_per_sample - 1], row-major, channels interleaved.
 struct CameraImage {
@@ -55,4 +55,4 @@ void WriteFloatImage(const std::filesystem::path& path, const FloatImage& image,
 // holds NaN or infinite values.
 void RequireFinite(const FloatImage& image, const std::string& source);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

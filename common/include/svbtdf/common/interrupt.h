@@ -3,7 +3,7 @@
 // flag; long loops poll it at safe points, save what they have, and throw
 // Error(kInterrupted) so that a rerun can resume.
 
-namespace svbtdf {
+namespace svbtdf::common {
 
 void InstallInterruptHandler();
 bool InterruptRequested();
@@ -12,4 +12,4 @@ void ThrowIfInterrupted(const char* what);
 // For tests: request or clear an interrupt without a signal.
 void SetInterruptRequested(bool requested);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

@@ -3,10 +3,10 @@
 
 #include <functional>
 
-namespace svbtdf {
+namespace svbtdf::common {
 
 // Golden-section search for a minimum of a unimodal f on [lo, hi], to an interval narrower than
 // `tolerance`; returns the midpoint of the final interval. Reuses one evaluation per step.
 double GoldenSectionSearch(const std::function<double(double)>& f, double lo, double hi, double tolerance);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <functional>
 
-namespace svbtdf {
+namespace svbtdf::common {
 
 // `requested` threads, or every hardware thread when requested <= 0.
 int ThreadCount(int requested);
@@ -14,4 +14,4 @@ int ThreadCount(int requested);
 // other threads at their next chunk and is rethrown here.
 void ParallelFor(int64_t n, int threads, int64_t chunk, const std::function<void(int64_t, int64_t)>& body);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

@@ -9,7 +9,7 @@
 #include <mutex>
 #include <string>
 
-namespace svbtdf {
+namespace svbtdf::common {
 
 class ProgressBar {
  public:
@@ -42,4 +42,4 @@ class ProgressBar {
   bool is_terminal_ = false;
 };
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

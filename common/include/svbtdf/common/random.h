@@ -8,7 +8,7 @@
 
 #include <cstdint>
 
-namespace svbtdf {
+namespace svbtdf::common {
 
 // One SplitMix64 step: nearby inputs (1, 2, 3, ...) give unrelated outputs.
 constexpr uint64_t SplitMix64(uint64_t x) {
@@ -47,4 +47,4 @@ class Pcg32 {
   uint64_t increment_;
 };
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

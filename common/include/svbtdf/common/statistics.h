@@ -5,7 +5,7 @@
 #include <cmath>
 #include <vector>
 
-namespace svbtdf {
+namespace svbtdf::common {
 
 // The median (the upper one for an even count); NaN for no values, so that reports show
 // "no data" rather than a number.
@@ -15,4 +15,4 @@ inline double Median(std::vector<double> values) {
   return values[values.size() / 2];
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::common

@@ -21,10 +21,10 @@ struct BaselineLobe {
 
 // The baseline BTDF with unit scale: WalterBtdf(GGX(alpha_x, alpha_y) rotated by azimuth, i, o, 1, eta).
 // The one evaluation of the baseline: the fitter and fitted materials (MaterialEvaluator) share it.
-double BaselineShape(const BaselineLobe& lobe, double eta, const Vec3& i, const Vec3& o);
+double BaselineShape(const BaselineLobe& lobe, double eta, const model::Vec3& i, const model::Vec3& o);
 
 // ln D of the rotated GGX at every cell centre of `grid` (a material stores it as the texel's NDF).
-std::vector<double> BaselineLnD(const Hemicube& grid, const BaselineLobe& lobe);
+std::vector<double> BaselineLnD(const model::Hemicube& grid, const BaselineLobe& lobe);
 
 // The weighted mean of lobes (affine weights, sum 1). Azimuths cannot be averaged directly (they
 // wrap at pi and mean nothing for an isotropic lobe), so the GGX slope second-moment matrices
@@ -47,7 +47,7 @@ class BaselineFitter {
  public:
   explicit BaselineFitter(double eta, double dark_fraction = 2e-3);
   BaselineFitResult Fit(const TexelSlice& slice) const;
-  double Rho(const BaselineFitResult& fit, const Vec3& i, const Vec3& o) const;
+  double Rho(const BaselineFitResult& fit, const model::Vec3& i, const model::Vec3& o) const;
 
  private:
   double eta_;

@@ -41,18 +41,18 @@ struct Material {
   std::vector<int64_t> representative_texels;        // texel index (y * width + x)
   std::vector<std::vector<double>> representative_ln_d;  // num_cells values each, normalised
   // Per-texel maps (interpolated for non-representatives).
-  FloatImage alpha;                // 1 channel
-  FloatImage shadowing_roughness;  // 1 channel; 0 = no shadowing
-  FloatImage k_s;                  // 3 channels
-  FloatImage rho_d;                // 3 channels
-  FloatImage residual;             // 1 channel: relative RMSE of the texel's own samples (-1: not fitted)
-  FloatImage cluster;              // 1 channel: the representative of the texel's cluster
+  common::FloatImage alpha;                // 1 channel
+  common::FloatImage shadowing_roughness;  // 1 channel; 0 = no shadowing
+  common::FloatImage k_s;                  // 3 channels
+  common::FloatImage rho_d;                // 3 channels
+  common::FloatImage residual;             // 1 channel: relative RMSE of the texel's own samples (-1: not fitted)
+  common::FloatImage cluster;              // 1 channel: the representative of the texel's cluster
   // Affine weights: K channels of representative indices and K of weights (sum 1; unused: 0, 0).
-  FloatImage weight_index;
-  FloatImage weight_value;
+  common::FloatImage weight_index;
+  common::FloatImage weight_value;
   // kWalterGgx only (1 channel each, interpolated like alpha): the GGX lobe of every texel. The NDF
   // tables then hold that lobe tabulated, and alpha and the shadowing roughness are unused (0).
-  FloatImage baseline_alpha_x, baseline_alpha_y, baseline_azimuth;
+  common::FloatImage baseline_alpha_x, baseline_alpha_y, baseline_azimuth;
   nlohmann::json provenance = nlohmann::json::object();  // session, settings, statistics, holdout
 };
 
@@ -60,13 +60,13 @@ struct Material {
 // and every texel's affine weights: alpha, shadowing roughness, k_s and D are interpolated with
 // the weights; rho_d is the texel's own (measured directly, no fit needed).
 Material AssembleMaterial(int width, int height, double eta, int ndf_resolution, const Clustering& clustering,
-                          const std::vector<TexelFitResult>& representative_fits, const FloatImage& rho_d);
+                          const std::vector<TexelFitResult>& representative_fits, const common::FloatImage& rho_d);
 
 // The same for the baseline (`svbtdf fit --model ggx`): a kWalterGgx material in which every
 // texel takes the fit of its cluster's representative (weight 1; see material.cc for why not the
 // affine blend).
 Material AssembleBaselineMaterial(int width, int height, double eta, int ndf_resolution, const Clustering& clustering,
-                                  const std::vector<BaselineFitResult>& representative_fits, const FloatImage& rho_d);
+                                  const std::vector<BaselineFitResult>& representative_fits, const common::FloatImage& rho_d);
 
 // "dual-microfacet" | "walter-ggx", as in the manifest's "btdf" field.
 const char* MaterialModelName(MaterialModel model);
@@ -81,17 +81,17 @@ Material ReadMaterial(const std::filesystem::path& folder);
 //   R[c] = k_s[c] BaselineShape(lobe, eta, i, o) + rho_d[c].
 class TexelBtdf {
  public:
-  TexelBtdf(TabulatedNdf ndf, DualMicrofacetParams params, std::optional<BaselineLobe> baseline = std::nullopt)
+  TexelBtdf(model::TabulatedNdf ndf, model::DualMicrofacetParams params, std::optional<BaselineLobe> baseline = std::nullopt)
       : ndf_(std::move(ndf)), params_(params), baseline_(baseline) {}
-  Rgb Evaluate(const Vec3& i, const Vec3& o) const;
-  const TabulatedNdf& ndf() const { return ndf_; }
-  const DualMicrofacetParams& params() const { return params_; }
+  model::Rgb Evaluate(const model::Vec3& i, const model::Vec3& o) const;
+  const model::TabulatedNdf& ndf() const { return ndf_; }
+  const model::DualMicrofacetParams& params() const { return params_; }
   MaterialModel model() const { return baseline_ ? MaterialModel::kWalterGgx : MaterialModel::kDualMicrofacet; }
   const std::optional<BaselineLobe>& baseline() const { return baseline_; }
 
  private:
-  TabulatedNdf ndf_;
-  DualMicrofacetParams params_;
+  model::TabulatedNdf ndf_;
+  model::DualMicrofacetParams params_;
   std::optional<BaselineLobe> baseline_;
 };
 
@@ -103,10 +103,10 @@ class MaterialEvaluator {
   // Throws svbtdf::Error(kInvalidInput) for a texel outside the material.
   TexelBtdf Texel(int x, int y) const;
   // One-off evaluation (builds the texel each call).
-  Rgb Evaluate(int x, int y, const Vec3& i, const Vec3& o) const { return Texel(x, y).Evaluate(i, o); }
+  model::Rgb Evaluate(int x, int y, const model::Vec3& i, const model::Vec3& o) const { return Texel(x, y).Evaluate(i, o); }
   // The texel's own NDF table: the weighted sum of the representatives' D, each scaled by its
   // transmission scale k_s (docs/material-format.md), normalised.
-  TabulatedNdf TexelNdf(int x, int y) const;
+  model::TabulatedNdf TexelNdf(int x, int y) const;
   // The scale a representative's D is weighted by in TexelNdf (its own k_s, channel mean).
   double RepresentativeScale(int representative) const { return representative_scale_.at(representative); }
 
@@ -114,7 +114,7 @@ class MaterialEvaluator {
   std::optional<BaselineLobe> Lobe(int x, int y) const;  // the texel's lobe, for a walter-ggx material
 
   const Material& material_;
-  Hemicube grid_;
+  model::Hemicube grid_;
   std::vector<double> representative_scale_;  // mean k_s of each representative's own fit
   std::vector<std::vector<float>> representative_d_;  // exp of representative_ln_d (dual-microfacet)
 };

@@ -45,14 +45,14 @@ inline constexpr int kSliceStoreFormatVersion = 2;
 struct TexelGeometry {
   int texels_x = 0, texels_y = 0;
   double width_m = 0.0, height_m = 0.0;
-  Vec3 camera_centre = Vec3::Zero();  // V, sample frame
-  std::vector<Vec3> dots;             // p_q, sample frame
-  Vec3 monitor_normal = Vec3::UnitZ();  // the monitor plane's normal (the plane holds the dots)
+  model::Vec3 camera_centre = model::Vec3::Zero();  // V, sample frame
+  std::vector<model::Vec3> dots;             // p_q, sample frame
+  model::Vec3 monitor_normal = model::Vec3::UnitZ();  // the monitor plane's normal (the plane holds the dots)
 
   int64_t num_texels() const { return static_cast<int64_t>(texels_x) * texels_y; }
-  Vec3 TexelCentre(int64_t texel) const;
-  Vec3 View(int64_t texel) const;              // o(x)
-  Vec3 Light(int64_t texel, int dot) const;    // i_q(x)
+  model::Vec3 TexelCentre(int64_t texel) const;
+  model::Vec3 View(int64_t texel) const;              // o(x)
+  model::Vec3 Light(int64_t texel, int dot) const;    // i_q(x)
   // The area of monitor one dot stands for: the median nearest-neighbour spacing of the dots,
   // squared (1e-4 m^2 for fewer than two dots).
   double DotCellArea() const;
@@ -75,11 +75,11 @@ class SliceStore {
 
   const SliceStoreInfo& info() const { return info_; }
   const TexelGeometry& geometry() const { return geometry_; }
-  const Hemicube& light_grid() const { return light_grid_; }
-  const FloatImage& rho_d() const { return rho_d_; }
-  const FloatImage& mask() const { return mask_; }
+  const model::Hemicube& light_grid() const { return light_grid_; }
+  const common::FloatImage& rho_d() const { return rho_d_; }
+  const common::FloatImage& mask() const { return mask_; }
   // 1 where a dot lies beneath the texel, else 0 (reach.exr).
-  const FloatImage& reach() const { return reach_; }
+  const common::FloatImage& reach() const { return reach_; }
   const std::filesystem::path& folder() const { return folder_; }
 
   // RGB R of every dot for one texel: out[3 * q + c]; NaN where there is no valid measurement.
@@ -102,8 +102,8 @@ class SliceStore {
   std::filesystem::path folder_;
   SliceStoreInfo info_;
   TexelGeometry geometry_;
-  Hemicube light_grid_{16};
-  FloatImage rho_d_, mask_, reach_;
+  model::Hemicube light_grid_{16};
+  common::FloatImage rho_d_, mask_, reach_;
   // MakeTexelSlice from RGB samples, dot q's at rgb[q * dot_stride].
   TexelSlice SliceFromSamples(int64_t texel, const float* rgb, size_t dot_stride, const std::vector<bool>& use_dot) const;
   struct Files;

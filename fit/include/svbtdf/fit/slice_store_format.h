@@ -55,7 +55,7 @@ int64_t NumTiles(const SliceStoreInfo& info);
 // Bytes of one tile of samples.f16: [dot][texel in tile][RGB].
 uint64_t TileBytes(const SliceStoreInfo& info);
 // Bytes of one texel's slice in slices.f16.
-uint64_t SliceBytes(const Hemicube& grid);
+uint64_t SliceBytes(const model::Hemicube& grid);
 
 // Throws svbtdf::Error(kInvalidInput) naming `source` for a grid, dot count, tile size or light
 // resolution no store can have.

@@ -30,8 +30,8 @@ namespace svbtdf::fit {
 
 // One texel's measured refractive BTDF slice (the diffuse part rho_d already removed).
 struct TexelSlice {
-  Vec3 view = Vec3::UnitZ();        // o: unit, o.z > 0
-  std::vector<Vec3> light;          // i_k: unit, i_k.z < 0
+  model::Vec3 view = model::Vec3::UnitZ();        // o: unit, o.z > 0
+  std::vector<model::Vec3> light;          // i_k: unit, i_k.z < 0
   std::vector<double> rho;          // luminance rho(i_k, o) >= 0
   std::vector<double> solid_angle;  // solid angle each sample stands for (eq. 18 weights); empty: equal
   std::vector<double> weight;       // confidence of each sample, 0 drops it; empty: all 1
@@ -97,13 +97,13 @@ class FitWorkspace {
 // A fitted texel as an evaluable BTDF: luminance rho(i, o) = k_s rho_dual(i, o; D, alpha, G).
 class FittedTexel {
  public:
-  FittedTexel(const Hemicube& grid, double eta, const TexelFitResult& fit);
-  double Rho(const Vec3& i, const Vec3& o) const;
-  const TabulatedNdf& ndf() const { return *ndf_; }
+  FittedTexel(const model::Hemicube& grid, double eta, const TexelFitResult& fit);
+  double Rho(const model::Vec3& i, const model::Vec3& o) const;
+  const model::TabulatedNdf& ndf() const { return *ndf_; }
 
  private:
-  std::shared_ptr<const TabulatedNdf> ndf_;
-  DualMicrofacetModel model_;
+  std::shared_ptr<const model::TabulatedNdf> ndf_;
+  model::DualMicrofacetModel model_;
   double alpha_;
   double k_s_;
 };
@@ -113,7 +113,7 @@ class TexelFitter {
   // Throws svbtdf::Error(kInvalidInput) for eta <= 1 or bad options.
   TexelFitter(double eta, const TexelFitOptions& options = {});
 
-  const Hemicube& ndf_grid() const { return grid_; }
+  const model::Hemicube& ndf_grid() const { return grid_; }
   double eta() const { return eta_; }
   const TexelFitOptions& options() const { return options_; }
 
@@ -129,7 +129,7 @@ class TexelFitter {
 
   double eta_;
   TexelFitOptions options_;
-  Hemicube grid_;
+  model::Hemicube grid_;
   std::shared_ptr<const GridSystem> system_;
 };
 

@@ -5,7 +5,7 @@
 
 #include "svbtdf/model/ndf.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 class BeckmannNdf final : public Ndf {
  public:
@@ -38,4 +38,4 @@ class BeckmannNdf final : public Ndf {
 // refined by Newton steps on std::erf).
 double ErfInv(double y);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

@@ -17,7 +17,7 @@
 #include "svbtdf/model/shadowing.h"
 #include "svbtdf/model/vec.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 // One virtual configuration evaluated for a pair of directions, without the NDF.
 struct VirtualConfiguration {
@@ -82,4 +82,4 @@ struct DualMicrofacetParams {
 Rgb EvaluateMaterial(const Ndf& ndf, const DualMicrofacetParams& params, const Vec3& i,
                      const Vec3& o);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

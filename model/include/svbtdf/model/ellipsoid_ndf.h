@@ -7,7 +7,7 @@
 
 #include "svbtdf/model/ndf.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 class EllipsoidNdf final : public Ndf {
  public:
@@ -41,4 +41,4 @@ class EllipsoidNdf final : public Ndf {
   double a_n_norm_;   // |A n|
 };
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

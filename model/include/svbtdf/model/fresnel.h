@@ -1,7 +1,7 @@
 #pragma once
 // Exact unpolarised Fresnel reflectance of a smooth dielectric interface.
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 // Reflectance for light arriving at an interface whose relative index of refraction is
 // eta = n_transmitted / n_incident, with cos_theta_i the cosine between the incident direction
@@ -10,4 +10,4 @@ namespace svbtdf {
 // Transmittance is 1 - FresnelDielectric(...). (Walter et al. 2007 eq. 22; seed 000 eq. 9.)
 double FresnelDielectric(double cos_theta_i, double eta);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

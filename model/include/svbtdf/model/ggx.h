@@ -5,7 +5,7 @@
 
 #include "svbtdf/model/ndf.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 class GgxNdf final : public Ndf {
  public:
@@ -34,4 +34,4 @@ class GgxNdf final : public Ndf {
   double alpha_y_;
 };
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

@@ -17,7 +17,7 @@
 
 #include "svbtdf/model/vec.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 class Hemicube {
  public:
@@ -77,4 +77,4 @@ class Hemicube {
   std::vector<int> mirrored_;
 };
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

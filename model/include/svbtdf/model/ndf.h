@@ -13,7 +13,7 @@
 
 #include "svbtdf/model/vec.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 // One normal drawn from the distribution of normals visible from a direction v.
 struct NormalSample {
@@ -50,4 +50,4 @@ class Ndf {
   virtual std::unique_ptr<Ndf> Clone() const = 0;
 };
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

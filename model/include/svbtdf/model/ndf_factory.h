@@ -9,7 +9,7 @@
 
 #include "svbtdf/model/ndf.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 // The union of the analytic NDFs' parameters; each NDF reads the ones it needs.
 struct AnalyticNdfParams {
@@ -28,4 +28,4 @@ std::vector<std::string> AnalyticNdfNames();
 // Throws svbtdf::Error(kInvalidInput) for an unknown name or bad parameters, naming them.
 std::unique_ptr<Ndf> MakeAnalyticNdf(std::string_view name, const AnalyticNdfParams& params);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

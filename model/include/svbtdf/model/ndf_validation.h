@@ -4,9 +4,9 @@
 
 #include <string>
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 // Throws svbtdf::Error(kInvalidInput) naming `ndf_name` unless both roughnesses are finite and > 0.
 void RequirePositiveRoughness(const std::string& ndf_name, double alpha_x, double alpha_y);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

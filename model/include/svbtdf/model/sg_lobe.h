@@ -7,7 +7,7 @@
 
 #include "svbtdf/model/vec.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 struct SphericalGaussian {
   Vec3 axis = Vec3::UnitZ();  // mu, unit
@@ -29,4 +29,4 @@ struct SphericalGaussianFit {
 SphericalGaussianFit FitSphericalGaussian(const std::vector<Vec3>& directions, const std::vector<double>& values,
                                           const std::vector<double>& weights);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

@@ -7,7 +7,7 @@
 
 #include "svbtdf/model/vec.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 class SmithShadowing {
  public:
@@ -30,4 +30,4 @@ class SmithShadowing {
   double roughness_;
 };
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

@@ -10,7 +10,7 @@
 #include "svbtdf/model/hemicube.h"
 #include "svbtdf/model/ndf.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 class TabulatedNdf final : public Ndf {
  public:
@@ -53,4 +53,4 @@ class TabulatedNdf final : public Ndf {
   mutable std::shared_ptr<const AreaTable> areas_;  // built on first use
 };
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <numbers>
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 using Vec2 = Eigen::Vector2d;
 using Vec3 = Eigen::Vector3d;
@@ -38,4 +38,4 @@ inline void OrthonormalBasis(const Vec3& n, Vec3* t, Vec3* b) {
   *b = Vec3(c, sign + n.y() * n.y() * a, -n.y());
 }
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

@@ -7,7 +7,7 @@
 
 #include "svbtdf/model/ndf.h"
 
-namespace svbtdf {
+namespace svbtdf::model {
 
 class VmfNdf final : public Ndf {
  public:
@@ -36,4 +36,4 @@ class VmfNdf final : public Ndf {
   std::vector<double> area_;  // A(v) on a (theta, phi) grid
 };
 
-}  // namespace svbtdf
+}  // namespace svbtdf::model

@@ -22,14 +22,14 @@ namespace svbtdf::process {
 // (eq. 14) takes the most negative noise draw. Selection is on luminance; each channel is the
 // weighted mean over the set.
 struct DiffuseEstimate {
-  Rgb rho_d = {0, 0, 0};
+  model::Rgb rho_d = {0, 0, 0};
   int floor_samples = 0;  // samples in the floor set
   double spread = 0.0;    // the noise's standard deviation on the floor, in units of sqrt(s_q)
 };
-DiffuseEstimate EstimateDiffuse(const std::vector<Rgb>& r, const std::vector<double>& noise_scale,
+DiffuseEstimate EstimateDiffuse(const std::vector<model::Rgb>& r, const std::vector<double>& noise_scale,
                                 const std::vector<std::array<int, 2>>& neighbours, double clip = 2.5);
 // For every dot, two dots on either side of it along one of the grid's directions (the nearest
 // dot and the one at its mirror image), or {-1, -1} when the grid has none (its corners).
-std::vector<std::array<int, 2>> OppositeNeighbours(const std::vector<Vec3>& dots);
+std::vector<std::array<int, 2>> OppositeNeighbours(const std::vector<model::Vec3>& dots);
 
 }  // namespace svbtdf::process

@@ -18,19 +18,19 @@ namespace svbtdf::process {
 class PushPullResampler {
  public:
   // The light grid's resolution must be a power of two (the pyramid halves it down to 1).
-  explicit PushPullResampler(const Hemicube& light_grid);
+  explicit PushPullResampler(const model::Hemicube& light_grid);
 
-  const Hemicube& grid() const { return grid_; }
+  const model::Hemicube& grid() const { return grid_; }
 
   // Samples at light directions i (i.z < 0) with values and weights (0 = missing). Writes one
   // value per hemicube cell of FlipZ(i) and the splatted weight that supports it (its
   // confidence: >= 1 means the cell is covered by data, small values mean pushed-in guesses).
-  void Resample(const std::vector<Vec3>& light, const std::vector<float>& values,
+  void Resample(const std::vector<model::Vec3>& light, const std::vector<float>& values,
                 const std::vector<float>& weights, std::vector<float>* cell_values,
                 std::vector<float>* cell_confidence) const;
 
  private:
-  Hemicube grid_;
+  model::Hemicube grid_;
   int size_;                       // 2N: side of the unfolded image
   std::vector<int> pixel_of_cell_;  // row * size_ + col of each cell in the unfolded image
 };

@@ -31,10 +31,10 @@ struct Picture {
 };
 
 // One scalar channel of a map, scaled from [lo, hi] to the ramp.
-Picture ScalarMap(const FloatImage& map, int channel, double lo, double hi);
+Picture ScalarMap(const common::FloatImage& map, int channel, double lo, double hi);
 // An RGB map scaled so that `white` maps to 255, gamma 2.2.
-Picture ColourMap(const FloatImage& map, double white);
+Picture ColourMap(const common::FloatImage& map, double white);
 // The NDF seen from above (orthographic over the hemisphere of h), ln D over its top 8 units.
-Picture NdfPicture(const Ndf& ndf, int side);
+Picture NdfPicture(const model::Ndf& ndf, int side);
 
 }  // namespace svbtdf::report

@@ -26,21 +26,21 @@ class Truth {
   // ReadTruthKind's answer: "analytic" or "montecarlo".
   const std::string& kind() const { return kind_; }
   // The camera, sample and dots of the capture (rig.json).
-  const RigTruth& rig() const { return rig_; }
+  const simulate::RigTruth& rig() const { return rig_; }
   int width() const { return btdf_->texels_x(); }
   int height() const { return btdf_->texels_y(); }
 
   // The analytic material's per-texel parameters, or nullptr for a Monte Carlo truth, which
   // has no alpha and no NDF to compare with.
-  const MaterialTruth* parameters() const { return analytic_ ? &*analytic_ : nullptr; }
+  const simulate::MaterialTruth* parameters() const { return analytic_ ? &*analytic_ : nullptr; }
   // The Monte Carlo truth itself (its slab-material layout), or nullptr for an analytic truth.
-  const MonteCarloTruth* montecarlo() const { return montecarlo_; }
+  const simulate::MonteCarloTruth* montecarlo() const { return montecarlo_; }
 
-  Rgb RhoD(int x, int y) const;
+  model::Rgb RhoD(int x, int y) const;
   // rho_d of every texel as an RGB map, the shape of the material's own map.
-  FloatImage RhoDMap() const;
+  common::FloatImage RhoDMap() const;
   // R(x, i, o) of texel (x, y) as the renderer showed it to the camera.
-  Rgb Evaluate(int x, int y, const Vec3& i, const Vec3& o) const { return btdf_->Evaluate(btdf_->Index(x, y), i, o); }
+  model::Rgb Evaluate(int x, int y, const model::Vec3& i, const model::Vec3& o) const { return btdf_->Evaluate(btdf_->Index(x, y), i, o); }
 
  private:
   friend Truth ReadTruth(const std::filesystem::path& folder);
@@ -48,10 +48,10 @@ class Truth {
 
   std::filesystem::path folder_;
   std::string kind_;
-  RigTruth rig_;
-  std::optional<MaterialTruth> analytic_;
-  const MonteCarloTruth* montecarlo_ = nullptr;  // owned by btdf_
-  std::unique_ptr<SpatialBtdf> btdf_;
+  simulate::RigTruth rig_;
+  std::optional<simulate::MaterialTruth> analytic_;
+  const simulate::MonteCarloTruth* montecarlo_ = nullptr;  // owned by btdf_
+  std::unique_ptr<simulate::SpatialBtdf> btdf_;
 };
 
 // Reads DIR/truth/material.json (either kind, with its maps) and rig.json. Throws svbtdf::Error

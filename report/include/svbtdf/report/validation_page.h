@@ -26,15 +26,15 @@ struct ValidationSettings {
 };
 
 // One line per case: config, angle, best alpha, each model's error, MC noise and paths.
-std::string ValidationTable(const std::vector<ValidationCase>& cases);
+std::string ValidationTable(const std::vector<simulate::ValidationCase>& cases);
 
 // {"options": settings, "cases": [...]}: every error, the fitted parameters and the Monte Carlo
 // run's statistics of each case.
-nlohmann::json ValidationJson(const std::vector<ValidationCase>& cases, const ValidationSettings& settings);
+nlohmann::json ValidationJson(const std::vector<simulate::ValidationCase>& cases, const ValidationSettings& settings);
 
 // Writes one cross-section PNG per case and index.html into `folder`, which must exist; never
 // overwrites a file. `grid` is the hemicube the cases were tabulated on.
-void WriteValidationPage(const std::vector<ValidationCase>& cases, const ValidationSettings& settings,
-                         const Hemicube& grid, const std::filesystem::path& folder);
+void WriteValidationPage(const std::vector<simulate::ValidationCase>& cases, const ValidationSettings& settings,
+                         const model::Hemicube& grid, const std::filesystem::path& folder);
 
 }  // namespace svbtdf::report

@@ -75,9 +75,9 @@ class Session {
 
   // Stores a captured image under `key` and journals it. Throws when the key is journalled
   // already or not planned.
-  void AddImage(const std::string& key, const CameraImage& image, double exposure_s, double gain);
+  void AddImage(const std::string& key, const common::CameraImage& image, double exposure_s, double gain);
   // Reads a journalled image, checking its size (and CRC when `check_crc`).
-  CameraImage ReadImage(const std::string& key, bool check_crc = false) const;
+  common::CameraImage ReadImage(const std::string& key, bool check_crc = false) const;
 
   SessionVerification Verify(bool check_crc = true) const;
 
@@ -95,7 +95,7 @@ class Session {
   std::unordered_set<std::string> planned_;  // the same keys, for lookups
   std::vector<SessionEntry> entries_;
   std::unordered_map<std::string, size_t> index_;  // key -> first entry
-  std::optional<DurableLog> journal_;  // journal.jsonl, repaired before the next append
+  std::optional<common::DurableLog> journal_;  // journal.jsonl, repaired before the next append
 };
 
 // CRC-32 of a file's bytes; throws naming the file when it cannot be read.

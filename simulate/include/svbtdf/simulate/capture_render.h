@@ -22,7 +22,7 @@
 #include "svbtdf/simulate/spatial_btdf.h"
 #include "svbtdf/simulate/truth_io.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 
 // The identity of one stored capture: its session key and exposure.
 struct CaptureId {
@@ -46,11 +46,11 @@ CaptureTruth PlanCapture(const SimulationPreset& preset, const RigRenderer& rend
 
 // Radiance image of capture `id` (its kind and index; the exposure is applied by Expose).
 void RenderCaptureRadiance(const RigRenderer& renderer, const CaptureTruth& plan, const CaptureId& id,
-                           FloatImage* radiance);
+                           common::FloatImage* radiance);
 
 // Where pixel (0, 0) of capture `id`'s image lies in the window's pixel coordinates: the Zhang
 // board views are whole-sensor images, every other capture is the window (RigRenderer::Expose).
-Vec2 CaptureWindowOrigin(const Rig& rig, const CaptureId& id);
+model::Vec2 CaptureWindowOrigin(const Rig& rig, const CaptureId& id);
 
 // Everything the simulator derives from a preset: the rig, the material (the truth, analytic or
 // Monte Carlo), the renderer and the capture plan (exposures, board poses). Held behind one
@@ -73,4 +73,4 @@ using TruthMaker = std::function<std::unique_ptr<SpatialBtdf>(const Rig& rig)>;
 std::unique_ptr<SimulatedSetup> MakeSimulatedSetup(SimulationPreset preset, uint64_t seed, int threads,
                                                    const TruthMaker& make_truth = {});
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

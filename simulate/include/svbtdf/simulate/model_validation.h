@@ -19,45 +19,45 @@
 #include "svbtdf/model/vec.h"
 #include "svbtdf/simulate/slab_tracer.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 
 // The model terms evaluated with the NDF's own Smith G1 in place of the model's shadowing term
 // (the same masking the MC tracer applies), so that a comparison isolates the virtual
 // configurations. rho_T = factor_T D(h_T) G1(i, h_T) G1(t, h_T) with t the in-slab direction;
 // rho_B = factor_B D(h_B) G1(t_i, h_B) G1(o, h_B) (docs/model.md).
-double RhoTWithNdfShadowing(const Ndf& ndf, double eta, const Vec3& i, const Vec3& o);
-double RhoBWithNdfShadowing(const Ndf& ndf, double eta, const Vec3& i, const Vec3& o);
+double RhoTWithNdfShadowing(const model::Ndf& ndf, double eta, const model::Vec3& i, const model::Vec3& o);
+double RhoBWithNdfShadowing(const model::Ndf& ndf, double eta, const model::Vec3& i, const model::Vec3& o);
 
 // The paper's single-refraction ("GGX", Walter et al. 2007) baseline: one rough interface from air
 // into the slab, with the camera direction o taken as the refracted direction:
 // WalterBtdf(ndf, i, o, 1, eta). See docs/validation.md for why this reading.
-double SingleInterfaceBtdf(const Ndf& ndf, double eta, const Vec3& i, const Vec3& o);
+double SingleInterfaceBtdf(const model::Ndf& ndf, double eta, const model::Vec3& i, const model::Vec3& o);
 
 // Cell averages, over a hemicube of light directions, of functions of the light direction i.
 // Each cell is split into k x k sub-cells whose solid angles weight the values at their centres.
 class CellAverager {
  public:
   // `grid` must outlive the averager.
-  CellAverager(const Hemicube& grid, int subdivisions);
+  CellAverager(const model::Hemicube& grid, int subdivisions);
 
-  const Hemicube& grid() const { return grid_; }
+  const model::Hemicube& grid() const { return grid_; }
   int num_points() const { return static_cast<int>(directions_.size()); }
   // Light directions (z < 0) of the sub-cell centres, cell by cell.
-  const std::vector<Vec3>& light_directions() const { return directions_; }
+  const std::vector<model::Vec3>& light_directions() const { return directions_; }
   // Averages point values (in light_directions() order) over each cell.
   std::vector<double> Average(const std::vector<double>& point_values) const;
   // Evaluates f at every point and averages.
-  std::vector<double> Average(const std::function<double(const Vec3& i)>& f) const;
+  std::vector<double> Average(const std::function<double(const model::Vec3& i)>& f) const;
 
  private:
-  const Hemicube& grid_;
+  const model::Hemicube& grid_;
   int per_cell_;
-  std::vector<Vec3> directions_;
+  std::vector<model::Vec3> directions_;
   std::vector<double> weights_;  // sub-cell solid angle / cell solid angle
 };
 
 // Relative L2 distance of `model` from `reference` over the cells, weighted by solid angle.
-double RelativeL2Error(const std::vector<double>& model, const std::vector<double>& reference,
+double RelativeL2Error(const std::vector<double>& predicted, const std::vector<double>& reference,
                        const std::vector<double>& solid_angles);
 
 enum class RoughSides { kEntry, kExit, kBoth };
@@ -76,13 +76,13 @@ struct ModelErrors {
 
 // Relative L2 error of s * model after the best scale s > 0: what remains once the overall
 // transmitted energy is discounted, i.e. the error in the lobe's shape and position.
-double ScaleFreeRelativeL2Error(const std::vector<double>& model, const std::vector<double>& reference,
+double ScaleFreeRelativeL2Error(const std::vector<double>& predicted, const std::vector<double>& reference,
                                 const std::vector<double>& solid_angles);
 
 struct ValidationCase {
   RoughSides rough_sides = RoughSides::kBoth;
   double incidence_deg = 0.0;  // polar angle of the fixed view direction o = (sin, 0, cos)
-  Vec3 o = Vec3::UnitZ();
+  model::Vec3 o = model::Vec3::UnitZ();
   double best_alpha = 0.5;        // blend weight minimising the blend's error
   double fitted_roughness = 0.0;  // single-interface roughness minimising its error
   double blend_fitted_alpha = 0.5;      // alpha and NDF roughness of the fitted blend
@@ -99,7 +99,7 @@ struct ValidationCase {
 struct ValidationOptions {
   // Makes the NDF of the given roughness (the same family for the slab, the model and both
   // single-interface baselines).
-  std::function<std::unique_ptr<Ndf>(double roughness)> make_ndf;
+  std::function<std::unique_ptr<model::Ndf>(double roughness)> make_ndf;
   double roughness = 0.3;
   double eta = 1.5;
   std::vector<RoughSides> configurations = {RoughSides::kEntry, RoughSides::kExit,
@@ -118,7 +118,7 @@ struct ValidationOptions {
 // Runs every (configuration, incidence) case on `grid`; `on_case` (optional) is called after
 // each one, e.g. to report progress. Throws svbtdf::Error on invalid options.
 std::vector<ValidationCase> ValidateModel(
-    const ValidationOptions& options, const Hemicube& grid,
+    const ValidationOptions& options, const model::Hemicube& grid,
     const std::function<void(const ValidationCase&)>& on_case = {});
 
 // Minimises a function of one variable on [lo, hi]: a dense scan on `scan_points` points, then a
@@ -126,4 +126,4 @@ std::vector<ValidationCase> ValidateModel(
 double MinimiseOnInterval(const std::function<double(double)>& f, double lo, double hi,
                           int scan_points = 41, double tolerance = 1e-4);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

@@ -24,12 +24,12 @@
 #include "svbtdf/simulate/slab_tracer.h"
 #include "svbtdf/simulate/spatial_btdf.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 
 // One interface of a slab material, as an analytic NDF by name (model/ndf_factory.h).
 struct SlabInterfaceSpec {
   std::string ndf = "ggx";
-  AnalyticNdfParams params;
+  model::AnalyticNdfParams params;
 };
 
 // A two-interface slab material: the tracer's Slab plus a colour.
@@ -37,8 +37,8 @@ struct SlabMaterial {
   std::string label;
   SlabInterfaceSpec entry, exit;
   double optical_depth = 0.0;  // absorption of one crossing at normal incidence
-  Rgb tint = {1.0, 1.0, 1.0};  // multiplies the traced (grey) rho, like k_s
-  Rgb rho_d = {0.0, 0.0, 0.0}; // diffuse part added to R
+  model::Rgb tint = {1.0, 1.0, 1.0};  // multiplies the traced (grey) rho, like k_s
+  model::Rgb rho_d = {0.0, 0.0, 0.0}; // diffuse part added to R
 
   Slab ToSlab(double eta) const;
   // The smaller roughness of the two interfaces (how sharp the lobe can be).
@@ -57,13 +57,13 @@ struct ViewGrid {
   double x0 = 0, x1 = 0, y0 = 0, y1 = 0;
 
   int num_nodes() const { return nx * ny; }
-  Vec3 Node(int node) const;  // node = iy * nx + ix
+  model::Vec3 Node(int node) const;  // node = iy * nx + ix
   // Up to four (node, weight) pairs, weights >= 0 summing to 1; o outside the grid is clamped
   // to its border. Unused entries are (0, 0.0).
-  std::array<std::pair<int, double>, 4> Interpolation(const Vec3& o) const;
+  std::array<std::pair<int, double>, 4> Interpolation(const model::Vec3& o) const;
   // The grid that covers the directions from every point of the sample to the camera centre,
   // widened by a small margin for the sub-texel positions the renderer shades.
-  static ViewGrid Spanning(const Vec3& camera_centre, const SampleConfig& sample, int nodes_per_axis);
+  static ViewGrid Spanning(const model::Vec3& camera_centre, const SampleConfig& sample, int nodes_per_axis);
 };
 
 // How finely each slice is traced.
@@ -79,7 +79,7 @@ class MonteCarloTruth final : public SpatialBtdf {
   // index ((m * nodes + v) * cells + cell) * 3 + c. Throws svbtdf::Error(kInvalidInput) for
   // inconsistent sizes, an index outside the materials, or negative / non-finite values.
   MonteCarloTruth(int texels_x, int texels_y, double eta, std::vector<SlabMaterial> materials,
-                  std::vector<int> index_map, std::vector<Rgb> rho_d, ViewGrid views,
+                  std::vector<int> index_map, std::vector<model::Rgb> rho_d, ViewGrid views,
                   int hemicube_resolution, std::vector<float> values, std::vector<float> errors);
 
   // Traces every material at every view node (multithreaded, deterministic for the seed).
@@ -90,18 +90,18 @@ class MonteCarloTruth final : public SpatialBtdf {
 
   int texels_x() const override { return texels_x_; }
   int texels_y() const override { return texels_y_; }
-  Rgb Evaluate(int index, const Vec3& i, const Vec3& o) const override;
+  model::Rgb Evaluate(int index, const model::Vec3& i, const model::Vec3& o) const override;
   double MinRoughness(int index) const override;
 
   double eta() const { return eta_; }
   const std::vector<SlabMaterial>& materials() const { return materials_; }
   int material_of(int index) const { return index_map_[index]; }
-  const Rgb& rho_d(int index) const { return rho_d_[index]; }
+  const model::Rgb& rho_d(int index) const { return rho_d_[index]; }
   const ViewGrid& views() const { return views_; }
-  const Hemicube& hemicube() const { return grid_; }
+  const model::Hemicube& hemicube() const { return grid_; }
   // The tabulated cell mean of the tinted rho and its standard error.
-  Rgb SliceValue(int material, int node, int cell) const { return At(values_, material, node, cell); }
-  Rgb SliceError(int material, int node, int cell) const { return At(errors_, material, node, cell); }
+  model::Rgb SliceValue(int material, int node, int cell) const { return At(values_, material, node, cell); }
+  model::Rgb SliceError(int material, int node, int cell) const { return At(errors_, material, node, cell); }
   // How it was traced (written to the manifest; 0 when unknown).
   MonteCarloPrecision precision;
   uint64_t seed = 0;
@@ -113,15 +113,15 @@ class MonteCarloTruth final : public SpatialBtdf {
   size_t Offset(int material, int node, int cell) const {
     return ((static_cast<size_t>(material) * views_.num_nodes() + node) * grid_.num_cells() + cell) * 3;
   }
-  Rgb At(const std::vector<float>& table, int material, int node, int cell) const;
+  model::Rgb At(const std::vector<float>& table, int material, int node, int cell) const;
 
   int texels_x_, texels_y_;
   double eta_;
   std::vector<SlabMaterial> materials_;
   std::vector<int> index_map_;
-  std::vector<Rgb> rho_d_;
+  std::vector<model::Rgb> rho_d_;
   ViewGrid views_;
-  Hemicube grid_;
+  model::Hemicube grid_;
   std::vector<float> values_, errors_;
 };
 
@@ -133,4 +133,4 @@ MonteCarloTruth ReadMonteCarloTruth(const std::filesystem::path& folder);
 // The "ndf.kind" of DIR/truth/material.json: "analytic" or "montecarlo".
 std::string ReadTruthKind(const std::filesystem::path& folder);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

@@ -7,7 +7,7 @@
 #include "svbtdf/simulate/montecarlo_truth.h"
 #include "svbtdf/simulate/rig.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 
 struct SimulationPreset {
   std::string name;
@@ -28,4 +28,4 @@ std::vector<std::string> PresetNames();
 // Throws svbtdf::Error(kInvalidInput) naming the known presets for an unknown name.
 SimulationPreset MakePreset(const std::string& name);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

@@ -20,19 +20,19 @@
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/simulate/spatial_btdf.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 
 // Where a chessboard is: board point (bx, by, 0) maps to world rotation * b + translation.
 // Inner corner (i, j) is at board point (i * square, j * square).
 struct BoardPose {
-  Mat3 rotation = Mat3::Identity();
-  Vec3 translation = Vec3::Zero();
-  Vec3 ToWorld(const Vec2& b) const { return rotation * Vec3(b.x(), b.y(), 0.0) + translation; }
+  model::Mat3 rotation = model::Mat3::Identity();
+  model::Vec3 translation = model::Vec3::Zero();
+  model::Vec3 ToWorld(const model::Vec2& b) const { return rotation * model::Vec3(b.x(), b.y(), 0.0) + translation; }
 };
 
 // Inner corners of a board in world coordinates, row-major (i fastest), as OpenCV's finder orders
 // them for a board that is not rotated by more than 90 degrees in the image.
-std::vector<Vec3> BoardCorners(const BoardPose& pose, const BoardConfig& board);
+std::vector<model::Vec3> BoardCorners(const BoardPose& pose, const BoardConfig& board);
 
 class RigRenderer {
  public:
@@ -44,20 +44,20 @@ class RigRenderer {
 
   // Radiance of dot `dot` seen through the sample; 0 where the ray misses the sample (the holder
   // is opaque). Includes the monitor's black-level glow when black_level > 0.
-  void RenderDot(const Dot& dot, FloatImage* radiance) const;
+  void RenderDot(const Dot& dot, common::FloatImage* radiance) const;
 
   // The monitor seen directly (sample and holder removed): every dot lit, the dots `lit` (grid
   // indices) at once, or a flat field of `level` over the whole active area. Anti-aliased with
   // board_samples^2 sub-samples.
-  void RenderAllDots(FloatImage* radiance) const;
-  void RenderDotSet(const std::vector<int>& lit, FloatImage* radiance) const;
-  void RenderFlatField(double level, FloatImage* radiance) const;
+  void RenderAllDots(common::FloatImage* radiance) const;
+  void RenderDotSet(const std::vector<int>& lit, common::FloatImage* radiance) const;
+  void RenderFlatField(double level, common::FloatImage* radiance) const;
 
   // A chessboard lit uniformly: a Zhang view (the rig's `board`) as a whole-sensor image, or the
   // board in the sample holder (`holder_board`) through the window; both through the lens with its
   // distortion. Pixels that straddle a square's edge get board_samples^2 sub-samples.
-  void RenderZhangBoard(const BoardPose& board, FloatImage* radiance) const;
-  void RenderHolderBoard(const BoardPose& board, FloatImage* radiance) const;
+  void RenderZhangBoard(const BoardPose& board, common::FloatImage* radiance) const;
+  void RenderHolderBoard(const BoardPose& board, common::FloatImage* radiance) const;
   // `views` deterministic poses of the Zhang board, tilted 20-40 degrees about varied axes, at
   // about the sample's distance, fully in the sensor's view. Throws when the board cannot fit.
   std::vector<BoardPose> ZhangBoardPoses(int views, uint64_t seed) const;
@@ -69,12 +69,12 @@ class RigRenderer {
   // quantisation. Noise is a deterministic function of (seed, stream, pixel). `window_origin`:
   // where the image's pixel (0, 0) lies in the window's pixel coordinates (minus the window's
   // offset for a whole-sensor image), for the vignetting.
-  CameraImage Expose(const FloatImage& radiance, double exposure_s, uint64_t seed, uint64_t stream,
-                     const Vec2& window_origin = Vec2::Zero()) const;
+  common::CameraImage Expose(const common::FloatImage& radiance, double exposure_s, uint64_t seed, uint64_t stream,
+                     const model::Vec2& window_origin = model::Vec2::Zero()) const;
   // The noise-free, unquantised, unclipped value on the stored scale (for tests and for the
   // inversion of the chain): (electrons / full_well), before the response curve.
-  double MeanElectrons(double radiance, const Vec2& pixel, double exposure_s) const;
-  double Vignetting(const Vec2& pixel) const;
+  double MeanElectrons(double radiance, const model::Vec2& pixel, double exposure_s) const;
+  double Vignetting(const model::Vec2& pixel) const;
 
   // Number of pixel groups shaded per dot image (pixels seeing the sample, split by texel).
   size_t num_shaded_groups() const { return groups_.size(); }
@@ -89,15 +89,15 @@ class RigRenderer {
     double x, y;      // centroid of those sub-samples on the sample plane
   };
   void RenderBoard(const BoardPose& board, const BoardConfig& config, const PinholeCamera& camera,
-                   FloatImage* radiance) const;
-  double ElectronsPerRadiance(const Vec2& pixel, double exposure_s) const;
+                   common::FloatImage* radiance) const;
+  double ElectronsPerRadiance(const model::Vec2& pixel, double exposure_s) const;
   double MeanElectrons(double radiance, double electrons_per_radiance, double exposure_s) const;
   void PrecomputeGroups();
   void PrecomputeBackground();
-  Vec3 DotRadianceAt(const Dot& dot, const Group& group) const;
+  model::Vec3 DotRadianceAt(const Dot& dot, const Group& group) const;
   // The monitor seen directly, emitting `exitance(p)` (radiant intensity per area along its
   // normal) at each point p of the screen.
-  void RenderMonitor(const std::function<double(const Vec3&)>& exitance, FloatImage* radiance) const;
+  void RenderMonitor(const std::function<double(const model::Vec3&)>& exitance, common::FloatImage* radiance) const;
 
   const Rig& rig_;
   const SpatialBtdf* material_;
@@ -107,4 +107,4 @@ class RigRenderer {
   std::vector<float> background_;         // black-level glow per group (RGB), when enabled
 };
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

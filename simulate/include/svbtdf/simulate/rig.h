@@ -19,7 +19,7 @@
 #include "svbtdf/session/rig.h"
 #include "svbtdf/model/vec.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 
 // Intrinsics and distortion exactly as cv::projectPoints uses them
 // (distortion = k1, k2, p1, p2, k3).
@@ -35,13 +35,13 @@ struct CameraIntrinsics {
 
 // World-to-camera rigid transform: x_cam = rotation * x_world + translation.
 struct CameraPose {
-  Mat3 rotation = Mat3::Identity();
-  Vec3 translation = Vec3::Zero();
+  model::Mat3 rotation = model::Mat3::Identity();
+  model::Vec3 translation = model::Vec3::Zero();
 
-  Vec3 Centre() const { return -rotation.transpose() * translation; }
+  model::Vec3 Centre() const { return -rotation.transpose() * translation; }
   // A camera at `eye` looking at `target`; the image's right axis is the projection of
   // (forward x up_hint) so that `up_hint` appears upward in the image.
-  static CameraPose LookAt(const Vec3& eye, const Vec3& target, const Vec3& up_hint);
+  static CameraPose LookAt(const model::Vec3& eye, const model::Vec3& target, const model::Vec3& up_hint);
 };
 
 class PinholeCamera {
@@ -50,24 +50,24 @@ class PinholeCamera {
 
   const CameraIntrinsics& intrinsics() const { return intrinsics_; }
   const CameraPose& pose() const { return pose_; }
-  Vec3 Centre() const { return centre_; }
+  model::Vec3 Centre() const { return centre_; }
 
   // Normalised undistorted image coordinates -> distorted ones (OpenCV's model).
-  Vec2 Distort(const Vec2& undistorted) const;
+  model::Vec2 Distort(const model::Vec2& undistorted) const;
   // Inverse of Distort by Newton's method; nullopt where it does not converge (far outside the
   // region where the polynomial model is invertible).
-  std::optional<Vec2> Undistort(const Vec2& distorted) const;
+  std::optional<model::Vec2> Undistort(const model::Vec2& distorted) const;
 
   // Pixel coordinates of a world point; nullopt when it is not in front of the camera.
-  std::optional<Vec2> Project(const Vec3& world) const;
+  std::optional<model::Vec2> Project(const model::Vec3& world) const;
   // Unit world-frame direction of the ray through pixel coordinates `pixel`, nullopt where the
   // distortion cannot be inverted.
-  std::optional<Vec3> PixelRay(const Vec2& pixel) const;
+  std::optional<model::Vec3> PixelRay(const model::Vec2& pixel) const;
 
  private:
   CameraIntrinsics intrinsics_;
   CameraPose pose_;
-  Vec3 centre_;
+  model::Vec3 centre_;
 };
 
 // How the radiant intensity of a small patch of the monitor depends on the angle theta_e between
@@ -90,7 +90,7 @@ struct MonitorConfig {
   double distance = 0.04;        // d: the screen's centre lies on the plane z = -d
   double width = 0.30;           // active area (m), along u
   double height = 0.20;          // ... along v
-  Vec2 centre = Vec2::Zero();    // centre of the active area in (x, y)
+  model::Vec2 centre = model::Vec2::Zero();    // centre of the active area in (x, y)
   // How the screen lies, as a lab puts it down. orientation_deg turns it about its normal,
   // counter-clockwise seen from the sample: at 0 its u axis runs along +x and v along -y (its
   // top edge toward +y), at 90 u runs along +y. tilt_deg then tilts it about the x axis through
@@ -117,23 +117,23 @@ double NominalOrientationDeg(const MonitorConfig& monitor);
 
 // Where the screen is: monitor pixel coordinates (u, v) <-> points of the sample frame.
 struct MonitorFrame {
-  Vec3 origin;       // the corner (u, v) = (0, 0): the top-left corner seen from the front
-  Vec3 right, down;  // unit vectors along u and v
-  Vec3 normal;       // out of the screen's front, toward the sample
+  model::Vec3 origin;       // the corner (u, v) = (0, 0): the top-left corner seen from the front
+  model::Vec3 right, down;  // unit vectors along u and v
+  model::Vec3 normal;       // out of the screen's front, toward the sample
   double pixel_pitch = 0;
   double width_px = 0, height_px = 0;  // the active area in pixels
 
   static MonitorFrame Of(const MonitorConfig& monitor);
-  Vec3 PointAt(const Vec2& uv) const { return origin + pixel_pitch * (uv.x() * right + uv.y() * down); }
+  model::Vec3 PointAt(const model::Vec2& uv) const { return origin + pixel_pitch * (uv.x() * right + uv.y() * down); }
   // (u, v) of the foot of `point` on the screen's plane.
-  Vec2 PixelCoordinates(const Vec3& point) const;
-  bool InActiveArea(const Vec2& uv) const {
+  model::Vec2 PixelCoordinates(const model::Vec3& point) const;
+  bool InActiveArea(const model::Vec2& uv) const {
     return uv.x() >= 0 && uv.y() >= 0 && uv.x() < width_px && uv.y() < height_px;
   }
   // Where the ray from `from` along `direction` meets the screen's plane, when it does ahead.
-  std::optional<Vec3> Intersect(const Vec3& from, const Vec3& direction) const;
+  std::optional<model::Vec3> Intersect(const model::Vec3& from, const model::Vec3& direction) const;
   // cos(theta_e): the angle between the screen's normal and the direction from `emitter` to `x`.
-  double CosEmission(const Vec3& emitter, const Vec3& x) const { return normal.dot((x - emitter).normalized()); }
+  double CosEmission(const model::Vec3& emitter, const model::Vec3& x) const { return normal.dot((x - emitter).normalized()); }
 };
 
 // The grid of dots shown one at a time behind the sample.
@@ -158,7 +158,7 @@ struct SampleConfig {
   double texel_pitch() const { return width / texels_x; }
   double height() const { return texel_pitch() * texels_y; }
   // Centre of texel (col, row) in the sample frame: x grows with col, y decreases with row.
-  Vec3 TexelCentre(int col, int row) const {
+  model::Vec3 TexelCentre(int col, int row) const {
     return {-0.5 * width + (col + 0.5) * texel_pitch(), 0.5 * height() - (row + 0.5) * texel_pitch(), 0.0};
   }
 };
@@ -217,14 +217,14 @@ struct RigConfig {
 
   // The paper's geometry: camera `distance` from the sample centre at `theta` from vertical,
   // on the -y side, looking at the centre.
-  static CameraPose PaperPose(double distance = 1.0, double theta = kPi / 4.0);
+  static CameraPose PaperPose(double distance = 1.0, double theta = model::kPi / 4.0);
 };
 
 // One dot of the grid: where it is and how much it emits.
 struct Dot {
   int col = 0;
   int row = 0;
-  Vec3 position;        // on the screen, at a monitor pixel centre
+  model::Vec3 position;        // on the screen, at a monitor pixel centre
   int monitor_x = 0;    // monitor pixel coordinates of its centre
   int monitor_y = 0;
   double intensity = 0; // L_q: radiant intensity along the monitor normal (P(0) = 1)
@@ -258,14 +258,14 @@ class Rig {
 
   // Radiant intensity the dot sends toward world point x (the profile included), i.e. L_q(x)
   // of the measurement equation I = R |i.z| L_q / |p - x|^2.
-  double DotIntensityToward(const Dot& dot, const Vec3& x) const;
+  double DotIntensityToward(const Dot& dot, const model::Vec3& x) const;
 
   // Where the ray through `pixel` meets the sample plane, when it does inside the sample.
-  std::optional<Vec3> SampleHit(const Vec2& pixel) const;
+  std::optional<model::Vec3> SampleHit(const model::Vec2& pixel) const;
   // Texel (col, row) containing a point of the sample plane, or nullopt outside the sample.
-  std::optional<std::array<int, 2>> TexelAt(const Vec3& x) const;
+  std::optional<std::array<int, 2>> TexelAt(const model::Vec3& x) const;
   // Centre of texel (col, row): x grows with col, y decreases with row (row 0 at +y).
-  Vec3 TexelCentre(int col, int row) const;
+  model::Vec3 TexelCentre(int col, int row) const;
 
  private:
   void Validate() const;
@@ -278,4 +278,4 @@ class Rig {
   std::vector<Dot> dots_;
 };
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

@@ -13,7 +13,7 @@
 #include "svbtdf/simulate/capture_render.h"
 #include "svbtdf/simulate/presets.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 
 struct SimulationOptions {
   std::string preset = "tiny";
@@ -47,4 +47,4 @@ std::unique_ptr<SimulatedSetup> PrepareSimulation(const std::filesystem::path& t
 // match what this build would simulate.
 std::unique_ptr<SimulatedSetup> LoadSimulatedSetup(const std::filesystem::path& out, int threads);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

@@ -27,14 +27,14 @@
 #include "svbtdf/model/vec.h"
 #include "svbtdf/common/random.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 
 // One interface of the slab: rough with an NDF, or perfectly flat (no NDF).
 struct SlabInterface {
-  std::shared_ptr<const Ndf> ndf;  // null: flat
+  std::shared_ptr<const model::Ndf> ndf;  // null: flat
 
   static SlabInterface Flat() { return {}; }
-  static SlabInterface Rough(const Ndf& ndf) { return {std::shared_ptr<const Ndf>(ndf.Clone())}; }
+  static SlabInterface Rough(const model::Ndf& ndf) { return {std::shared_ptr<const model::Ndf>(ndf.Clone())}; }
   bool flat() const { return ndf == nullptr; }
 };
 
@@ -62,7 +62,7 @@ struct EnergyFractions {
 struct PathRecord {
   bool left_slab = false;    // true: it left, along `direction`
   bool transmitted = false;  // it left through the far side
-  Vec3 direction = Vec3::Zero();  // travel direction on leaving (unit)
+  model::Vec3 direction = model::Vec3::Zero();  // travel direction on leaving (unit)
   int interactions = 0;           // interface hits
   EnergyFractions energy;         // this path's unit energy, split
 };
@@ -113,21 +113,21 @@ class SlabTracer {
 
   // Traces one path that arrives travelling along the unit `direction`: direction.z < 0 arrives
   // from the camera side on the exit interface, direction.z > 0 from the light side on the entry.
-  PathRecord TracePath(const Vec3& direction, Pcg32& rng, int max_interactions) const;
+  PathRecord TracePath(const model::Vec3& direction, common::Pcg32& rng, int max_interactions) const;
 
   // rho(i, o) for the fixed view direction o (o.z > 0) over the light hemisphere, tabulated on
   // `grid` at the cells of FlipZ(i). Traced from the camera side (paths arrive along -o); by the
   // reciprocity of the air-slab-air BTDF the density of exit directions i is rho(i, o) |i.z|.
-  BtdfSlice SliceForView(const Vec3& o, const Hemicube& grid, const SliceOptions& options) const;
+  BtdfSlice SliceForView(const model::Vec3& o, const model::Hemicube& grid, const SliceOptions& options) const;
 
   // rho(i, o) for the fixed light direction i (i.z < 0) over the camera hemisphere, at the cells
   // of o. Traced from the light side; used to check the reciprocity of the tracer itself.
-  BtdfSlice SliceForLight(const Vec3& i, const Hemicube& grid, const SliceOptions& options) const;
+  BtdfSlice SliceForLight(const model::Vec3& i, const model::Hemicube& grid, const SliceOptions& options) const;
 
  private:
-  BtdfSlice TraceSlice(const Vec3& arrival, const Hemicube& grid, const SliceOptions& options) const;
+  BtdfSlice TraceSlice(const model::Vec3& arrival, const model::Hemicube& grid, const SliceOptions& options) const;
 
   Slab slab_;
 };
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

@@ -7,7 +7,7 @@
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/vec.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 
 class SpatialBtdf {
  public:
@@ -20,11 +20,11 @@ class SpatialBtdf {
 
   // R(x, i, o) RGB of texel `index` for unit i (toward the light, i.z < 0) and o (toward the
   // camera, o.z > 0), including any diffuse part.
-  virtual Rgb Evaluate(int index, const Vec3& i, const Vec3& o) const = 0;
+  virtual model::Rgb Evaluate(int index, const model::Vec3& i, const model::Vec3& o) const = 0;
 
   // How sharp the texel's lobe can be, as a microfacet roughness: the renderer treats a dot as a
   // point when it subtends less than a tenth of this.
   virtual double MinRoughness(int index) const = 0;
 };
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

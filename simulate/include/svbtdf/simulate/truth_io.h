@@ -17,7 +17,7 @@
 #include "svbtdf/simulate/rig.h"
 #include "svbtdf/simulate/truth_material.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 
 inline constexpr int kTruthFormatVersion = 1;  // material.json of the analytic truth
 // rig.json; 2: the Zhang views are whole-sensor images (camera.sensor), the holder board is its own;
@@ -60,13 +60,13 @@ RigTruth ReadRigTruth(const std::filesystem::path& path);
 struct MaterialTruth {
   double eta = 1.5;
   std::string ndf_name = "ggx";
-  FloatImage ndf_params;  // 5 channels: alpha_x, alpha_y, theta_x, theta_y, theta_z
-  FloatImage alpha, shadowing_roughness, k_s, rho_d;
+  common::FloatImage ndf_params;  // 5 channels: alpha_x, alpha_y, theta_x, theta_y, theta_z
+  common::FloatImage alpha, shadowing_roughness, k_s, rho_d;
   int width() const { return alpha.width; }
   int height() const { return alpha.height; }
   // The texel's parameters and NDF, as the renderer used them.
-  DualMicrofacetParams Params(int x, int y) const;
-  std::unique_ptr<Ndf> TexelNdf(int x, int y) const;
+  model::DualMicrofacetParams Params(int x, int y) const;
+  std::unique_ptr<model::Ndf> TexelNdf(int x, int y) const;
   // The same material as the renderer's SpatialBtdf (texel index = y * width + x).
   TruthMaterial ToTruthMaterial() const;
 };
@@ -76,4 +76,4 @@ void WriteMaterialTruth(const std::filesystem::path& folder, const TruthMaterial
 // Throws svbtdf::Error naming the file for anything missing or malformed.
 MaterialTruth ReadMaterialTruth(const std::filesystem::path& truth_folder);
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate

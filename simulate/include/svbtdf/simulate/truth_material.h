@@ -16,14 +16,14 @@
 #include "svbtdf/model/vec.h"
 #include "svbtdf/simulate/spatial_btdf.h"
 
-namespace svbtdf {
+namespace svbtdf::simulate {
 
 struct TruthTexel {
-  AnalyticNdfParams ndf;            // ggx/ellipsoid parameters (alpha_x, alpha_y, theta_*)
+  model::AnalyticNdfParams ndf;            // ggx/ellipsoid parameters (alpha_x, alpha_y, theta_*)
   double alpha = 0.5;               // blend weight of the rough-entry term
   double shadowing_roughness = 0.0; // 0: no shadowing (indicators only)
-  Rgb k_s = {1.0, 1.0, 1.0};
-  Rgb rho_d = {0.0, 0.0, 0.0};
+  model::Rgb k_s = {1.0, 1.0, 1.0};
+  model::Rgb rho_d = {0.0, 0.0, 0.0};
 };
 
 // The spatial patterns the presets use; each is a smooth function of the texel position and a
@@ -49,10 +49,10 @@ class TruthMaterial final : public SpatialBtdf {
   const std::string& ndf_name() const { return ndf_name_; }
   const TruthTexel& texel(int col, int row) const { return texels_[Index(col, row)]; }
   const TruthTexel& texel(int index) const { return texels_[index]; }
-  const Ndf& ndf(int index) const { return *ndfs_[index]; }
+  const model::Ndf& ndf(int index) const { return *ndfs_[index]; }
 
   // R(x, i, o) of texel `index` for unit i (toward the light, i.z < 0) and o (toward the camera).
-  Rgb Evaluate(int index, const Vec3& i, const Vec3& o) const override;
+  model::Rgb Evaluate(int index, const model::Vec3& i, const model::Vec3& o) const override;
 
   // The smallest NDF roughness of a texel: how sharp its lobe can be (for quadrature choices).
   double MinRoughness(int index) const override;
@@ -63,8 +63,8 @@ class TruthMaterial final : public SpatialBtdf {
   double eta_;
   std::string ndf_name_;
   std::vector<TruthTexel> texels_;
-  std::vector<std::unique_ptr<Ndf>> ndfs_;
-  std::vector<DualMicrofacetModel> models_;  // per texel: eta and its shadowing
+  std::vector<std::unique_ptr<model::Ndf>> ndfs_;
+  std::vector<model::DualMicrofacetModel> models_;  // per texel: eta and its shadowing
 };
 
-}  // namespace svbtdf
+}  // namespace svbtdf::simulate
