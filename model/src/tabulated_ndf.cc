@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <random>
 #include <string>
 
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/random.h"
 
 namespace svbtdf::model {
 namespace {
@@ -127,15 +127,14 @@ double TabulatedNdf::Normalize() {
   }
   const double shift = std::log(integral);
   for (double& value : ln_d_) value -= shift;
-  // The projected areas scale too; drop the cached table.
-  std::lock_guard<std::mutex> lock(areas_mutex_);
-  areas_.reset();
+  // The projected areas and the sampling bounds scale too; drop the cached tables.
+  areas_.Reset();
+  sampling_.Reset();
   return integral;
 }
 
 const TabulatedNdf::AreaTable& TabulatedNdf::Areas() const {
-  std::lock_guard<std::mutex> lock(areas_mutex_);
-  if (!areas_) {
+  return areas_.Get([this] {
     auto table = std::make_shared<AreaTable>();
     const Quadrature q = CellQuadrature(grid_, 2);
     std::vector<double> d_weight(q.directions.size());
@@ -150,9 +149,42 @@ const TabulatedNdf::AreaTable& TabulatedNdf::Areas() const {
         table->area[static_cast<size_t>(t) * kAreaPhiSteps + p] = area;
       }
     }
-    areas_ = std::move(table);
-  }
-  return *areas_;
+    return table;
+  });
+}
+
+// The proposal of SampleVisibleNormal: a cell with probability proportional to `bound`, then a
+// point uniform on the cell's face rectangle (every cell has the face-plane area (2/N)^2). The
+// target in face-plane area measure is max(0, v.h) D(h) |dω/dA|, and bound[c] is at least that
+// for every v: the largest D the cell's interpolation can reach (the largest ln D two cells
+// around), times cos <= 1 and |dω/dA| <= 1.
+struct TabulatedNdf::SamplingTable {
+  std::vector<double> bound;
+  std::vector<double> cumulative;
+};
+
+const TabulatedNdf::SamplingTable& TabulatedNdf::Sampling() const {
+  return sampling_.Get([this] {
+    auto table = std::make_shared<SamplingTable>();
+    const int cells = grid_.num_cells();
+    table->bound.resize(cells);
+    table->cumulative.resize(cells);
+    double total = 0;
+    for (int c = 0; c < cells; ++c) {
+      double max_ln = ln_d_[c];
+      for (int nb : grid_.Neighbours(c)) {
+        if (nb < 0) continue;
+        max_ln = std::max(max_ln, ln_d_[nb]);
+        for (int nb2 : grid_.Neighbours(nb)) {
+          if (nb2 >= 0) max_ln = std::max(max_ln, ln_d_[nb2]);
+        }
+      }
+      table->bound[c] = std::exp(max_ln);
+      total += table->bound[c];
+      table->cumulative[c] = total;
+    }
+    return table;
+  });
 }
 
 double TabulatedNdf::ProjectedArea(const Vec3& v) const { return Areas().At(v); }
@@ -171,44 +203,26 @@ double TabulatedNdf::VisibleNormalPdf(const Vec3& v, const Vec3& h) const {
 }
 
 NormalSample TabulatedNdf::SampleVisibleNormal(const Vec3& v, const Vec2& u) const {
-  // Proposal: a cell chosen in proportion to a bound of the target over it, then a point uniform
-  // on the cell's face rectangle. The target in face-plane area measure is
-  // max(0, v.h) D(h) |dω/dA|; each cell's bound uses the largest ln D of the cells its
-  // interpolation can touch, the largest cosine over the cell and |dω/dA| <= 1.
-  const int cells = grid_.num_cells();
-  std::vector<double> cumulative(cells);
-  double total = 0;
-  const double half_diagonal = 1.5 * std::sqrt(2.0) * (2.0 / grid_.resolution());  // generous angle bound
-  for (int c = 0; c < cells; ++c) {
-    double max_ln = ln_d_[c];
-    for (int nb : grid_.Neighbours(c)) {
-      if (nb < 0) continue;
-      max_ln = std::max(max_ln, ln_d_[nb]);
-      for (int nb2 : grid_.Neighbours(nb)) {
-        if (nb2 >= 0) max_ln = std::max(max_ln, ln_d_[nb2]);
-      }
-    }
-    const double cosine = std::min(1.0, std::max(0.0, v.dot(grid_.CellCenter(c)) + half_diagonal));
-    // Face-plane area of the cell: (2/N)^2 on every face.
-    total += cosine > 0 ? std::exp(max_ln) * cosine : 0.0;
-    cumulative[c] = total;
-  }
+  const SamplingTable& table = Sampling();
+  const std::vector<double>& cumulative = table.cumulative;
+  const double total = cumulative.back();
   // Rejection needs more than two random numbers: a stream seeded from u keeps the sampler a
   // deterministic function of u, as the interface promises.
-  std::mt19937_64 rng(static_cast<uint64_t>(u.x() * 9007199254740992.0) ^
-                      (static_cast<uint64_t>(u.y() * 9007199254740992.0) << 1));
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  common::Pcg32 rng(static_cast<uint64_t>(u.x() * 9007199254740992.0),
+                    static_cast<uint64_t>(u.y() * 9007199254740992.0));
   for (int attempt = 0; attempt < 100000; ++attempt) {
-    const double pick = uniform(rng) * total;
-    const int cell = static_cast<int>(std::upper_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin());
-    if (cell >= cells) continue;
-    const double bound = cumulative[cell] - (cell > 0 ? cumulative[cell - 1] : 0.0);
-    const Vec3 h = grid_.CellPoint(cell, uniform(rng), uniform(rng));
+    const double pick = rng.NextDouble() * total;
+    const auto cell = static_cast<int>(std::upper_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin());
+    if (cell >= static_cast<int>(cumulative.size())) continue;
+    const double fu = rng.NextDouble(), fv = rng.NextDouble();
+    const Vec3 h = grid_.CellPoint(cell, fu, fv);
     const double dominant = std::max({std::abs(h.x()), std::abs(h.y()), h.z()});
-    const double target = std::max(0.0, v.dot(h)) * D(h) * dominant * dominant * dominant;
-    if (uniform(rng) * bound <= target) {
+    const double cosine = v.dot(h);
+    if (cosine <= 0) continue;
+    const double target = cosine * D(h) * dominant * dominant * dominant;
+    if (rng.NextDouble() * table.bound[cell] <= target) {
       const double pdf = VisibleNormalPdf(v, h);
-      const double weight = pdf > 0 ? G1(v, h) * std::max(0.0, v.dot(h)) * D(h) / (v.z() * pdf) : 0.0;
+      const double weight = pdf > 0 ? G1(v, h) * cosine * D(h) / (v.z() * pdf) : 0.0;
       return {h, pdf, weight};
     }
   }

@@ -1,0 +1,255 @@
+#include "svbtdf/model/bsdf.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace svbtdf::model {
+namespace {
+
+// Below this o.z (about 0.6 degrees above the horizon) the rough-exit strategy is not used, in
+// Sample and Pdf alike: visible-normal samplers that work by rejection (the tabulated NDF) slow
+// down without bound there, and the other two strategies still cover every direction.
+constexpr double kMinRoughExitCosine = 1e-2;
+
+bool OppositeSides(const Vec3& wi, const Vec3& wo) { return wi.z() * wo.z() < 0; }
+
+double CosineTransmissionPdf(const Vec3& wi, const Vec3& wo) {
+  return OppositeSides(wi, wo) ? std::abs(wi.z()) * kInvPi : 0.0;
+}
+
+// The share of samples Sample gives the cosine: the diffuse part's energy (pi rho_d) against the
+// specular part's (at most k_s), never below 5% so that the specular samplers are never the only
+// ones covering a direction whose log-blended lobe they both fit poorly.
+double DiffuseProbability(const Rgb& k_s, const Rgb& rho_d) {
+  const double specular = std::max(0.0, Luminance(k_s));
+  const double diffuse = std::max(0.0, kPi * Luminance(rho_d));
+  if (!(specular + diffuse > 0)) return 1.0;
+  return std::clamp(diffuse / (specular + diffuse), 0.05, 1.0);
+}
+
+Rgb Scaled(const Rgb& rgb, double s) { return {rgb[0] * s, rgb[1] * s, rgb[2] * s}; }
+
+// The direction that leaves a facet with normal h (h.d > 0) into a medium of relative index
+// 1 / ratio, for d pointing away from the facet in the medium it comes from (ratio = n_from /
+// n_to); nullopt on total internal reflection.
+std::optional<Vec3> Refract(const Vec3& d, const Vec3& h, double ratio) {
+  const double cos_d = d.dot(h);
+  const double sin2_t = ratio * ratio * (1.0 - cos_d * cos_d);
+  if (sin2_t >= 1.0) return std::nullopt;
+  return Vec3(-ratio * d + (ratio * cos_d - std::sqrt(1.0 - sin2_t)) * h);
+}
+
+std::optional<BsdfSample> Finish(const Bsdf& bsdf, const Vec3& wi, const Vec3& wo) {
+  const double pdf = bsdf.Pdf(wi, wo);
+  if (!(pdf > 0)) return std::nullopt;
+  return BsdfSample{wi, pdf, Scaled(bsdf.Eval(wi, wo), std::abs(wi.z()) / pdf)};
+}
+
+}  // namespace
+
+Vec3 SampleCosineTransmission(const Vec3& wo, const Vec2& u) {
+  const double r = std::sqrt(u.x()), phi = kTwoPi * u.y();
+  const double z = std::sqrt(std::max(0.0, 1.0 - u.x()));
+  return {r * std::cos(phi), r * std::sin(phi), wo.z() > 0 ? -z : z};
+}
+
+// ---------------------------------------------------------------------------------------------
+// DualMicrofacetBsdf
+
+DualMicrofacetBsdf::DualMicrofacetBsdf(const Ndf& ndf, const DualMicrofacetParams& params, const Ndf* proposal)
+    : ndf_(ndf), proposal_(proposal ? *proposal : ndf), params_(params), model_(params.eta, params.shadowing) {}
+
+DualMicrofacetBsdf::LobeWeights DualMicrofacetBsdf::lobe_weights(bool viewer_below) const {
+  const double alpha = viewer_below ? 1.0 - params_.alpha : params_.alpha;
+  LobeWeights w;
+  w.diffuse = DiffuseProbability(params_.k_s, params_.rho_d);
+  // Both configurations keep a tenth of the specular samples: for 0 < alpha < 1 the blend lives
+  // where both are non-zero, and each sampler covers its own configuration's support.
+  w.rough_entry = (1.0 - w.diffuse) * std::clamp(alpha, 0.1, 0.9);
+  w.rough_exit = (1.0 - w.diffuse) - w.rough_entry;
+  return w;
+}
+
+Rgb DualMicrofacetBsdf::EvalAbove(const Vec3& i, const Vec3& o, double alpha) const {
+  const double rho = model_.Rho(ndf_, alpha, i, o);
+  const Rgb& k = params_.k_s;
+  const Rgb& d = params_.rho_d;
+  return {k[0] * rho + d[0], k[1] * rho + d[1], k[2] * rho + d[2]};
+}
+
+Rgb DualMicrofacetBsdf::Eval(const Vec3& wi, const Vec3& wo) const {
+  if (!OppositeSides(wi, wo)) return {0, 0, 0};
+  if (wo.z() > 0) return EvalAbove(wi, wo, params_.alpha);
+  return EvalAbove(FlipZ(wi), FlipZ(wo), 1.0 - params_.alpha);
+}
+
+// Rough entry: om = eta t is fixed by o, and h_T = normalize(i + om) is a visible normal of the
+// in-slab direction t refracted out into the air; dw_h / dw_i = |i.h| / |i + om|^2 (Walter eq. 17
+// with the light's side in air).
+std::optional<Vec3> DualMicrofacetBsdf::SampleRoughEntry(const Vec3& o, const Vec2& u) const {
+  const double eta = params_.eta;
+  const Vec3 om(o.x(), o.y(), std::sqrt(std::max(0.0, eta * eta - o.x() * o.x() - o.y() * o.y())));
+  const Vec3 t = om / eta;
+  const NormalSample s = proposal_.SampleVisibleNormal(t, u);
+  if (!(s.pdf > 0) || s.h.dot(t) <= 0) return std::nullopt;
+  const std::optional<Vec3> i = Refract(t, s.h, eta);
+  if (!i || i->z() >= 0) return std::nullopt;
+  return i->normalized();
+}
+
+double DualMicrofacetBsdf::RoughEntryPdf(const Vec3& i, const Vec3& o) const {
+  const double eta = params_.eta;
+  const Vec3 om(o.x(), o.y(), std::sqrt(std::max(0.0, eta * eta - o.x() * o.x() - o.y() * o.y())));
+  const Vec3 sum = i + om;
+  const double length2 = sum.squaredNorm();
+  if (!(length2 > 0)) return 0.0;
+  const Vec3 h = sum / std::sqrt(length2);
+  if (h.z() <= 0 || i.dot(h) >= 0 || om.dot(h) <= 0) return 0.0;
+  return proposal_.VisibleNormalPdf(om / eta, h) * std::abs(i.dot(h)) / length2;
+}
+
+// Rough exit: h_B is a visible normal of o, o refracts into the slab (never totally reflected)
+// and the in-slab direction leaves the flat entry along i. dw_h / dw_i is Walter's refraction
+// Jacobian times the flat interface's dw_t / dw_i = |i.z| / (eta^2 t.z), which together give
+// |im.h| |i.z| / (im.z |im - o|^2).
+std::optional<Vec3> DualMicrofacetBsdf::SampleRoughExit(const Vec3& o, const Vec2& u) const {
+  const double eta = params_.eta;
+  if (o.z() < kMinRoughExitCosine) return std::nullopt;
+  const NormalSample s = proposal_.SampleVisibleNormal(o, u);
+  if (!(s.pdf > 0) || s.h.dot(o) <= 0) return std::nullopt;
+  const std::optional<Vec3> into_slab = Refract(o, s.h, 1.0 / eta);
+  if (!into_slab || into_slab->z() >= 0) return std::nullopt;
+  const Vec3 im = -eta * into_slab->normalized();  // eta times the light's in-slab direction
+  const double sin2 = im.x() * im.x() + im.y() * im.y();
+  if (sin2 >= 1.0) return std::nullopt;  // totally reflected at the flat entry
+  return Vec3(-im.x(), -im.y(), -std::sqrt(1.0 - sin2));
+}
+
+double DualMicrofacetBsdf::RoughExitPdf(const Vec3& i, const Vec3& o) const {
+  const double eta = params_.eta;
+  const Vec3 im(-i.x(), -i.y(), std::sqrt(std::max(0.0, eta * eta - i.x() * i.x() - i.y() * i.y())));
+  if (o.z() < kMinRoughExitCosine) return 0.0;
+  const Vec3 difference = im - o;
+  const double length2 = difference.squaredNorm();
+  if (!(length2 > 0)) return 0.0;
+  const Vec3 h = difference / std::sqrt(length2);
+  if (h.z() <= 0 || im.dot(h) <= 0 || o.dot(h) <= 0) return 0.0;
+  return proposal_.VisibleNormalPdf(o, h) * im.dot(h) * std::abs(i.z()) / (im.z() * length2);
+}
+
+double DualMicrofacetBsdf::PdfAbove(const Vec3& i, const Vec3& o, const LobeWeights& weights) const {
+  double pdf = weights.diffuse * std::abs(i.z()) * kInvPi;
+  if (weights.rough_entry > 0) pdf += weights.rough_entry * RoughEntryPdf(i, o);
+  if (weights.rough_exit > 0) pdf += weights.rough_exit * RoughExitPdf(i, o);
+  return pdf;
+}
+
+double DualMicrofacetBsdf::Pdf(const Vec3& wi, const Vec3& wo) const {
+  if (!OppositeSides(wi, wo)) return 0.0;
+  const bool below = wo.z() < 0;
+  return below ? PdfAbove(FlipZ(wi), FlipZ(wo), lobe_weights(true)) : PdfAbove(wi, wo, lobe_weights(false));
+}
+
+std::optional<BsdfSample> DualMicrofacetBsdf::Sample(const Vec3& wo, double u_lobe, const Vec2& u) const {
+  if (wo.z() == 0) return std::nullopt;
+  const bool below = wo.z() < 0;
+  const Vec3 o = below ? FlipZ(wo) : wo;
+  const LobeWeights weights = lobe_weights(below);
+  std::optional<Vec3> i;
+  if (u_lobe < weights.diffuse) {
+    i = SampleCosineTransmission(o, u);
+  } else if (u_lobe < weights.diffuse + weights.rough_entry) {
+    i = SampleRoughEntry(o, u);
+  } else {
+    i = SampleRoughExit(o, u);
+  }
+  if (!i) return std::nullopt;
+  return Finish(*this, below ? FlipZ(*i) : *i, wo);
+}
+
+// ---------------------------------------------------------------------------------------------
+// WalterBsdf
+
+WalterBsdf::WalterBsdf(const Ndf& ndf, double eta_i, double eta_o, const Rgb& k_s, const Rgb& rho_d, double azimuth)
+    : ndf_(ndf),
+      eta_i_(eta_i),
+      eta_o_(eta_o),
+      k_s_(k_s),
+      rho_d_(rho_d),
+      cos_azimuth_(std::cos(azimuth)),
+      sin_azimuth_(std::sin(azimuth)),
+      diffuse_probability_(DiffuseProbability(k_s, rho_d)) {}
+
+// Turning by -azimuth about z, as BaselineShape does (fit/baseline_fit.cc), after mirroring a
+// viewer below to above.
+Vec3 WalterBsdf::ToLobe(const Vec3& v) const {
+  return {cos_azimuth_ * v.x() + sin_azimuth_ * v.y(), -sin_azimuth_ * v.x() + cos_azimuth_ * v.y(), v.z()};
+}
+
+Vec3 WalterBsdf::FromLobe(const Vec3& v) const {
+  return {cos_azimuth_ * v.x() - sin_azimuth_ * v.y(), sin_azimuth_ * v.x() + cos_azimuth_ * v.y(), v.z()};
+}
+
+Rgb WalterBsdf::Eval(const Vec3& wi, const Vec3& wo) const {
+  if (!OppositeSides(wi, wo)) return {0, 0, 0};
+  const bool below = wo.z() < 0;
+  const Vec3 i = ToLobe(below ? FlipZ(wi) : wi), o = ToLobe(below ? FlipZ(wo) : wo);
+  const double f = WalterBtdf(ndf_, i, o, eta_i_, eta_o_);
+  return {k_s_[0] * f + rho_d_[0], k_s_[1] * f + rho_d_[1], k_s_[2] * f + rho_d_[2]};
+}
+
+// h = normalize(-(eta_i i + eta_o o)) turned up, a visible normal of o; dw_h / dw_i =
+// eta_i^2 |i.h| / (eta_i i.h + eta_o o.h)^2 (Walter et al. 2007 eq. 17).
+double WalterBsdf::RefractionPdf(const Vec3& i, const Vec3& o) const {
+  Vec3 h = -(eta_i_ * i + eta_o_ * o);
+  const double length2 = h.squaredNorm();
+  if (!(length2 > 0)) return 0.0;
+  h /= std::sqrt(length2);
+  if (h.z() < 0) h = -h;
+  const double cos_ih = i.dot(h), cos_oh = o.dot(h);
+  if (cos_oh <= 0 || cos_ih >= 0) return 0.0;
+  const double denominator = eta_i_ * cos_ih + eta_o_ * cos_oh;
+  return ndf_.VisibleNormalPdf(o, h) * eta_i_ * eta_i_ * std::abs(cos_ih) / (denominator * denominator);
+}
+
+double WalterBsdf::Pdf(const Vec3& wi, const Vec3& wo) const {
+  if (!OppositeSides(wi, wo)) return 0.0;
+  const bool below = wo.z() < 0;
+  const Vec3 i = ToLobe(below ? FlipZ(wi) : wi), o = ToLobe(below ? FlipZ(wo) : wo);
+  return diffuse_probability_ * std::abs(i.z()) * kInvPi + (1.0 - diffuse_probability_) * RefractionPdf(i, o);
+}
+
+std::optional<BsdfSample> WalterBsdf::Sample(const Vec3& wo, double u_lobe, const Vec2& u) const {
+  if (wo.z() == 0) return std::nullopt;
+  const bool below = wo.z() < 0;
+  const Vec3 o = ToLobe(below ? FlipZ(wo) : wo);
+  std::optional<Vec3> i;
+  if (u_lobe < diffuse_probability_) {
+    i = SampleCosineTransmission(o, u);
+  } else {
+    const NormalSample s = ndf_.SampleVisibleNormal(o, u);
+    if (!(s.pdf > 0) || s.h.dot(o) <= 0) return std::nullopt;
+    i = Refract(o, s.h, eta_o_ / eta_i_);
+    if (!i || i->z() >= 0) return std::nullopt;
+    i = i->normalized();
+  }
+  const Vec3 wi = FromLobe(*i);
+  return Finish(*this, below ? FlipZ(wi) : wi, wo);
+}
+
+// ---------------------------------------------------------------------------------------------
+// EvaluatedBsdf
+
+Rgb EvaluatedBsdf::Eval(const Vec3& wi, const Vec3& wo) const {
+  if (!OppositeSides(wi, wo)) return {0, 0, 0};
+  return wo.z() > 0 ? evaluate_(wi, wo) : evaluate_(FlipZ(wi), FlipZ(wo));
+}
+
+double EvaluatedBsdf::Pdf(const Vec3& wi, const Vec3& wo) const { return CosineTransmissionPdf(wi, wo); }
+
+std::optional<BsdfSample> EvaluatedBsdf::Sample(const Vec3& wo, double, const Vec2& u) const {
+  if (wo.z() == 0) return std::nullopt;
+  return Finish(*this, SampleCosineTransmission(wo, u), wo);
+}
+
+}  // namespace svbtdf::model
