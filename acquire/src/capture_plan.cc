@@ -6,6 +6,7 @@
 #include <set>
 
 #include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/session/capture_key.h"
 #include "svbtdf/session/fiducials.h"
@@ -215,12 +216,7 @@ Pattern DotPattern(const CapturePlan& plan, size_t q) {
 }  // namespace
 
 CapturePlan ParseCapturePlan(const std::string& text, const std::string& source) {
-  json root;
-  try {
-    root = json::parse(text);
-  } catch (const json::exception& e) {
-    common::ThrowFormatError(source, std::string("is not valid JSON: ") + e.what(), "see docs/capture.md for the plan format");
-  }
+  const json root = common::ParseJson(text, source);
   try {
     return ParsePlanJson(root, source);
   } catch (const json::exception& e) {  // a value of an unexpected type deep inside

@@ -6,6 +6,7 @@
 #include <opencv2/calib3d.hpp>
 
 #include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/common/error.h"
 
 namespace svbtdf::calib {
@@ -189,14 +190,7 @@ SessionCalibration SessionCalibrationFromJson(const nlohmann::json& json, const 
 }
 
 SessionCalibration ReadSessionCalibration(const std::filesystem::path& path) {
-  const std::string text = common::ReadTextFile(path);
-  nlohmann::json json;
-  try {
-    json = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {
-    common::ThrowFormatError(path.string(), std::string("is not valid JSON: ") + e.what());
-  }
-  return SessionCalibrationFromJson(json, path.string());
+  return SessionCalibrationFromJson(common::ReadJsonFile(path), path.string());
 }
 
 void WriteSessionCalibration(const std::filesystem::path& path, const SessionCalibration& calibration) {

@@ -10,6 +10,7 @@
 
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/json.h"
 
 namespace svbtdf::common {
 namespace fs = std::filesystem;
@@ -31,8 +32,8 @@ void AppendBytesDurably(const fs::path& path, const std::string& bytes) {
 
 bool IsJsonObjectLine(std::string_view line) {
   try {
-    return nlohmann::json::parse(line).is_object();
-  } catch (const nlohmann::json::exception&) {  // parse errors, but also number overflow
+    return ParseJson(line, "journal line").is_object();
+  } catch (const Error&) {  // parse errors, number overflow, nesting beyond kMaxJsonDepth
     return false;
   }
 }

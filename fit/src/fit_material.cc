@@ -12,6 +12,7 @@
 #include <random>
 
 #include "svbtdf/common/durable_log.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/common/parallel.h"
@@ -147,8 +148,8 @@ class Checkpoint {
     }
     nlohmann::json header;
     try {
-      header = nlohmann::json::parse(lines[0]);
-    } catch (const nlohmann::json::exception&) {
+      header = common::ParseJson(lines[0], path.string());
+    } catch (const common::Error&) {  // an unreadable header is a checkpoint of other inputs
     }
     if (header != nlohmann::json{{"fit", identity}}) {
       common::ThrowInvalidInput(path.string(), "is the checkpoint of a fit with other inputs or options",
@@ -156,9 +157,9 @@ class Checkpoint {
     }
     for (size_t n = 1; n < lines.size(); ++n) {
       try {  // a damaged line does not count: that representative is fitted again
-        const nlohmann::json entry = nlohmann::json::parse(lines[n]);
+        const nlohmann::json entry = common::ParseJson(lines[n], path.string());
         done_[entry.at("representative").get<int>()] = entry.at("result");
-      } catch (const nlohmann::json::exception&) {
+      } catch (const std::exception&) {  // common::Error or a json type error
       }
     }
   }

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/common/error.h"
 
 namespace svbtdf::fit {
@@ -207,12 +208,7 @@ void WriteMaterial(const fs::path& folder, const Material& m) {
 
 Material ReadMaterial(const fs::path& folder) {
   const fs::path manifest_path = folder / "material.json";
-  nlohmann::json manifest;
-  try {
-    manifest = nlohmann::json::parse(common::ReadTextFile(manifest_path));
-  } catch (const nlohmann::json::exception& e) {
-    common::ThrowFormatError(manifest_path.string(), std::string("is not valid JSON: ") + e.what());
-  }
+  const nlohmann::json manifest = common::ReadJsonFile(manifest_path);
   Material m;
   try {
     if (manifest.at("format") != "svbtdf-material") common::ThrowFormatError(manifest_path.string(), "is not an svbtdf material");

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/image_io.h"
 
@@ -67,7 +68,7 @@ std::vector<QualityWarning> CheckSliceStore(const fs::path& processed) {
   } else {
     named = processed / "processed.json";
     try {
-      const nlohmann::json manifest = nlohmann::json::parse(common::ReadTextFile(named));
+      const nlohmann::json manifest = common::ReadJsonFile(named);
       const nlohmann::json statistics = manifest.value("statistics", nlohmann::json::object());
       if (statistics.contains("texels_without_dot_beneath")) {
         without = statistics.at("texels_without_dot_beneath").get<int64_t>();
@@ -239,13 +240,7 @@ void WriteQuality(const fs::path& material_folder, const std::vector<QualityWarn
 bool ReadQuality(const fs::path& material_folder, std::vector<QualityWarning>* warnings) {
   const fs::path path = material_folder / "quality.json";
   if (!fs::exists(path)) return false;
-  nlohmann::json json;
-  try {
-    json = nlohmann::json::parse(common::ReadTextFile(path));
-  } catch (const nlohmann::json::exception& e) {
-    common::ThrowFormatError(path.string(), std::string("is not valid JSON: ") + e.what());
-  }
-  *warnings = QualityFromJson(json, path.string());
+  *warnings = QualityFromJson(common::ReadJsonFile(path), path.string());
   return true;
 }
 

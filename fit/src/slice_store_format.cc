@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/common/error.h"
 
 namespace svbtdf::fit::store {
@@ -133,7 +134,7 @@ void WriteManifest(const fs::path& folder, const SliceStoreInfo& info, const Tex
 nlohmann::json ReadManifest(const fs::path& folder) {
   const fs::path path = folder / kManifest;
   try {
-    nlohmann::json manifest = nlohmann::json::parse(common::ReadTextFile(path));
+    nlohmann::json manifest = common::ReadJsonFile(path);
     if (manifest.at("format") != "svbtdf-processed") common::ThrowFormatError(path.string(), "is not a processed session");
     if (manifest.at("version") != kSliceStoreFormatVersion) {
       common::ThrowFormatError(path.string(), "has version " + manifest.at("version").dump() + "; this svbtdf reads version " +

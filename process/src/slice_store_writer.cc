@@ -11,6 +11,7 @@
 #include <set>
 
 #include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/common/durable_log.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/parallel.h"
@@ -144,8 +145,8 @@ std::set<int> ReadProgress(const common::DurableLog& log) {
   std::set<int> done;
   for (const std::string& line : log.lines()) {
     try {
-      done.insert(nlohmann::json::parse(line).at("dot").get<int>());
-    } catch (const nlohmann::json::exception&) {
+      done.insert(common::ParseJson(line, log.path().string()).at("dot").get<int>());
+    } catch (const std::exception&) {  // common::Error or a json type error
     }
   }
   return done;
@@ -172,7 +173,7 @@ SliceStoreWriter::SliceStoreWriter(const fs::path& folder, const SliceStoreInfo&
     if (manifest.value("complete", false)) {
       common::ThrowInvalidInput(folder.string(), "already holds a finished processing", "choose a new output folder");
     }
-    const nlohmann::json calibration_on_disk = nlohmann::json::parse(common::ReadTextFile(folder / kCalibration));
+    const nlohmann::json calibration_on_disk = common::ReadJsonFile(folder / kCalibration);
     if (manifest.at("texels_x") != info.texels_x || manifest.at("texels_y") != info.texels_y ||
         manifest.at("num_dots") != info.num_dots || manifest.at("light_resolution") != info.light_resolution ||
         manifest.at("tile_texels") != info.tile_texels || calibration_on_disk != calib::ToJson(calibration)) {

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/fit/material.h"
 #include "svbtdf/report/compare.h"
@@ -157,7 +158,7 @@ std::vector<fit::QualityWarning> AddQuality(Page& page, const fit::Material& mat
 }
 
 void AddCompare(Page& page, const std::string& compare_file) {
-  const nlohmann::json metrics = nlohmann::json::parse(common::ReadTextFile(compare_file));
+  const nlohmann::json metrics = common::ReadJsonFile(compare_file);
   page.Heading("Against the ground truth");
   std::string table = "<table>";
   for (const auto& [key, value] : metrics.items()) table += "<tr><th>" + key + "</th><td>" + value.dump() + "</td></tr>";

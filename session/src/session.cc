@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/common/durable_log.h"
 #include "svbtdf/common/error.h"
 
@@ -35,12 +36,7 @@ std::string UtcNow() {
 }
 
 nlohmann::json ParseJsonFile(const fs::path& path) {
-  const std::string text = common::ReadTextFile(path);
-  try {
-    return nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {  // parse errors, but also number overflow
-    common::ThrowFormatError(path.string(), std::string("is not valid JSON: ") + e.what());
-  }
+  return common::ReadJsonFile(path);
 }
 
 // Keys are short ASCII paths: letters, digits, '_', '-', '.', separated by '/', no "..".
@@ -157,8 +153,8 @@ void Session::ReadJournal() {
     if (lines[n].empty()) continue;
     nlohmann::json object;
     try {
-      object = nlohmann::json::parse(lines[n]);
-    } catch (const nlohmann::json::exception&) {  // parse errors, but also number overflow
+      object = common::ParseJson(lines[n], where);
+    } catch (const common::Error&) {
       common::ThrowFormatError(where, "is not a valid journal line");
     }
     SessionEntry entry;

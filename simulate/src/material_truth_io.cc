@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/model/ndf_factory.h"
 #include "svbtdf/simulate/truth_io.h"
@@ -51,7 +52,7 @@ MaterialTruth ReadMaterialTruth(const fs::path& folder) {
   const fs::path manifest_path = folder / "material.json";
   MaterialTruth truth;
   try {
-    const nlohmann::json manifest = nlohmann::json::parse(common::ReadTextFile(manifest_path));
+    const nlohmann::json manifest = common::ReadJsonFile(manifest_path);
     if (manifest.at("format") != "svbtdf-truth-material") common::ThrowFormatError(manifest_path.string(), "is not a truth material");
     if (manifest.at("ndf").at("kind") != "analytic") {
       common::ThrowFormatError(manifest_path.string(), "is not an analytic truth (see its ndf.kind)");

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/simulate/montecarlo_truth.h"
 
@@ -139,7 +140,7 @@ void SplitSlices(const common::FloatImage& image, std::vector<float>* values, st
 
 nlohmann::json ReadManifest(const fs::path& path) {
   try {
-    nlohmann::json manifest = nlohmann::json::parse(common::ReadTextFile(path));
+    nlohmann::json manifest = common::ReadJsonFile(path);
     if (manifest.at("format") != "svbtdf-truth-material") common::ThrowFormatError(path.string(), "is not a truth material");
     return manifest;
   } catch (const nlohmann::json::exception& e) {

@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/simulate/montecarlo_truth.h"
 #include "svbtdf/simulate/truth_io.h"
@@ -49,7 +50,7 @@ bool Close(double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(std::
 
 double EtaOfTruthMaterial(const fs::path& manifest_path) {
   try {
-    return nlohmann::json::parse(common::ReadTextFile(manifest_path)).at("eta").get<double>();
+    return common::ReadJsonFile(manifest_path).at("eta").get<double>();
   } catch (const nlohmann::json::exception& e) {
     common::ThrowFormatError(manifest_path.string(), std::string("is malformed: ") + e.what());
   }

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include "svbtdf/common/atomic_file.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/common/error.h"
 
 namespace svbtdf::simulate {
@@ -119,7 +120,7 @@ RigTruth ReadRigTruth(const std::filesystem::path& path) {
   const std::string text = common::ReadTextFile(path);
   RigTruth truth;
   try {
-    const json in = json::parse(text);
+    const json in = common::ParseJson(text, path.string());
     if (in.value("format", "") != "svbtdf-rig-truth") {
       common::ThrowFormatError(path.string(), "is not an svbtdf rig truth file (format key)");
     }

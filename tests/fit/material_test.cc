@@ -139,6 +139,16 @@ TEST_F(MaterialTest, DamagedMaterialsAreErrorsNamingTheFile) {
   } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find("version 99"), std::string::npos) << e.what();
   }
+  // 150,000 nested [] in the provenance crashed `svbtdf eval` with SIGSEGV (issue 15).
+  const std::string deep = std::string(150000, '[') + std::string(150000, ']');
+  common::WriteTextAtomically(dir_ / "material.json", "{\"format\": \"svbtdf-material\", \"provenance\": " + deep + "}");
+  try {
+    ReadMaterial(dir_);
+    FAIL();
+  } catch (const common::Error& e) {
+    EXPECT_EQ(e.kind(), common::ErrorKind::kFormat);
+    EXPECT_NE(std::string(e.what()).find("material.json: is not valid JSON: nested deeper"), std::string::npos) << e.what();
+  }
 }
 
 // The baseline's lobes blend through their slope moments: a lobe blended with itself is itself,

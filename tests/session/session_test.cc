@@ -123,6 +123,34 @@ TEST_F(SessionTest, BrokenJournalLinesAreErrorsNamingFileAndLine) {
   }
 }
 
+// Issue 15: 150,000 nested [] in session.json, plan.json or a journal line crashed every command
+// that opened the session; each is now the file's one-line format error.
+TEST_F(SessionTest, DeeplyNestedJsonIsAFormatErrorNamingTheFile) {
+  session::Session session = session::Session::Create(folder_, rig_, plan_);
+  session.AddImage("dark/e0", Frame(3), 0.1, 1.0);
+  const std::string deep = std::string(150000, '[') + std::string(150000, ']');
+  for (const char* name : {"session.json", "plan.json"}) {
+    const fs::path path = folder_ / name;
+    const std::string original = common::ReadTextFile(path);
+    common::WriteTextAtomically(path, "{\"rig\": " + deep + "}");
+    try {
+      session::Session::Open(folder_);
+      FAIL() << name;
+    } catch (const common::Error& e) {
+      EXPECT_EQ(e.kind(), common::ErrorKind::kFormat);
+      EXPECT_NE(std::string(e.what()).find(path.string() + ": is not valid JSON: nested deeper"), std::string::npos) << e.what();
+    }
+    common::WriteTextAtomically(path, original);
+  }
+  std::ofstream(folder_ / "journal.jsonl", std::ios::app) << "{\"key\": " << deep << "}\n" << R"({"key":"x"})" << "\n";
+  try {
+    session::Session::Open(folder_);
+    FAIL() << "journal";
+  } catch (const common::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("journal.jsonl:2: is not a valid journal line"), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(SessionTest, RandomlyDamagedFilesNeverCrashTheReader) {
   // A small fuzz: truncate or scramble the manifest, plan and journal in many ways; Open must
   // either succeed or throw svbtdf::Error, never crash or throw anything else.
