@@ -75,6 +75,12 @@ void WriteTextAtomically(const fs::path& path, std::string_view contents, bool o
       overwrite);
 }
 
+fs::path WithoutTrailingSeparators(const fs::path& path) {
+  std::string text = path.string();
+  while (text.size() > 1 && text.back() == fs::path::preferred_separator) text.pop_back();
+  return text;
+}
+
 std::string ReadTextFile(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) ThrowIoError(path.string(), "cannot open for reading", "does the file exist?");

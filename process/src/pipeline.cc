@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "svbtdf/calib/calibrate_session.h"
+#include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/fit/material.h"
 #include "svbtdf/fit/slice_store.h"
@@ -96,7 +97,8 @@ void ProcessUnlessDone(const session::Session& session, const calib::SessionCali
 }  // namespace
 
 fs::path FitCheckpointPath(const fs::path& material) {
-  return material.parent_path() / (material.filename().string() + ".partial-fits.jsonl");
+  const fs::path folder = common::WithoutTrailingSeparators(material);
+  return folder.parent_path() / (folder.filename().string() + ".partial-fits.jsonl");
 }
 
 std::vector<fit::QualityWarning> FitAndWriteMaterial(const fs::path& processed, const fs::path& out,
@@ -130,7 +132,8 @@ std::vector<fit::QualityWarning> FitAndWriteMaterial(const fs::path& processed, 
 PipelineOutcome RunPipeline(const PipelineOptions& options, const PipelineListener& listener) {
   RequireNewOrEmpty(options.out);
   PipelineOutcome outcome;
-  outcome.work = options.work.empty() ? fs::path(options.out.string() + ".work") : options.work;
+  outcome.work = options.work.empty() ? fs::path(common::WithoutTrailingSeparators(options.out).string() + ".work")
+                                      : options.work;
   const session::Session session = session::Session::Open(options.session);
   const session::SessionVerification verification = session.Verify(/*check_crc=*/false);
   if (!verification.complete()) {

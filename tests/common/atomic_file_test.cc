@@ -54,5 +54,13 @@ TEST(AtomicFile, MissingFileErrorNamesTheFile) {
   }
 }
 
+TEST(AtomicFile, TrailingSeparatorsNameTheSameFolder) {
+  EXPECT_EQ(WithoutTrailingSeparators("mat/"), fs::path("mat"));
+  EXPECT_EQ(WithoutTrailingSeparators("a/mat///"), fs::path("a/mat"));
+  EXPECT_EQ(WithoutTrailingSeparators("a/mat"), fs::path("a/mat"));
+  EXPECT_EQ(WithoutTrailingSeparators("/"), fs::path("/"));
+  EXPECT_EQ(WithoutTrailingSeparators(""), fs::path(""));
+}
+
 }  // namespace
 }  // namespace svbtdf::common

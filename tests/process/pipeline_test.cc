@@ -91,6 +91,23 @@ TEST_F(Pipeline, CalibratesProcessesAndFitsInOrderThenReusesTheFinishedSteps) {
   EXPECT_TRUE(fs::exists(folder_->path() / "second" / "material.json"));
 }
 
+// Issue 15: `--out mat/` put the checkpoint and the work folder inside mat/, and then refused
+// mat/ as not empty, so `svbtdf run ... --out mat/` always failed.
+TEST_F(Pipeline, ATrailingSlashOnTheOutputNamesTheSameFolder) {
+  EXPECT_EQ(FitCheckpointPath("a/mat/"), fs::path("a/mat.partial-fits.jsonl"));
+  EXPECT_EQ(FitCheckpointPath("a/mat//"), FitCheckpointPath("a/mat"));
+  Simulate();
+  PipelineOptions options = Options("slashed/");
+  options.work.clear();  // the default, MATERIAL.work
+  const PipelineOutcome outcome = Run(options);
+  EXPECT_EQ(outcome.work, folder_->path() / "slashed.work");
+  EXPECT_TRUE(fs::exists(folder_->path() / "slashed" / "material.json"));
+  for (const auto& entry : fs::directory_iterator(folder_->path() / "slashed")) {
+    EXPECT_EQ(entry.path().filename().string().find(".work"), std::string::npos) << entry.path();
+    EXPECT_EQ(entry.path().filename().string().find("partial-fits"), std::string::npos) << entry.path();
+  }
+}
+
 TEST_F(Pipeline, ANonEmptyOutputIsRefusedBeforeAnyStep) {
   const fs::path out = folder_->path() / "mine";
   fs::create_directories(out);

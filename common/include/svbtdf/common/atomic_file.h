@@ -23,4 +23,8 @@ void WriteTextAtomically(const std::filesystem::path& path, std::string_view con
 // Reads a whole file; throws an Io error naming the file when it cannot.
 std::string ReadTextFile(const std::filesystem::path& path);
 
+// `mat/` and `mat//` name the folder `mat`: whatever is named after an output folder (its
+// `.work` sibling, its checkpoint) must not depend on how the user typed it. "/" stays "/".
+std::filesystem::path WithoutTrailingSeparators(const std::filesystem::path& path);
+
 }  // namespace svbtdf::common
