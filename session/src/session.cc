@@ -35,10 +35,6 @@ std::string UtcNow() {
   return buffer;
 }
 
-nlohmann::json ParseJsonFile(const fs::path& path) {
-  return common::ReadJsonFile(path);
-}
-
 // Keys are short ASCII paths: letters, digits, '_', '-', '.', separated by '/', no "..".
 void RequireValidKey(const std::string& key, const std::string& source) {
   static const std::regex pattern(R"([A-Za-z0-9_\-]+(\.[A-Za-z0-9_\-]+)*(/[A-Za-z0-9_\-]+(\.[A-Za-z0-9_\-]+)*)*)");
@@ -122,7 +118,7 @@ Session Session::Open(const fs::path& folder) {
   Session session;
   session.folder_ = folder;
   const fs::path manifest_path = folder / kManifest;
-  const nlohmann::json manifest = ParseJsonFile(manifest_path);
+  const nlohmann::json manifest = common::ReadJsonFile(manifest_path);
   if (Field<std::string>(manifest, "format", manifest_path.string()) != "svbtdf-session") {
     common::ThrowFormatError(manifest_path.string(), "is not an svbtdf session manifest");
   }
@@ -134,7 +130,7 @@ Session Session::Open(const fs::path& folder) {
   session.rig_json_ = manifest.value("rig", nlohmann::json::object());
   session.rig_ = ParseRigDescription(session.rig_json_, manifest_path.string());
   const fs::path plan_path = folder / kPlan;
-  session.planned_keys_ = Field<std::vector<std::string>>(ParseJsonFile(plan_path), "captures", plan_path.string());
+  session.planned_keys_ = Field<std::vector<std::string>>(common::ReadJsonFile(plan_path), "captures", plan_path.string());
   for (const std::string& key : session.planned_keys_) RequireValidKey(key, plan_path.string());
   session.planned_.insert(session.planned_keys_.begin(), session.planned_keys_.end());
   session.ReadJournal();

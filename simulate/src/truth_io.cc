@@ -117,10 +117,9 @@ void WriteRigTruth(const std::filesystem::path& path, const Rig& rig, const Capt
 }
 
 RigTruth ReadRigTruth(const std::filesystem::path& path) {
-  const std::string text = common::ReadTextFile(path);
   RigTruth truth;
   try {
-    const json in = common::ParseJson(text, path.string());
+    const json in = common::ReadJsonFile(path);
     if (in.value("format", "") != "svbtdf-rig-truth") {
       common::ThrowFormatError(path.string(), "is not an svbtdf rig truth file (format key)");
     }

@@ -15,6 +15,7 @@
 #include "svbtdf/model/ggx.h"
 #include "svbtdf/model/hemicube.h"
 #include "svbtdf/model/tabulated_ndf.h"
+#include "sampling_check.h"
 
 namespace svbtdf::model {
 namespace {
@@ -39,23 +40,11 @@ Vec3 Folded(const Vec3& d) { return {d.x(), d.y(), std::abs(d.z())}; }
 
 ChiSquare CheckBsdf(const Bsdf& bsdf, const Vec3& wo, int samples, uint64_t seed) {
   const Hemicube grid(16);
-  constexpr int kSub = 8;
   const double side = wo.z() > 0 ? -1.0 : 1.0;  // wi's side
-  std::vector<double> expected(grid.num_cells(), 0.0);
+  std::vector<double> expected =
+      testing::CellIntegrals(grid, [&](const Vec3& d) { return bsdf.Pdf(Vec3(d.x(), d.y(), side * d.z()), wo); });
   ChiSquare check;
-  for (int c = 0; c < grid.num_cells(); ++c) {
-    double weighted = 0, face_weight = 0;
-    for (int a = 0; a < kSub; ++a) {
-      for (int b = 0; b < kSub; ++b) {
-        const Vec3 d = grid.CellPoint(c, (a + 0.5) / kSub, (b + 0.5) / kSub);
-        const double jacobian = std::pow(std::max({std::abs(d.x()), std::abs(d.y()), d.z()}), 3);
-        weighted += bsdf.Pdf(Vec3(d.x(), d.y(), side * d.z()), wo) * jacobian;
-        face_weight += jacobian;
-      }
-    }
-    expected[c] = weighted * grid.CellSolidAngle(c) / face_weight;
-    check.pdf_integral += expected[c];
-  }
+  for (double e : expected) check.pdf_integral += e;
   std::vector<double> observed(grid.num_cells(), 0.0);
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> uniform(0, 1);
@@ -85,21 +74,11 @@ ChiSquare CheckBsdf(const Bsdf& bsdf, const Vec3& wo, int samples, uint64_t seed
   check.mean_weight = weight_sum / samples;
   check.weight_standard_error =
       std::sqrt(std::max(0.0, weight_square_sum / samples - check.mean_weight * check.mean_weight) / samples);
-  double pooled_observed = failures, pooled_expected = std::max(0.0, 1.0 - check.pdf_integral) * samples;
-  for (int c = 0; c < grid.num_cells(); ++c) {
-    const double e = expected[c] * samples;
-    if (e < 20) {
-      pooled_observed += observed[c];
-      pooled_expected += e;
-      continue;
-    }
-    check.chi2 += (observed[c] - e) * (observed[c] - e) / e;
-    ++check.bins;
-  }
-  if (pooled_expected > 20) {
-    check.chi2 += (pooled_observed - pooled_expected) * (pooled_observed - pooled_expected) / pooled_expected;
-    ++check.bins;
-  }
+  for (double& e : expected) e *= samples;
+  const testing::ChiSquareStatistic statistic =
+      testing::PooledChiSquare(observed, expected, failures, std::max(0.0, 1.0 - check.pdf_integral) * samples);
+  check.chi2 = statistic.chi2;
+  check.bins = statistic.bins;
   return check;
 }
 
