@@ -13,7 +13,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/fit/material.h"
 #include "svbtdf/report/compare.h"
-#include "svbtdf/report/truth.h"
+#include "svbtdf/simulate/truth.h"
 
 namespace svbtdf::cli {
 namespace {
@@ -40,7 +40,7 @@ void RunCompare(CompareCommandOptions options) {
     common::ThrowInvalidInput(options.json, "already exists", "compare never overwrites; choose another --json file");
   }
   const fit::Material material = fit::ReadMaterial(options.material);
-  const report::Truth truth = report::ReadTruth(options.truth);
+  const simulate::Truth truth = simulate::ReadTruth(options.truth);
   options.compare.material_folder = options.material;
   const report::CompareMetrics metrics = report::Compare(material, truth, options.compare);
   PrintSummary(metrics);

@@ -11,6 +11,7 @@ void AddAllCommands(CLI::App& app) {
   AddEvalCommand(app);
   AddFitCommand(app);
   AddProcessCommand(app);
+  AddRenderCommand(app);
   AddReportCommand(app);
   AddRunCommand(app);
   AddSessionCommand(app);

@@ -18,6 +18,7 @@ void AddDevicesCommand(CLI::App& app);         // svbtdf devices
 void AddEvalCommand(CLI::App& app);            // svbtdf eval
 void AddFitCommand(CLI::App& app);             // svbtdf fit
 void AddProcessCommand(CLI::App& app);         // svbtdf process
+void AddRenderCommand(CLI::App& app);          // svbtdf render
 void AddReportCommand(CLI::App& app);          // svbtdf report
 void AddRunCommand(CLI::App& app);             // svbtdf run
 void AddSessionCommand(CLI::App& app);         // svbtdf session verify

@@ -367,6 +367,8 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
   fits.Lend(LenderOfFailed(reps, store.info().texels_x, failed));
 
   Material material = fits.Assemble(store, eta, options.ndf_resolution, clustering);
+  material.width_m = store.geometry().width_m;
+  material.height_m = store.geometry().height_m;
   RefineStatistics refined;
   if (options.refine_texels) {
     RefineOptions refine_options;

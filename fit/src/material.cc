@@ -186,7 +186,7 @@ void WriteMaterial(const fs::path& folder, const Material& m) {
     common::WriteFloatImage(folder / spec.file, m.*spec.image, /*half_precision=*/false, false);
     maps[spec.key] = spec.file;
   }
-  const nlohmann::json manifest = {
+  nlohmann::json manifest = {
       {"format", "svbtdf-material"},
       // Version 1 readers would evaluate a baseline as a dual-microfacet material: only it needs 2.
       {"version", m.model == MaterialModel::kWalterGgx ? 2 : 1},
@@ -203,6 +203,7 @@ void WriteMaterial(const fs::path& folder, const Material& m) {
       {"maps", maps},
       {"provenance", m.provenance},
   };
+  if (m.width_m > 0 && m.height_m > 0) manifest["sample"] = {{"width_m", m.width_m}, {"height_m", m.height_m}};
   common::WriteTextAtomically(folder / "material.json", manifest.dump(2) + "\n", false);
 }
 
@@ -222,12 +223,19 @@ Material ReadMaterial(const fs::path& folder) {
     m.width = manifest.at("width").get<int>();
     m.height = manifest.at("height").get<int>();
     m.ndf_resolution = manifest.at("ndf").at("resolution").get<int>();
+    if (manifest.contains("sample")) {
+      m.width_m = manifest["sample"].at("width_m").get<double>();
+      m.height_m = manifest["sample"].at("height_m").get<double>();
+    }
     m.representative_texels = manifest.at("representatives").at("texels").get<std::vector<int64_t>>();
     m.provenance = manifest.value("provenance", nlohmann::json::object());
   } catch (const nlohmann::json::exception& e) {
     common::ThrowFormatError(manifest_path.string(), std::string("misses a field or has a wrong type: ") + e.what());
   }
   if (m.width <= 0 || m.height <= 0 || !(m.eta > 1.0)) common::ThrowFormatError(manifest_path.string(), "has an invalid size or eta");
+  if (!(m.width_m >= 0 && m.height_m >= 0 && std::isfinite(m.width_m) && std::isfinite(m.height_m))) {
+    common::ThrowFormatError(manifest_path.string(), "has a sample size (\"sample\") that is not a finite size in metres");
+  }
   const model::Hemicube grid(m.ndf_resolution);
   const common::FloatImage tables = common::ReadFloatImage(folder / "ndf_ln_d.exr");
   common::RequireFinite(tables, (folder / "ndf_ln_d.exr").string());

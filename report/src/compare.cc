@@ -67,7 +67,7 @@ nlohmann::json NumberOrNull(double value) { return std::isfinite(value) ? nlohma
 
 }  // namespace
 
-void RequireSameSize(const fit::Material& material, const std::string& material_folder, const Truth& truth) {
+void RequireSameSize(const fit::Material& material, const std::string& material_folder, const simulate::Truth& truth) {
   if (material.width == truth.width() && material.height == truth.height()) return;
   common::ThrowInvalidInput(material_folder, "is " + std::to_string(material.width) + "x" + std::to_string(material.height) +
                                          " texels but the truth is " + std::to_string(truth.width()) + "x" +
@@ -75,7 +75,7 @@ void RequireSameSize(const fit::Material& material, const std::string& material_
                     "compare a material fitted at the truth's resolution");
 }
 
-CompareMetrics Compare(const fit::Material& material, const Truth& truth, const CompareOptions& options) {
+CompareMetrics Compare(const fit::Material& material, const simulate::Truth& truth, const CompareOptions& options) {
   RequireSameSize(material, options.material_folder, truth);
   CompareMetrics metrics;
   metrics.material_folder = options.material_folder;

@@ -13,7 +13,7 @@
 #include "svbtdf/fit/material.h"
 #include "svbtdf/report/compare.h"
 #include "svbtdf/report/picture.h"
-#include "svbtdf/report/truth.h"
+#include "svbtdf/simulate/truth.h"
 
 namespace svbtdf::report {
 namespace {
@@ -82,7 +82,7 @@ void AddSlabMaterials(Page& page, const simulate::MonteCarloTruth& truth) {
   page.Paragraph(list);
 }
 
-void AddMaps(Page& page, const fit::Material& material, const Truth* truth) {
+void AddMaps(Page& page, const fit::Material& material, const simulate::Truth* truth) {
   const simulate::MaterialTruth* parameters = truth ? truth->parameters() : nullptr;
   page.Heading("Maps");
   page.Paragraph("Colour ramp: dark purple = low, yellow = high; white = not fitted. Ranges in the captions.");
@@ -172,9 +172,9 @@ std::vector<fit::QualityWarning> WriteMaterialReport(const MaterialReportOptions
     common::ThrowInvalidInput(options.out.string(), "is not empty", "report writes into a new folder; choose another --out");
   }
   const fit::Material material = fit::ReadMaterial(options.material_folder);
-  std::optional<Truth> truth;
+  std::optional<simulate::Truth> truth;
   if (!options.truth_folder.empty()) {
-    truth.emplace(ReadTruth(options.truth_folder));
+    truth.emplace(simulate::ReadTruth(options.truth_folder));
     RequireSameSize(material, options.material_folder, *truth);
   }
   std::error_code error;
@@ -187,7 +187,7 @@ std::vector<fit::QualityWarning> WriteMaterialReport(const MaterialReportOptions
                  std::to_string(material.representative_texels.size()) + " representatives, NDF hemicube " +
                  std::to_string(material.ndf_resolution) + ".");
   if (!options.compare_file.empty()) AddCompare(page, options.compare_file);
-  const Truth* shown_truth = truth ? &*truth : nullptr;
+  const simulate::Truth* shown_truth = truth ? &*truth : nullptr;
   AddMaps(page, material, shown_truth);
   AddNdfs(page, material, shown_truth ? shown_truth->parameters() : nullptr, options.max_ndfs);
   page.Raw("<h2>Provenance</h2><pre>" + material.provenance.dump(2) + "</pre>\n");

@@ -20,68 +20,6 @@
 namespace svbtdf::model {
 namespace {
 
-// Samples binned on a hemicube of |direction| (wi lies on one side of the surface only) against
-// the integral of Pdf over each cell; draws that fail form one more bin, expected to hold the
-// mass the pdf lacks.
-struct ChiSquare {
-  double chi2 = 0;
-  int bins = 0;
-  double pdf_integral = 0;
-  double failure_fraction = 0;
-  double max_pdf_mismatch = 0;     // |sample.pdf - Pdf(wi)| / pdf
-  double max_weight_mismatch = 0;  // |weight - Eval |cos| / pdf| / (that + 1e-12), any channel
-  double mean_weight = 0;          // channel-mean weight, failures counted as 0: the energy
-  double weight_standard_error = 0;
-  // Mean + 4.5 sigma of a chi-square with bins - 1 degrees of freedom (p about 1e-5).
-  bool Passes() const { return bins > 20 && chi2 < (bins - 1) + 4.5 * std::sqrt(2.0 * (bins - 1)); }
-};
-
-Vec3 Folded(const Vec3& d) { return {d.x(), d.y(), std::abs(d.z())}; }
-
-ChiSquare CheckBsdf(const Bsdf& bsdf, const Vec3& wo, int samples, uint64_t seed) {
-  const Hemicube grid(16);
-  const double side = wo.z() > 0 ? -1.0 : 1.0;  // wi's side
-  std::vector<double> expected =
-      testing::CellIntegrals(grid, [&](const Vec3& d) { return bsdf.Pdf(Vec3(d.x(), d.y(), side * d.z()), wo); });
-  ChiSquare check;
-  for (double e : expected) check.pdf_integral += e;
-  std::vector<double> observed(grid.num_cells(), 0.0);
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> uniform(0, 1);
-  double failures = 0, weight_sum = 0, weight_square_sum = 0;
-  for (int k = 0; k < samples; ++k) {
-    const double u_lobe = uniform(rng);
-    const Vec2 u(uniform(rng), uniform(rng));
-    const std::optional<BsdfSample> s = bsdf.Sample(wo, u_lobe, u);
-    if (!s) {
-      ++failures;
-      continue;
-    }
-    EXPECT_LT(s->wi.z() * wo.z(), 0.0);
-    EXPECT_NEAR(s->wi.norm(), 1.0, 1e-9);
-    ++observed[grid.CellOf(Folded(s->wi))];
-    check.max_pdf_mismatch = std::max(check.max_pdf_mismatch, std::abs(s->pdf - bsdf.Pdf(s->wi, wo)) / s->pdf);
-    const Rgb f = bsdf.Eval(s->wi, wo);
-    for (int ch = 0; ch < 3; ++ch) {
-      const double want = f[ch] * std::abs(s->wi.z()) / s->pdf;
-      check.max_weight_mismatch = std::max(check.max_weight_mismatch, std::abs(s->weight[ch] - want) / (want + 1e-12));
-    }
-    const double w = Luminance(s->weight);
-    weight_sum += w;
-    weight_square_sum += w * w;
-  }
-  check.failure_fraction = failures / samples;
-  check.mean_weight = weight_sum / samples;
-  check.weight_standard_error =
-      std::sqrt(std::max(0.0, weight_square_sum / samples - check.mean_weight * check.mean_weight) / samples);
-  for (double& e : expected) e *= samples;
-  const testing::ChiSquareStatistic statistic =
-      testing::PooledChiSquare(observed, expected, failures, std::max(0.0, 1.0 - check.pdf_integral) * samples);
-  check.chi2 = statistic.chi2;
-  check.bins = statistic.bins;
-  return check;
-}
-
 // The energy a viewer along wo receives per unit irradiance, by a fine quadrature of Eval |cos|
 // over wi's side (independent of Sample and Pdf).
 double QuadratureEnergy(const Bsdf& bsdf, const Vec3& wo) {
@@ -124,7 +62,7 @@ TEST(DualMicrofacetBsdf, SampleFollowsPdfForSeveralNdfsViewsAndBlends) {
     for (double alpha : {0.0, 0.5, 0.85}) {
       const DualMicrofacetBsdf bsdf(*n.ndf, Params(alpha, 0.35, {0.9, 0.8, 0.7}, {0.02, 0.03, 0.04}));
       for (const Vec3& wo : {Direction(0, 0), Direction(35, 60), Direction(65, 200), FlipZ(Direction(40, 10))}) {
-        const ChiSquare c = CheckBsdf(bsdf, wo, 200000, 7);
+        const testing::BsdfSamplerCheck c = testing::CheckBsdf(bsdf, wo, 200000, 7);
         const std::string where = n.name + " alpha " + std::to_string(alpha) + " wo.z " + std::to_string(wo.z());
         EXPECT_TRUE(c.Passes()) << where << ": chi2 " << c.chi2 << " over " << c.bins << " bins";
         EXPECT_LE(c.pdf_integral, 1.0 + 5e-3) << where;
@@ -178,7 +116,7 @@ TEST(DualMicrofacetBsdf, EnergyIsAtMostOneAndSampleEstimatesIt) {
     for (double alpha : {0.0, 0.5, 1.0}) {
       const DualMicrofacetBsdf bsdf(*n.ndf, Params(alpha, 0.5, {1, 1, 1}, {0, 0, 0}));
       for (const Vec3& wo : {Direction(0, 0), Direction(50, 30), FlipZ(Direction(70, 120))}) {
-        const ChiSquare c = CheckBsdf(bsdf, wo, 100000, 5);
+        const testing::BsdfSamplerCheck c = testing::CheckBsdf(bsdf, wo, 100000, 5);
         const double quadrature = QuadratureEnergy(bsdf, wo);
         const std::string where = n.name + " alpha " + std::to_string(alpha) + " wo.z " + std::to_string(wo.z());
         EXPECT_LE(c.mean_weight, 1.0 + 4 * c.weight_standard_error) << where;
@@ -194,7 +132,7 @@ TEST(DualMicrofacetBsdf, DiffuseOnlyTexelIsLambertianTransmission) {
   const GgxNdf ndf(0.3);
   const DualMicrofacetBsdf bsdf(ndf, Params(0.5, 0.3, {0, 0, 0}, {0.2, 0.25, 0.3}));
   EXPECT_DOUBLE_EQ(bsdf.lobe_weights(false).diffuse, 1.0);
-  const ChiSquare c = CheckBsdf(bsdf, Direction(30, 0), 100000, 9);
+  const testing::BsdfSamplerCheck c = testing::CheckBsdf(bsdf, Direction(30, 0), 100000, 9);
   EXPECT_TRUE(c.Passes()) << c.chi2;
   EXPECT_NEAR(c.mean_weight, kPi * 0.25, 1e-9);  // every weight is exactly pi rho_d
   EXPECT_EQ(c.failure_fraction, 0.0);
@@ -205,7 +143,7 @@ TEST(WalterBsdf, SampleFollowsPdfAndEvalIsTheBaselineShape) {
   for (double azimuth : {0.0, 0.7}) {
     const WalterBsdf bsdf(ndf, 1.0, 1.5, {0.8, 0.9, 1.0}, {0.01, 0.01, 0.01}, azimuth);
     for (const Vec3& wo : {Direction(0, 0), Direction(45, 80), FlipZ(Direction(60, 250))}) {
-      const ChiSquare c = CheckBsdf(bsdf, wo, 200000, 13);
+      const testing::BsdfSamplerCheck c = testing::CheckBsdf(bsdf, wo, 200000, 13);
       const std::string where = "azimuth " + std::to_string(azimuth) + " wo.z " + std::to_string(wo.z());
       EXPECT_TRUE(c.Passes()) << where << ": chi2 " << c.chi2 << " over " << c.bins << " bins";
       EXPECT_LT(c.max_pdf_mismatch, 1e-9) << where;
@@ -225,7 +163,7 @@ TEST(EvaluatedBsdf, SamplesTheCosineAndEvaluatesWhatItIsGiven) {
   const EvaluatedBsdf bsdf([&](const Vec3& i, const Vec3& o) { return EvaluateMaterial(ndf, p, i, o); });
   const DualMicrofacetBsdf reference(ndf, p);
   for (const Vec3& wo : {Direction(10, 0), Direction(55, 300)}) {
-    const ChiSquare c = CheckBsdf(bsdf, wo, 200000, 17);
+    const testing::BsdfSamplerCheck c = testing::CheckBsdf(bsdf, wo, 200000, 17);
     EXPECT_TRUE(c.Passes()) << c.chi2;
     EXPECT_NEAR(c.pdf_integral, 1.0, 5e-3);
     EXPECT_NEAR(c.mean_weight, QuadratureEnergy(reference, wo), 5 * c.weight_standard_error);

@@ -26,7 +26,7 @@ CompareOptions Named(const std::string& material_folder) {
 }
 
 TEST(Compare, AgainstAnAnalyticTruth) {
-  const Truth truth = ReadTruth(SimulatedTruths::TruthFolder("model"));
+  const simulate::Truth truth = simulate::ReadTruth(SimulatedTruths::TruthFolder("model"));
   ASSERT_NE(truth.parameters(), nullptr);
   const fit::Material exact = MaterialFromTruth(*truth.parameters());
   const CompareMetrics perfect = Compare(exact, truth, Named("exact"));
@@ -91,7 +91,7 @@ TEST(Compare, AgainstAnAnalyticTruth) {
 }
 
 TEST(Compare, AMonteCarloTruthHasNoAlphaOrNdfMetrics) {
-  const Truth montecarlo = ReadTruth(SimulatedTruths::TruthFolder("montecarlo"));
+  const simulate::Truth montecarlo = simulate::ReadTruth(SimulatedTruths::TruthFolder("montecarlo"));
   EXPECT_EQ(montecarlo.kind(), "montecarlo");
   EXPECT_EQ(montecarlo.parameters(), nullptr);
   ASSERT_NE(montecarlo.montecarlo(), nullptr);
@@ -115,20 +115,6 @@ TEST(Compare, AMonteCarloTruthHasNoAlphaOrNdfMetrics) {
   }
   EXPECT_TRUE(json["heldout_rel_rmse"].is_number());
   EXPECT_EQ(json.size(), 13u);
-}
-
-TEST(ReadTruth, AFolderOfNeitherKindNamesItsManifest) {
-  const fs::path folder = fs::temp_directory_path() / ("svbtdf-bad-truth-" + std::to_string(::getpid()));
-  fs::remove_all(folder);
-  fs::create_directories(folder);
-  common::WriteTextAtomically(folder / "material.json", "{}");
-  try {
-    ReadTruth(folder);
-    FAIL() << "a truth of no kind was read";
-  } catch (const common::Error& e) {
-    EXPECT_NE(std::string(e.what()).find("material.json"), std::string::npos) << e.what();
-  }
-  fs::remove_all(folder);
 }
 
 }  // namespace

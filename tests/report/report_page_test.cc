@@ -15,7 +15,7 @@
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/image_io.h"
-#include "svbtdf/report/truth.h"
+#include "svbtdf/simulate/truth.h"
 
 namespace svbtdf::report {
 namespace {
@@ -80,7 +80,7 @@ TEST_F(ReportPage, NamesTheMaterialsFiguresAndWritesThem) {
 // One simulation per test process (15-25 s each): the size check shares the analytic truth.
 TEST_F(ReportPage, ShowsAnAnalyticTruthsMapsAndNdfsAndRefusesATruthOfAnotherSize) {
   const fs::path truth_folder = SimulatedTruths::TruthFolder("model");
-  const std::set<std::string> figures = Report(MaterialFromTruth(*ReadTruth(truth_folder).parameters()), truth_folder);
+  const std::set<std::string> figures = Report(MaterialFromTruth(*simulate::ReadTruth(truth_folder).parameters()), truth_folder);
   for (const char* file : {"alpha_truth.png", "alpha_error.png", "rho_d_truth.png", "ndf_0_truth.png", "ndf_11.png"}) {
     EXPECT_TRUE(figures.count(file)) << file;
   }
@@ -104,7 +104,7 @@ TEST_F(ReportPage, ShowsAnAnalyticTruthsMapsAndNdfsAndRefusesATruthOfAnotherSize
 
 TEST_F(ReportPage, ShowsAMonteCarloTruthsRhoDAndSlabMaterials) {
   const fs::path truth_folder = SimulatedTruths::TruthFolder("montecarlo");
-  const Truth truth = ReadTruth(truth_folder);
+  const simulate::Truth truth = simulate::ReadTruth(truth_folder);
   const std::set<std::string> figures = Report(SmallMaterial(truth.width(), truth.height()), truth_folder.string());
   EXPECT_TRUE(figures.count("rho_d_truth.png"));
   EXPECT_TRUE(figures.count("slab_material_truth.png"));

@@ -36,6 +36,9 @@ struct Material {
   MaterialModel model = MaterialModel::kDualMicrofacet;
   int width = 0, height = 0;   // texels
   double eta = 1.5;
+  // The sample's physical size in metres (the store's geometry; "sample" in material.json), which
+  // a renderer needs; 0 when not recorded (materials written before it was).
+  double width_m = 0.0, height_m = 0.0;
   int ndf_resolution = 32;
   // Per-representative fits.
   std::vector<int64_t> representative_texels;        // texel index (y * width + x)

@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "svbtdf/fit/material.h"
-#include "svbtdf/report/truth.h"
+#include "svbtdf/simulate/truth.h"
 
 namespace svbtdf::report {
 
@@ -41,12 +41,12 @@ struct CompareMetrics {
 
 // Throws svbtdf::Error naming options.material_folder when the material and the truth differ in
 // size, or when the material records a held-out dot the rig does not have.
-CompareMetrics Compare(const fit::Material& material, const Truth& truth, const CompareOptions& options);
+CompareMetrics Compare(const fit::Material& material, const simulate::Truth& truth, const CompareOptions& options);
 
 // The metrics as `svbtdf compare --json` writes them (docs/validation.md); NaN becomes null.
 nlohmann::json ToJson(const CompareMetrics& metrics);
 
 // The one check that a material and a truth describe the same texels; throws naming the material.
-void RequireSameSize(const fit::Material& material, const std::string& material_folder, const Truth& truth);
+void RequireSameSize(const fit::Material& material, const std::string& material_folder, const simulate::Truth& truth);
 
 }  // namespace svbtdf::report

@@ -1,11 +1,16 @@
 #pragma once
-// Test support: a chi-square goodness-of-fit check of an NDF's visible-normal sampler against the
-// density it reports, binned on the cells of a hemicube.
+// Test support: chi-square goodness-of-fit checks of a sampler against the density it reports,
+// binned on the cells of a hemicube: an NDF's visible normals (CheckSampler) and a BSDF's
+// directions (CheckBsdf).
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <random>
 #include <vector>
 
+#include "svbtdf/model/bsdf.h"
 #include "svbtdf/model/hemicube.h"
 #include "svbtdf/model/ndf.h"
 
@@ -90,6 +95,69 @@ inline SamplerCheck CheckSampler(const Ndf& ndf, const Vec3& v, int samples, uin
   }
   for (double& e : expected) e = e / check.pdf_integral * samples;
   const ChiSquareStatistic statistic = PooledChiSquare(observed, expected);
+  check.chi2 = statistic.chi2;
+  check.bins = statistic.bins;
+  return check;
+}
+
+// A BSDF's Sample against its Pdf, Eval and weight (model/bsdf.h).
+// Samples binned on a hemicube of |direction| (wi lies on one side of the surface only) against
+// the integral of Pdf over each cell; draws that fail form one more bin, expected to hold the
+// mass the pdf lacks.
+struct BsdfSamplerCheck {
+  double chi2 = 0;
+  int bins = 0;
+  double pdf_integral = 0;
+  double failure_fraction = 0;
+  double max_pdf_mismatch = 0;     // |sample.pdf - Pdf(wi)| / pdf
+  double max_weight_mismatch = 0;  // |weight - Eval |cos| / pdf| / (that + 1e-12), any channel
+  double mean_weight = 0;          // channel-mean weight, failures counted as 0: the energy
+  double weight_standard_error = 0;
+  // Mean + 4.5 sigma of a chi-square with bins - 1 degrees of freedom (p about 1e-5).
+  bool Passes() const { return bins > 20 && chi2 < (bins - 1) + 4.5 * std::sqrt(2.0 * (bins - 1)); }
+};
+
+inline Vec3 Folded(const Vec3& d) { return {d.x(), d.y(), std::abs(d.z())}; }
+
+inline BsdfSamplerCheck CheckBsdf(const Bsdf& bsdf, const Vec3& wo, int samples, uint64_t seed) {
+  const Hemicube grid(16);
+  const double side = wo.z() > 0 ? -1.0 : 1.0;  // wi's side
+  std::vector<double> expected =
+      CellIntegrals(grid, [&](const Vec3& d) { return bsdf.Pdf(Vec3(d.x(), d.y(), side * d.z()), wo); });
+  BsdfSamplerCheck check;
+  for (double e : expected) check.pdf_integral += e;
+  std::vector<double> observed(grid.num_cells(), 0.0);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> uniform(0, 1);
+  double failures = 0, weight_sum = 0, weight_square_sum = 0;
+  for (int k = 0; k < samples; ++k) {
+    const double u_lobe = uniform(rng);
+    const Vec2 u(uniform(rng), uniform(rng));
+    const std::optional<BsdfSample> s = bsdf.Sample(wo, u_lobe, u);
+    if (!s) {
+      ++failures;
+      continue;
+    }
+    EXPECT_LT(s->wi.z() * wo.z(), 0.0);
+    EXPECT_NEAR(s->wi.norm(), 1.0, 1e-9);
+    ++observed[grid.CellOf(Folded(s->wi))];
+    check.max_pdf_mismatch = std::max(check.max_pdf_mismatch, std::abs(s->pdf - bsdf.Pdf(s->wi, wo)) / s->pdf);
+    const Rgb f = bsdf.Eval(s->wi, wo);
+    for (int ch = 0; ch < 3; ++ch) {
+      const double want = f[ch] * std::abs(s->wi.z()) / s->pdf;
+      check.max_weight_mismatch = std::max(check.max_weight_mismatch, std::abs(s->weight[ch] - want) / (want + 1e-12));
+    }
+    const double w = Luminance(s->weight);
+    weight_sum += w;
+    weight_square_sum += w * w;
+  }
+  check.failure_fraction = failures / samples;
+  check.mean_weight = weight_sum / samples;
+  check.weight_standard_error =
+      std::sqrt(std::max(0.0, weight_square_sum / samples - check.mean_weight * check.mean_weight) / samples);
+  for (double& e : expected) e *= samples;
+  const ChiSquareStatistic statistic =
+      PooledChiSquare(observed, expected, failures, std::max(0.0, 1.0 - check.pdf_integral) * samples);
   check.chi2 = statistic.chi2;
   check.bins = statistic.bins;
   return check;

@@ -1,22 +1,24 @@
-#include "svbtdf/report/truth.h"
+#include "svbtdf/simulate/truth.h"
 
 #include "svbtdf/simulate/truth_material.h"
 
-namespace svbtdf::report {
+namespace svbtdf::simulate {
 
 Truth ReadTruth(const std::filesystem::path& folder) {
   Truth truth;
   truth.folder_ = folder;
-  truth.kind_ = simulate::ReadTruthKind(folder);
+  truth.kind_ = ReadTruthKind(folder);
   if (truth.kind_ == "montecarlo") {
-    auto montecarlo = std::make_unique<simulate::MonteCarloTruth>(simulate::ReadMonteCarloTruth(folder));
+    auto montecarlo = std::make_unique<MonteCarloTruth>(ReadMonteCarloTruth(folder));
     truth.montecarlo_ = montecarlo.get();
     truth.btdf_ = std::move(montecarlo);
   } else {
-    truth.analytic_.emplace(simulate::ReadMaterialTruth(folder));
-    truth.btdf_ = std::make_unique<simulate::TruthMaterial>(truth.analytic_->ToTruthMaterial());
+    truth.analytic_.emplace(ReadMaterialTruth(folder));
+    auto material = std::make_unique<TruthMaterial>(truth.analytic_->ToTruthMaterial());
+    truth.analytic_material_ = material.get();
+    truth.btdf_ = std::move(material);
   }
-  truth.rig_ = simulate::ReadRigTruth(folder / "rig.json");
+  truth.rig_ = ReadRigTruth(folder / "rig.json");
   return truth;
 }
 
@@ -36,4 +38,4 @@ common::FloatImage Truth::RhoDMap() const {
   return map;
 }
 
-}  // namespace svbtdf::report
+}  // namespace svbtdf::simulate

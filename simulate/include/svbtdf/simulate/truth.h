@@ -2,7 +2,7 @@
 // The ground truth of a simulated session, DIR/truth/ (docs/truth-format.md), of either kind:
 // the analytic dual-microfacet material of `svbtdf simulate --truth model` (a true alpha and
 // NDF per texel) or the Monte Carlo slab truth of `--truth montecarlo` (a BTDF and rho_d only).
-// `svbtdf compare` and `svbtdf report` read truths through ReadTruth, so both accept both kinds.
+// `svbtdf compare`, `svbtdf report` and `svbtdf render` read truths through ReadTruth, so both accept both kinds.
 
 #include <filesystem>
 #include <memory>
@@ -13,11 +13,11 @@
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/hemicube.h"
 #include "svbtdf/simulate/montecarlo_truth.h"
-#include "svbtdf/simulate/truth_io.h"
 #include "svbtdf/simulate/spatial_btdf.h"
+#include "svbtdf/simulate/truth_material.h"
 #include "svbtdf/simulate/truth_io.h"
 
-namespace svbtdf::report {
+namespace svbtdf::simulate {
 
 class Truth {
  public:
@@ -26,15 +26,19 @@ class Truth {
   // ReadTruthKind's answer: "analytic" or "montecarlo".
   const std::string& kind() const { return kind_; }
   // The camera, sample and dots of the capture (rig.json).
-  const simulate::RigTruth& rig() const { return rig_; }
+  const RigTruth& rig() const { return rig_; }
   int width() const { return btdf_->texels_x(); }
   int height() const { return btdf_->texels_y(); }
 
   // The analytic material's per-texel parameters, or nullptr for a Monte Carlo truth, which
   // has no alpha and no NDF to compare with.
-  const simulate::MaterialTruth* parameters() const { return analytic_ ? &*analytic_ : nullptr; }
+  const MaterialTruth* parameters() const { return analytic_ ? &*analytic_ : nullptr; }
   // The Monte Carlo truth itself (its slab-material layout), or nullptr for an analytic truth.
-  const simulate::MonteCarloTruth* montecarlo() const { return montecarlo_; }
+  const MonteCarloTruth* montecarlo() const { return montecarlo_; }
+  // The analytic truth as the simulator rendered it (its NDF objects and eta), or nullptr.
+  const TruthMaterial* analytic_material() const { return analytic_material_; }
+  // The BTDF of every texel, whichever the kind.
+  const SpatialBtdf& btdf() const { return *btdf_; }
 
   model::Rgb RhoD(int x, int y) const;
   // rho_d of every texel as an RGB map, the shape of the material's own map.
@@ -48,14 +52,15 @@ class Truth {
 
   std::filesystem::path folder_;
   std::string kind_;
-  simulate::RigTruth rig_;
-  std::optional<simulate::MaterialTruth> analytic_;
-  const simulate::MonteCarloTruth* montecarlo_ = nullptr;  // owned by btdf_
-  std::unique_ptr<simulate::SpatialBtdf> btdf_;
+  RigTruth rig_;
+  std::optional<MaterialTruth> analytic_;
+  const MonteCarloTruth* montecarlo_ = nullptr;  // owned by btdf_
+  const TruthMaterial* analytic_material_ = nullptr;  // owned by btdf_
+  std::unique_ptr<SpatialBtdf> btdf_;
 };
 
 // Reads DIR/truth/material.json (either kind, with its maps) and rig.json. Throws svbtdf::Error
 // naming the file for anything missing or malformed, or a material.json of neither kind.
 Truth ReadTruth(const std::filesystem::path& folder);
 
-}  // namespace svbtdf::report
+}  // namespace svbtdf::simulate

@@ -1,0 +1,146 @@
+#include "svbtdf/render/surface.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "svbtdf/common/error.h"
+#include "svbtdf/common/json.h"
+#include "svbtdf/model/hemicube.h"
+
+namespace svbtdf::render {
+namespace fs = std::filesystem;
+
+Surface::Surface(int texels_x, int texels_y, double width_m, double height_m, const std::string& source)
+    : texels_x_(texels_x), texels_y_(texels_y), width_m_(width_m), height_m_(height_m) {
+  if (texels_x <= 0 || texels_y <= 0) common::ThrowInvalidInput(source, "has no texels");
+  if (!(width_m > 0 && height_m > 0 && std::isfinite(width_m) && std::isfinite(height_m))) {
+    common::ThrowInvalidInput(source, "has no physical size (give --sample-size WIDTH HEIGHT in metres)");
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// MaterialSurface
+
+MaterialSurface::MaterialSurface(const fit::Material& material, double width_m, double height_m, const std::string& source)
+    : Surface(material.width, material.height, width_m, height_m, source), material_(material) {
+  const model::Hemicube grid(material.ndf_resolution);
+  representatives_.reserve(material.representative_ln_d.size());
+  for (size_t r = 0; r < material.representative_ln_d.size(); ++r) {
+    // The stored tables are normalised under TabulatedNdf's own quadrature, so a blend whose
+    // weights sum to 1 is normalised too. Renormalising guards tables written by hand.
+    model::TabulatedNdf& table = representatives_.emplace_back(grid, material.representative_ln_d[r]);
+    table.Normalize();
+    const int64_t texel = material.representative_texels[r];
+    const int x = static_cast<int>(texel % material.width), y = static_cast<int>(texel / material.width);
+    double scale = 0;
+    for (int c = 0; c < 3; ++c) scale += material.k_s.at(x, y, c) / 3.0;
+    representative_scale_.push_back(scale);
+  }
+  if (material.weight_index.channels > model::TabulatedNdfBlend::kMaxComponents) {
+    common::ThrowFormatError(source, "blends more representatives per texel than the renderer takes (" +
+                                         std::to_string(material.weight_index.channels) + ")");
+  }
+}
+
+std::string MaterialSurface::description() const {
+  return std::string("fitted ") + fit::MaterialModelName(material_.model) + " material";
+}
+
+const model::Bsdf& MaterialSurface::At(int col, int row, BsdfScratch& scratch) const {
+  const fit::Material& m = material_;
+  model::Rgb k_s, rho_d;
+  for (int c = 0; c < 3; ++c) {
+    k_s[c] = m.k_s.at(col, row, c);
+    rho_d[c] = m.rho_d.at(col, row, c);
+  }
+  if (m.model == fit::MaterialModel::kWalterGgx) {
+    scratch.ggx.emplace(m.baseline_alpha_x.at(col, row), m.baseline_alpha_y.at(col, row));
+    return scratch.walter.emplace(*scratch.ggx, 1.0, m.eta, k_s, rho_d, m.baseline_azimuth.at(col, row));
+  }
+  // D = sum_j c_j D_j with c_j = w_j s_j / S, as MaterialEvaluator::TexelNdf blends the cells
+  // (docs/material-format.md), except that the sum is taken after interpolation.
+  struct Term {
+    int representative;
+    double weight;
+  };
+  std::array<Term, model::TabulatedNdfBlend::kMaxComponents> terms{};
+  int count = 0;
+  double scaled_total = 0, plain_total = 0;
+  for (int k = 0; k < m.weight_index.channels; ++k) {
+    const double w = m.weight_value.at(col, row, k);
+    if (w == 0.0) continue;
+    const int rep = static_cast<int>(m.weight_index.at(col, row, k));
+    terms[count++] = {rep, w};
+    scaled_total += w * representative_scale_[rep];
+    plain_total += w;
+  }
+  const bool by_scale = scaled_total > 0;  // representatives that transmit nothing: the plain blend
+  model::TabulatedNdfBlend& blend = scratch.blend.emplace();
+  for (int t = 0; t < count; ++t) {
+    const double scale = by_scale ? representative_scale_[terms[t].representative] / scaled_total : 1.0 / plain_total;
+    blend.Add(representatives_[terms[t].representative], terms[t].weight * scale);
+  }
+  model::DualMicrofacetParams params;
+  params.eta = m.eta;
+  params.alpha = std::clamp<double>(m.alpha.at(col, row), 0.0, 1.0);
+  const double roughness = m.shadowing_roughness.at(col, row);
+  params.shadowing = roughness > 0 ? model::SmithShadowing::Ggx(roughness) : model::SmithShadowing::None();
+  params.k_s = k_s;
+  params.rho_d = rho_d;
+  return scratch.dual.emplace(blend, params, &blend);
+}
+
+// ---------------------------------------------------------------------------------------------
+// TruthSurface
+
+TruthSurface::TruthSurface(const simulate::Truth& truth)
+    : Surface(truth.width(), truth.height(), truth.rig().sample.width, truth.rig().sample.height(),
+              truth.folder().string()),
+      truth_(truth) {}
+
+std::string TruthSurface::description() const { return truth_.kind() + " truth"; }
+
+const model::Bsdf& TruthSurface::At(int col, int row, BsdfScratch& scratch) const {
+  const int index = truth_.btdf().Index(col, row);
+  if (const simulate::TruthMaterial* analytic = truth_.analytic_material()) {
+    const simulate::TruthTexel& t = analytic->texel(index);
+    model::DualMicrofacetParams params;
+    params.eta = analytic->eta();
+    params.alpha = t.alpha;
+    params.shadowing = t.shadowing_roughness > 0 ? model::SmithShadowing::Ggx(t.shadowing_roughness)
+                                                 : model::SmithShadowing::None();
+    params.k_s = t.k_s;
+    params.rho_d = t.rho_d;
+    return scratch.dual.emplace(analytic->ndf(index), params);
+  }
+  const simulate::SpatialBtdf* btdf = &truth_.btdf();
+  return scratch.evaluated.emplace(
+      [btdf, index](const model::Vec3& i, const model::Vec3& o) { return btdf->Evaluate(index, i, o); });
+}
+
+// ---------------------------------------------------------------------------------------------
+
+LoadedSurface LoadSurface(const fs::path& folder, std::optional<std::pair<double, double>> sample_size) {
+  const fs::path manifest_path = folder / "material.json";
+  if (!fs::is_regular_file(manifest_path)) {
+    common::ThrowInvalidInput(folder.string(), "is not a material or a truth folder (it has no material.json)");
+  }
+  const nlohmann::json manifest = common::ReadJsonFile(manifest_path);
+  LoadedSurface loaded;
+  if (manifest.is_object() && manifest.value("format", "") == "svbtdf-material") {
+    loaded.material_ = std::make_unique<fit::Material>(fit::ReadMaterial(folder));
+    const fit::Material& m = *loaded.material_;
+    const auto [width_m, height_m] = sample_size.value_or(std::pair{m.width_m, m.height_m});
+    loaded.surface_ = std::make_unique<MaterialSurface>(m, width_m, height_m, manifest_path.string());
+    return loaded;
+  }
+  if (sample_size) {
+    common::ThrowInvalidInput("--sample-size", "applies to a fitted material only: " + folder.string() +
+                                                   " is a truth, whose rig.json records the sample's size");
+  }
+  loaded.truth_ = std::make_unique<simulate::Truth>(simulate::ReadTruth(folder));
+  loaded.surface_ = std::make_unique<TruthSurface>(*loaded.truth_);
+  return loaded;
+}
+
+}  // namespace svbtdf::render
