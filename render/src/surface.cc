@@ -22,7 +22,9 @@ Surface::Surface(int texels_x, int texels_y, double width_m, double height_m, co
 // MaterialSurface
 
 MaterialSurface::MaterialSurface(const fit::Material& material, double width_m, double height_m, const std::string& source)
-    : Surface(material.width, material.height, width_m, height_m, source), material_(material) {
+    : Surface(material.width, material.height, width_m, height_m, source),
+      material_(material),
+      clamped_integral_(static_cast<size_t>(material.width) * material.height) {
   const model::Hemicube grid(material.ndf_resolution);
   representatives_.reserve(material.representative_ln_d.size());
   for (size_t r = 0; r < material.representative_ln_d.size(); ++r) {
@@ -75,11 +77,30 @@ const model::Bsdf& MaterialSurface::At(int col, int row, BsdfScratch& scratch) c
     plain_total += w;
   }
   const bool by_scale = scaled_total > 0;  // representatives that transmit nothing: the plain blend
-  model::TabulatedNdfBlend& blend = scratch.blend.emplace();
-  for (int t = 0; t < count; ++t) {
-    const double scale = by_scale ? representative_scale_[terms[t].representative] / scaled_total : 1.0 / plain_total;
-    blend.Add(representatives_[terms[t].representative], terms[t].weight * scale);
+  const auto normalised_weight = [&](const Term& term) {
+    return term.weight * (by_scale ? representative_scale_[term.representative] / scaled_total : 1.0 / plain_total);
+  };
+  bool negative = false;
+  for (int t = 0; t < count; ++t) negative = negative || normalised_weight(terms[t]) < 0;
+  // The weights sum to 1 and every table is normalised, so the blend is too, until negative
+  // weights are clamped away: that adds mass, which can be many times the blend's own when its
+  // terms nearly cancel. Such a texel is scaled back by its clamped blend's integral, as
+  // MaterialEvaluator::TexelNdf normalises its clamped table.
+  double scale = 1.0;
+  if (negative) {
+    const size_t index = static_cast<size_t>(row) * m.width + col;
+    float integral = clamped_integral_[index].load(std::memory_order_relaxed);
+    if (integral == 0.0f) {
+      std::array<int, model::TabulatedNdfBlend::kMaxComponents> reps{};
+      std::array<double, model::TabulatedNdfBlend::kMaxComponents> weights{};
+      for (int t = 0; t < count; ++t) reps[t] = terms[t].representative, weights[t] = normalised_weight(terms[t]);
+      integral = static_cast<float>(ClampedIntegral(reps.data(), weights.data(), count));
+      clamped_integral_[index].store(integral, std::memory_order_relaxed);
+    }
+    scale = 1.0 / integral;
   }
+  model::TabulatedNdfBlend& blend = scratch.blend.emplace();
+  for (int t = 0; t < count; ++t) blend.Add(representatives_[terms[t].representative], normalised_weight(terms[t]) * scale);
   model::DualMicrofacetParams params;
   params.eta = m.eta;
   params.alpha = std::clamp<double>(m.alpha.at(col, row), 0.0, 1.0);
@@ -88,6 +109,29 @@ const model::Bsdf& MaterialSurface::At(int col, int row, BsdfScratch& scratch) c
   params.k_s = k_s;
   params.rho_d = rho_d;
   return scratch.dual.emplace(blend, params, &blend);
+}
+
+double MaterialSurface::ClampedIntegral(const int* representatives, const double* weights, int count) const {
+  // The unclamped blend integrates to exactly 1 (normalised tables, weights summing to 1), so only
+  // the mass the clamp adds is computed: the integral of max(0, -sum) by 2 x 2 points per cell of
+  // the tables' hemicube, taken as the clamped minus the signed sum under the same rule so that
+  // the rule's own error cancels (about 1 ms per texel at resolution 32, 4 representatives).
+  const model::Hemicube& grid = representatives_.front().grid();
+  constexpr int kSub = 2;
+  double clamped = 0, signed_sum = 0;
+  for (int c = 0; c < grid.num_cells(); ++c) {
+    const double cell_weight = grid.CellSolidAngle(c) / (kSub * kSub);
+    for (int a = 0; a < kSub; ++a) {
+      for (int b = 0; b < kSub; ++b) {
+        const model::Vec3 h = grid.CellPoint(c, (a + 0.5) / kSub, (b + 0.5) / kSub);
+        double d = 0;
+        for (int j = 0; j < count; ++j) d += weights[j] * representatives_[representatives[j]].D(h);
+        clamped += std::max(d, 0.0) * h.z() * cell_weight;
+        signed_sum += d * h.z() * cell_weight;
+      }
+    }
+  }
+  return 1.0 + std::max(0.0, clamped - signed_sum);
 }
 
 // ---------------------------------------------------------------------------------------------

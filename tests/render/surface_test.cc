@@ -23,10 +23,11 @@ Vec3 Direction(double theta_deg, double phi_deg) {
   return model::SphericalDirection(theta_deg * model::kPi / 180, phi_deg * model::kPi / 180);
 }
 
-// Five texels: three representatives (GGX tables of unlike roughness and scale) on texels 0-2,
-// texel 3 a blend of all three, texel 4 an affine blend with a negative weight.
+// Six texels: three representatives (GGX tables of unlike roughness and scale) on texels 0-2,
+// texel 3 a blend of all three, texel 4 an affine blend with a negative weight, texel 5 one whose
+// terms nearly cancel (clamping its negative part adds several times the blend's mass).
 fit::Material BlendedMaterial() {
-  fit::Material m = SmallMaterial(5, 1);
+  fit::Material m = SmallMaterial(6, 1);
   m.ndf_resolution = 32;  // the fit's default (the paper's)
   const model::Hemicube grid(m.ndf_resolution);
   m.representative_texels = {0, 1, 2};
@@ -36,16 +37,16 @@ fit::Material BlendedMaterial() {
     table.Normalize();
     m.representative_ln_d.push_back(table.ln_d());
   }
-  const float k_s[5] = {0.8f, 1.2f, 0.5f, 0.9f, 1.0f};
-  const float alpha[5] = {0.2f, 0.6f, 0.9f, 0.5f, 0.4f};
-  for (int x = 0; x < 5; ++x) {
+  const float k_s[6] = {0.8f, 1.2f, 0.5f, 0.9f, 1.0f, 1.1f};
+  const float alpha[6] = {0.2f, 0.6f, 0.9f, 0.5f, 0.4f, 0.5f};
+  for (int x = 0; x < 6; ++x) {
     for (int c = 0; c < 3; ++c) m.k_s.at(x, 0, c) = k_s[x] * (1.0f - 0.1f * c);
     m.alpha.at(x, 0) = alpha[x];
   }
-  m.weight_index = common::FloatImage(5, 1, 3);
-  m.weight_value = common::FloatImage(5, 1, 3);
-  const float weights[5][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0.5f, 0.3f, 0.2f}, {0.1f, 1.2f, -0.3f}};
-  for (int x = 0; x < 5; ++x) {
+  m.weight_index = common::FloatImage(6, 1, 3);
+  m.weight_value = common::FloatImage(6, 1, 3);
+  const float weights[6][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0.5f, 0.3f, 0.2f}, {0.1f, 1.2f, -0.3f}, {-2.0f, 3.0f, 0.0f}};
+  for (int x = 0; x < 6; ++x) {
     for (int k = 0; k < 3; ++k) {
       m.weight_index.at(x, 0, k) = static_cast<float>(k);
       m.weight_value.at(x, 0, k) = weights[x][k];
@@ -71,7 +72,7 @@ double RelativeL2(const model::Bsdf& bsdf, const fit::TexelBtdf& reference) {
   return std::sqrt(error / norm);
 }
 
-TEST(MaterialSurface, RepresentativesAreExactlyTheEvaluatorsAndBlendsAgreeWithinAPercent) {
+TEST(MaterialSurface, RepresentativesAreExactlyTheEvaluatorsAndBlendsAgreeWithItsTolerance) {
   const fit::Material material = BlendedMaterial();
   const MaterialSurface surface(material, 0.05, 0.01, "test material");
   const fit::MaterialEvaluator evaluator(material);
@@ -81,9 +82,12 @@ TEST(MaterialSurface, RepresentativesAreExactlyTheEvaluatorsAndBlendsAgreeWithin
   }
   // A blend is summed after interpolating its tables, the evaluator before: they differ between
   // hemicube cell centres only (measured 0.44% and 0.27% at resolution 32; 1.4% and 1.0% at 16).
-  for (int x = 3; x < 5; ++x) {
+  // Texel 5's terms nearly cancel: clamping its negative part adds 2.6 times its mass, and where D
+  // crosses zero the two interpolations differ most (measured 8.1%; 40x before the surface
+  // normalised the clamped blend).
+  for (int x = 3; x < 6; ++x) {
     const double error = RelativeL2(surface.At(x, 0, scratch), evaluator.Texel(x, 0));
-    EXPECT_LT(error, 0.01) << "blended texel " << x;
+    EXPECT_LT(error, x == 5 ? 0.1 : 0.01) << "blended texel " << x;
     std::printf("blended texel %d: relative L2 %.5f against MaterialEvaluator\n", x, error);
   }
 }
@@ -92,7 +96,7 @@ TEST(MaterialSurface, BlendedTexelsSampleWhatTheirPdfSays) {
   const fit::Material material = BlendedMaterial();
   const MaterialSurface surface(material, 0.05, 0.01, "test material");
   BsdfScratch scratch;
-  for (int x : {3, 4}) {
+  for (int x : {3, 4, 5}) {
     const model::Bsdf& bsdf = surface.At(x, 0, scratch);
     for (const Vec3& wo : {Direction(0, 0), Direction(50, 120), model::FlipZ(Direction(30, 10))}) {
       const model::testing::BsdfSamplerCheck c = model::testing::CheckBsdf(bsdf, wo, 200000, 21);

@@ -6,6 +6,7 @@
 // Renderers ask for one texel's BSDF per hit; At() builds it in a caller-owned scratch (one per
 // thread), so that nothing is allocated per hit and the material's tables are built once.
 
+#include <atomic>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -55,7 +56,7 @@ class Surface {
 
 // A fitted material: the dual-microfacet texel with D the blend of its representatives' tables
 // (model::TabulatedNdfBlend, sampled as their mixture), or the walter-ggx baseline's texel.
-// `material` must outlive the surface.
+// `material` must outlive the surface. At() is safe to call from many threads at once.
 class MaterialSurface final : public Surface {
  public:
   MaterialSurface(const fit::Material& material, double width_m, double height_m, const std::string& source);
@@ -63,9 +64,15 @@ class MaterialSurface final : public Surface {
   const model::Bsdf& At(int col, int row, BsdfScratch& scratch) const override;
 
  private:
+  // The integral of D h.z of the blend sum_j weights[j] D_j clamped at 0, for weights summing to 1.
+  double ClampedIntegral(const int* representatives, const double* weights, int count) const;
+
   const fit::Material& material_;
   std::vector<model::TabulatedNdf> representatives_;  // each representative's own table
   std::vector<double> representative_scale_;          // its k_s, channel mean (MaterialEvaluator's s_j)
+  // Per texel with a negative weight, the integral of its clamped blend, computed on first use
+  // (0: not yet). A pure function of the texel, so whichever thread computes it stores the same.
+  mutable std::vector<std::atomic<float>> clamped_integral_;
 };
 
 // A simulator truth (either kind): the analytic dual-microfacet texel with its own NDF, or the
