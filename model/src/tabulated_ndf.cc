@@ -136,16 +136,38 @@ double TabulatedNdf::Normalize() {
 const TabulatedNdf::AreaTable& TabulatedNdf::Areas() const {
   return areas_.Get([this] {
     auto table = std::make_shared<AreaTable>();
+    // The quadrature nodes in separate arrays (x, y, z and D times the weight), so that the inner
+    // loop over them vectorises: a renderer builds this table for every representative of a
+    // material (3,600 at paper scale), and it is most of the cost of a first render.
     const Quadrature q = CellQuadrature(grid_, 2);
-    std::vector<double> d_weight(q.directions.size());
-    for (size_t k = 0; k < q.directions.size(); ++k) d_weight[k] = D(q.directions[k]) * q.weights[k];
+    const size_t n = q.directions.size();
+    // Single precision: four lanes per SSE instruction, and a projected area to about 1e-6
+    // relative, far below the table's interpolation error.
+    std::vector<float> x(n), y(n), z(n), d_weight(n);
+    for (size_t k = 0; k < n; ++k) {
+      x[k] = static_cast<float>(q.directions[k].x());
+      y[k] = static_cast<float>(q.directions[k].y());
+      z[k] = static_cast<float>(q.directions[k].z());
+      d_weight[k] = static_cast<float>(D(q.directions[k]) * q.weights[k]);
+    }
     table->area.resize(static_cast<size_t>(kAreaThetaSteps + 1) * kAreaPhiSteps);
     for (int t = 0; t <= kAreaThetaSteps; ++t) {
       const double theta = std::min(0.5 * kPi * t / kAreaThetaSteps, 0.5 * kPi - 1e-6);
       for (int p = 0; p < kAreaPhiSteps; ++p) {
         const Vec3 v = SphericalDirection(theta, kTwoPi * p / kAreaPhiSteps);
+        const float vx = static_cast<float>(v.x()), vy = static_cast<float>(v.y()), vz = static_cast<float>(v.z());
+        // Eight partial sums: without them the compiler may not reorder the additions to vectorise.
+        float partial[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+        size_t k = 0;
+        for (; k + 8 <= n; k += 8) {
+          for (int lane = 0; lane < 8; ++lane) {
+            const size_t j = k + lane;
+            partial[lane] += std::max(0.0f, vx * x[j] + vy * y[j] + vz * z[j]) * d_weight[j];
+          }
+        }
+        for (; k < n; ++k) partial[0] += std::max(0.0f, vx * x[k] + vy * y[k] + vz * z[k]) * d_weight[k];
         double area = 0;
-        for (size_t k = 0; k < q.directions.size(); ++k) area += std::max(0.0, v.dot(q.directions[k])) * d_weight[k];
+        for (float value : partial) area += value;
         table->area[static_cast<size_t>(t) * kAreaPhiSteps + p] = area;
       }
     }
