@@ -35,6 +35,9 @@ std::string SelectedCommandPath(const CLI::App& app) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // First of all: a Ctrl-C during start-up must stop cleanly too, not kill the process with the
+  // signal (issue 15).
+  svbtdf::common::InstallInterruptHandler();
   CLI::App app{"svbtdf: measure and fit the BTDF of thin transparent slabs (dual-microfacet model)",
                "svbtdf"};
   app.set_version_flag("--version", std::string("svbtdf ") + SVBTDF_VERSION);
@@ -51,7 +54,6 @@ int main(int argc, char** argv) {
   });
 
   svbtdf::cli::AddAllCommands(app);
-  svbtdf::common::InstallInterruptHandler();
 
   try {
     app.parse(argc, argv);

@@ -5,11 +5,19 @@
 #include <exception>
 #include <mutex>
 #include <thread>
+#include <string>
 #include <vector>
+
+#include "svbtdf/common/error.h"
 
 namespace svbtdf::common {
 
 int ThreadCount(int requested) {
+  // A million threads aborted `fit` under a memory limit (issue 15): far beyond any machine's
+  // cores, each thread's stack alone exhausts memory.
+  if (requested > kMaxThreads) {
+    ThrowInvalidInput("--threads", std::to_string(requested) + " threads asked for; at most " + std::to_string(kMaxThreads));
+  }
   if (requested > 0) return requested;
   return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }

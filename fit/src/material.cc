@@ -236,6 +236,19 @@ Material ReadMaterial(const fs::path& folder) {
   if (!(m.width_m >= 0 && m.height_m >= 0 && std::isfinite(m.width_m) && std::isfinite(m.height_m))) {
     common::ThrowFormatError(manifest_path.string(), "has a sample size (\"sample\") that is not a finite size in metres");
   }
+  // Every index a file gives is checked before it is used: a representative texel of 1e9 read far
+  // out of bounds (SIGSEGV in `svbtdf eval`, issue 15), and 1024 or -1 read silently wrong texels.
+  const int64_t texels = static_cast<int64_t>(m.width) * m.height;
+  for (const int64_t texel : m.representative_texels) {
+    if (texel < 0 || texel >= texels) {
+      common::ThrowFormatError(manifest_path.string(), "lists representative texel " + std::to_string(texel) +
+                                                           ", outside the " + std::to_string(m.width) + "x" +
+                                                           std::to_string(m.height) + " material");
+    }
+  }
+  if (m.ndf_resolution < 1 || m.ndf_resolution > 256) {
+    common::ThrowFormatError(manifest_path.string(), "has an NDF resolution outside 1..256");
+  }
   const model::Hemicube grid(m.ndf_resolution);
   const common::FloatImage tables = common::ReadFloatImage(folder / "ndf_ln_d.exr");
   common::RequireFinite(tables, (folder / "ndf_ln_d.exr").string());

@@ -27,6 +27,18 @@ TEST(ThreadCount, ARequestIsTakenAsIsAndZeroMeansEveryHardwareThread) {
   const int all = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   EXPECT_EQ(ThreadCount(0), all);
   EXPECT_EQ(ThreadCount(-3), all);
+  EXPECT_EQ(ThreadCount(kMaxThreads), kMaxThreads);
+}
+
+// `fit --threads 1000000` aborted under a memory limit (issue 15): now one line naming --threads.
+TEST(ThreadCount, RefusesAbsurdRequestsNamingTheOption) {
+  try {
+    ThreadCount(1000000);
+    FAIL() << "a million threads were accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kInvalidInput);
+    EXPECT_NE(std::string(e.what()).find("--threads"), std::string::npos) << e.what();
+  }
 }
 
 // (n, threads, chunk)

@@ -7,6 +7,7 @@
 
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/fit/clustering.h"
 #include "svbtdf/fit/material.h"
 #include "svbtdf/model/beckmann.h"
@@ -138,6 +139,22 @@ TEST_F(MaterialTest, DamagedMaterialsAreErrorsNamingTheFile) {
     FAIL();
   } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find("version 99"), std::string::npos) << e.what();
+  }
+  // A representative texel outside the material crashed `svbtdf eval` with SIGSEGV (1e9) or read
+  // another texel silently (1024, -1) (issue 15).
+  WriteMaterial(dir_ / "indices", FitMaterial(synthetic, 0.125));
+  const fs::path manifest = dir_ / "indices" / "material.json";
+  nlohmann::json json = common::ReadJsonFile(manifest);
+  for (const int64_t texel : {int64_t{1000000000}, static_cast<int64_t>(json["width"].get<int>() * json["height"].get<int>()), int64_t{-1}}) {
+    json["representatives"]["texels"][0] = texel;
+    common::WriteTextAtomically(manifest, json.dump(), /*overwrite=*/true);
+    try {
+      ReadMaterial(dir_ / "indices");
+      FAIL() << "representative texel " << texel << " was read";
+    } catch (const common::Error& e) {
+      EXPECT_NE(std::string(e.what()).find("material.json: lists representative texel " + std::to_string(texel)),
+                std::string::npos) << e.what();
+    }
   }
   // 150,000 nested [] in the provenance crashed `svbtdf eval` with SIGSEGV (issue 15).
   const std::string deep = std::string(150000, '[') + std::string(150000, ']');

@@ -6,7 +6,10 @@
 
 namespace svbtdf::common {
 
-// `requested` threads, or every hardware thread when requested <= 0.
+inline constexpr int kMaxThreads = 1024;
+
+// `requested` threads, or every hardware thread when requested <= 0. Throws
+// svbtdf::Error(kInvalidInput) naming --threads beyond kMaxThreads.
 int ThreadCount(int requested);
 
 // Runs body(begin, end) over [0, n) in chunks of `chunk` indices taken in order by ThreadCount(threads)
