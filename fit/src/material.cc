@@ -285,14 +285,34 @@ Material ReadMaterial(const fs::path& folder) {
   return m;
 }
 
-MaterialEvaluator::MaterialEvaluator(const Material& material) : material_(material), grid_(material.ndf_resolution) {
+model::DualMicrofacetParams TexelParams(const Material& material, int x, int y) {
+  model::DualMicrofacetParams params;
+  params.eta = material.eta;
+  params.alpha = std::clamp<double>(material.alpha.at(x, y), 0.0, 1.0);
+  const double roughness = material.shadowing_roughness.at(x, y);
+  params.shadowing = roughness > 0 ? model::SmithShadowing::Ggx(roughness) : model::SmithShadowing::None();
+  for (int c = 0; c < 3; ++c) {
+    params.k_s[c] = material.k_s.at(x, y, c);
+    params.rho_d[c] = material.rho_d.at(x, y, c);
+  }
+  return params;
+}
+
+std::vector<double> RepresentativeScales(const Material& material) {
   // A representative's texel holds its own fit (weight 1 on itself).
+  std::vector<double> scales;
+  scales.reserve(material.representative_texels.size());
   for (const int64_t texel : material.representative_texels) {
     const int x = static_cast<int>(texel % material.width), y = static_cast<int>(texel / material.width);
     double scale = 0;
     for (int c = 0; c < 3; ++c) scale += material.k_s.at(x, y, c) / 3.0;
-    representative_scale_.push_back(scale);
+    scales.push_back(scale);
   }
+  return scales;
+}
+
+MaterialEvaluator::MaterialEvaluator(const Material& material)
+    : material_(material), grid_(material.ndf_resolution), representative_scale_(RepresentativeScales(material)) {
   // Every texel's NDF is a blend of these: exponentiate each table once, not once per texel.
   if (material.model == MaterialModel::kDualMicrofacet) {
     representative_d_.reserve(material.representative_ln_d.size());
@@ -359,16 +379,7 @@ TexelBtdf MaterialEvaluator::Texel(int x, int y) const {
                                      std::to_string(material_.width) + "x" + std::to_string(material_.height) +
                                      " material");
   }
-  model::DualMicrofacetParams params;
-  params.eta = material_.eta;
-  params.alpha = std::clamp<double>(material_.alpha.at(x, y), 0.0, 1.0);
-  const double roughness = material_.shadowing_roughness.at(x, y);
-  params.shadowing = roughness > 0 ? model::SmithShadowing::Ggx(roughness) : model::SmithShadowing::None();
-  for (int c = 0; c < 3; ++c) {
-    params.k_s[c] = material_.k_s.at(x, y, c);
-    params.rho_d[c] = material_.rho_d.at(x, y, c);
-  }
-  return TexelBtdf(TexelNdf(x, y), params, Lobe(x, y));
+  return TexelBtdf(TexelNdf(x, y), TexelParams(material_, x, y), Lobe(x, y));
 }
 
 }  // namespace svbtdf::fit

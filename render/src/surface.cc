@@ -24,19 +24,14 @@ Surface::Surface(int texels_x, int texels_y, double width_m, double height_m, co
 MaterialSurface::MaterialSurface(const fit::Material& material, double width_m, double height_m, const std::string& source)
     : Surface(material.width, material.height, width_m, height_m, source),
       material_(material),
+      representative_scale_(fit::RepresentativeScales(material)),
       clamped_integral_(static_cast<size_t>(material.width) * material.height) {
   const model::Hemicube grid(material.ndf_resolution);
   representatives_.reserve(material.representative_ln_d.size());
-  for (size_t r = 0; r < material.representative_ln_d.size(); ++r) {
+  for (const std::vector<double>& ln_d : material.representative_ln_d) {
     // The stored tables are normalised under TabulatedNdf's own quadrature, so a blend whose
     // weights sum to 1 is normalised too. Renormalising guards tables written by hand.
-    model::TabulatedNdf& table = representatives_.emplace_back(grid, material.representative_ln_d[r]);
-    table.Normalize();
-    const int64_t texel = material.representative_texels[r];
-    const int x = static_cast<int>(texel % material.width), y = static_cast<int>(texel / material.width);
-    double scale = 0;
-    for (int c = 0; c < 3; ++c) scale += material.k_s.at(x, y, c) / 3.0;
-    representative_scale_.push_back(scale);
+    representatives_.emplace_back(grid, ln_d).Normalize();
   }
   if (material.weight_index.channels > model::TabulatedNdfBlend::kMaxComponents) {
     common::ThrowFormatError(source, "blends more representatives per texel than the renderer takes (" +
@@ -50,14 +45,10 @@ std::string MaterialSurface::description() const {
 
 const model::Bsdf& MaterialSurface::At(int col, int row, BsdfScratch& scratch) const {
   const fit::Material& m = material_;
-  model::Rgb k_s, rho_d;
-  for (int c = 0; c < 3; ++c) {
-    k_s[c] = m.k_s.at(col, row, c);
-    rho_d[c] = m.rho_d.at(col, row, c);
-  }
+  const model::DualMicrofacetParams params = fit::TexelParams(m, col, row);
   if (m.model == fit::MaterialModel::kWalterGgx) {
     scratch.ggx.emplace(m.baseline_alpha_x.at(col, row), m.baseline_alpha_y.at(col, row));
-    return scratch.walter.emplace(*scratch.ggx, 1.0, m.eta, k_s, rho_d, m.baseline_azimuth.at(col, row));
+    return scratch.walter.emplace(*scratch.ggx, 1.0, m.eta, params.k_s, params.rho_d, m.baseline_azimuth.at(col, row));
   }
   // D = sum_j c_j D_j with c_j = w_j s_j / S, as MaterialEvaluator::TexelNdf blends the cells
   // (docs/material-format.md), except that the sum is taken after interpolation.
@@ -101,13 +92,6 @@ const model::Bsdf& MaterialSurface::At(int col, int row, BsdfScratch& scratch) c
   }
   model::TabulatedNdfBlend& blend = scratch.blend.emplace();
   for (int t = 0; t < count; ++t) blend.Add(representatives_[terms[t].representative], normalised_weight(terms[t]) * scale);
-  model::DualMicrofacetParams params;
-  params.eta = m.eta;
-  params.alpha = std::clamp<double>(m.alpha.at(col, row), 0.0, 1.0);
-  const double roughness = m.shadowing_roughness.at(col, row);
-  params.shadowing = roughness > 0 ? model::SmithShadowing::Ggx(roughness) : model::SmithShadowing::None();
-  params.k_s = k_s;
-  params.rho_d = rho_d;
   return scratch.dual.emplace(blend, params, &blend);
 }
 
@@ -147,15 +131,7 @@ std::string TruthSurface::description() const { return truth_.kind() + " truth";
 const model::Bsdf& TruthSurface::At(int col, int row, BsdfScratch& scratch) const {
   const int index = truth_.btdf().Index(col, row);
   if (const simulate::TruthMaterial* analytic = truth_.analytic_material()) {
-    const simulate::TruthTexel& t = analytic->texel(index);
-    model::DualMicrofacetParams params;
-    params.eta = analytic->eta();
-    params.alpha = t.alpha;
-    params.shadowing = t.shadowing_roughness > 0 ? model::SmithShadowing::Ggx(t.shadowing_roughness)
-                                                 : model::SmithShadowing::None();
-    params.k_s = t.k_s;
-    params.rho_d = t.rho_d;
-    return scratch.dual.emplace(analytic->ndf(index), params);
+    return scratch.dual.emplace(analytic->ndf(index), truth_.parameters()->Params(col, row));
   }
   const simulate::SpatialBtdf* btdf = &truth_.btdf();
   return scratch.evaluated.emplace(

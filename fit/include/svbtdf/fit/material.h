@@ -79,6 +79,14 @@ void WriteMaterial(const std::filesystem::path& folder, const Material& material
 // Reads and checks a material; every problem is an svbtdf::Error naming the file.
 Material ReadMaterial(const std::filesystem::path& folder);
 
+// Texel (x, y)'s dual-microfacet parameters as every evaluator of a material takes them: the
+// material's eta, alpha clamped to [0, 1], the Smith roughness (0: no shadowing), k_s and rho_d.
+model::DualMicrofacetParams TexelParams(const Material& material, int x, int y);
+
+// Each representative's scale s_j (its own texel's k_s, channel mean), by which a texel's blend
+// weighs the representative's D (docs/material-format.md).
+std::vector<double> RepresentativeScales(const Material& material);
+
 // One texel of a material, ready to evaluate at many direction pairs.
 // For the baseline, `params` holds eta, k_s and rho_d, and `baseline` the lobe:
 //   R[c] = k_s[c] BaselineShape(lobe, eta, i, o) + rho_d[c].

@@ -69,7 +69,7 @@ class MaterialSurface final : public Surface {
 
   const fit::Material& material_;
   std::vector<model::TabulatedNdf> representatives_;  // each representative's own table
-  std::vector<double> representative_scale_;          // its k_s, channel mean (MaterialEvaluator's s_j)
+  std::vector<double> representative_scale_;          // fit::RepresentativeScales
   // Per texel with a negative weight, the integral of its clamped blend, computed on first use
   // (0: not yet). A pure function of the texel, so whichever thread computes it stores the same.
   mutable std::vector<std::atomic<float>> clamped_integral_;
