@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "svbtdf/common/folder_lock.h"
 #include "quality_output.h"
 #include "svbtdf/calib/session_calibration.h"
 #include "svbtdf/common/error.h"
@@ -41,6 +42,7 @@ void RunProcess(ProcessCommandOptions options) {
     common::ThrowInvalidInput(options.session, "has no calibration.json", "run 'svbtdf calibrate " + options.session + "' first");
   }
   const calib::SessionCalibration calibration = calib::ReadSessionCalibration(calibration_path);
+  const common::FolderLock lock = common::FolderLock::Acquire(options.out, "svbtdf process");
   const process::ProcessReport report = process::ProcessSession(session, calibration, options.out, options.process);
   std::printf("processed %d dots (%d resumed) from %lld images in %.1f s: %lld of %lld texels valid\n", report.dots,
               report.dots_resumed, static_cast<long long>(report.images_read), report.seconds,
