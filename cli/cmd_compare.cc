@@ -58,6 +58,7 @@ void AddCompareCommand(CLI::App& app) {
   compare->add_option("truth", options->truth, "ground-truth folder written by 'svbtdf simulate' (OUT/truth)")->required();
   compare->add_option("--json", options->json, "write the metrics to this new JSON file");
   compare->add_option("--texels", options->compare.max_texels, "compare at most this many texels (random, seeded)")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   compare->add_option("--seed", options->compare.seed, "seed of the texel subset")->capture_default_str();
   compare->callback([options] { RunCompare(*options); });

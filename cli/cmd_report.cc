@@ -35,7 +35,9 @@ void AddReportCommand(CLI::App& app) {
   report->add_option("--truth", options->truth_folder,
                      "ground truth written by 'svbtdf simulate' (OUT/truth, model or montecarlo), shown alongside");
   report->add_option("--compare", options->compare_file, "metrics written by 'svbtdf compare --json', shown as a table");
-  report->add_option("--ndfs", options->max_ndfs, "number of representatives' NDFs to show")->capture_default_str();
+  report->add_option("--ndfs", options->max_ndfs, "number of representatives' NDFs to show")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   report->callback([options] { RunReport(*options); });
 }
 

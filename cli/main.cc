@@ -75,7 +75,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "svbtdf: error: %s: %s\n", e.path1().c_str(), e.code().message().c_str());
     return 1;
   } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "svbtdf: error: out of memory (try a smaller --threads or tile size)\n");
+    std::fprintf(stderr,
+                 "svbtdf: error: out of memory: an input or an option asks for more memory than this machine has "
+                 "(check image sizes, --texels, --light-resolution and --threads)\n");
     return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "svbtdf: internal error: %s (please report this with the command line)\n",

@@ -4,6 +4,7 @@
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -20,6 +21,16 @@ std::unique_ptr<OIIO::ImageInput> OpenForReading(const fs::path& path) {
   if (!input) {
     ThrowFormatError(path.string(), "cannot be decoded as an image: " + OIIO::geterror(),
                      "is the file complete and in a format OpenImageIO reads (PNG, TIFF, EXR)?");
+  }
+  // A header is a claim, not a fact: a few damaged bytes can claim 60000 x 60000 pixels, which
+  // would end in "out of memory" without naming the file.
+  const OIIO::ImageSpec& spec = input->spec();
+  constexpr int64_t kMaxSamples = int64_t{1} << 30;
+  const int64_t samples = int64_t{spec.width} * spec.height * std::max(1, spec.nchannels);
+  if (spec.width <= 0 || spec.height <= 0 || samples > kMaxSamples) {
+    ThrowFormatError(path.string(), "claims " + std::to_string(spec.width) + " x " + std::to_string(spec.height) + " x " +
+                                        std::to_string(spec.nchannels) + " samples, more than svbtdf reads (2^30)",
+                     "the file is damaged or not an image of this rig");
   }
   return input;
 }

@@ -331,7 +331,8 @@ std::vector<int> HeldOutDots(int num_dots, double holdout, uint64_t seed) {
 
 Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options) {
   const auto start = std::chrono::steady_clock::now();
-  const double eta = options.eta > 0 ? options.eta : store.info().eta;
+  // 0 means "the session's"; anything else given (NaN or a negative number too) is checked as given.
+  const double eta = options.eta != 0.0 ? options.eta : store.info().eta;
   CheckOptions(options, eta);
   const int num_dots = store.info().num_dots;
   const std::vector<int> held_out = HeldOutDots(num_dots, options.holdout, options.seed);

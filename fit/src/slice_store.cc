@@ -86,6 +86,8 @@ SliceStore SliceStore::Open(const fs::path& folder) {
     if (map.width != store.info_.texels_x || map.height != store.info_.texels_y || map.channels != channels) {
       common::ThrowFormatError((folder / name).string(), "does not match the texel grid of processed.json");
     }
+    // A NaN here would be fitted into a material that its own reader refuses.
+    common::RequireFinite(map, (folder / name).string());
     return map;
   };
   store.rho_d_ = read_map(kRhoD, 3);

@@ -10,6 +10,7 @@
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/json.h"
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/fault_injection.h"
 
 namespace svbtdf::fit::store {
 namespace fs = std::filesystem;
@@ -59,24 +60,23 @@ void File::ReadAt(void* data, size_t bytes, uint64_t offset) const {
 }
 
 void File::WriteAt(const void* data, size_t bytes, uint64_t offset) const {
-  const auto* p = static_cast<const char*>(data);
-  while (bytes > 0) {
-    const ssize_t n = ::pwrite(fd_, p, bytes, static_cast<off_t>(offset));
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) common::ThrowIoError(path_.string(), std::string("cannot write: ") + std::strerror(errno), "is the disk full?");
-    p += n, bytes -= n, offset += n;
-  }
+  common::WriteAllOrThrow(fd_, data, bytes, path_, static_cast<int64_t>(offset));
 }
 
 void File::Resize(uint64_t bytes) const {
-  if (::ftruncate(fd_, static_cast<off_t>(bytes)) != 0) {
-    common::ThrowIoError(path_.string(), std::string("cannot allocate: ") + std::strerror(errno), "is the disk full?");
+  const std::string what = "cannot allocate " + std::to_string(bytes) + " bytes";
+  switch (common::NextDurableOperation()) {
+    case common::FaultAction::kProceed:
+      break;
+    case common::FaultAction::kFail:
+      common::ThrowSystemError(path_.string(), what, ENOSPC);
+    case common::FaultAction::kKill:
+      common::KillProcessNow();
   }
+  if (::ftruncate(fd_, static_cast<off_t>(bytes)) != 0) common::ThrowSystemError(path_.string(), what, errno);
 }
 
-void File::Sync() const {
-  if (::fdatasync(fd_) != 0) common::ThrowIoError(path_.string(), std::string("cannot sync: ") + std::strerror(errno));
-}
+void File::Sync() const { common::SyncOrThrow(fd_, path_); }
 
 uint64_t File::Size() const {
   struct stat st {};

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <future>
 #include <cmath>
 #include <limits>
@@ -312,6 +313,42 @@ void ToBtdf(const TexelGeometry& geometry, const calib::MonitorCalibration& moni
   }
 }
 
+std::string Gigabytes(double bytes) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f GB", bytes / 1e9);
+  return text;
+}
+
+// A typo (--texels 99999x99999, --light-resolution 4096) must be refused by name before the
+// store is sized, not end in "out of memory" or a full disk hours later.
+void RequireSaneSizes(const ProcessOptions& options, int num_dots, const fs::path& out) {
+  constexpr int kMaxTexels = 16384;
+  if (options.texels_x > kMaxTexels || options.texels_y > kMaxTexels) {
+    common::ThrowInvalidInput("--texels", std::to_string(options.texels_x) + "x" + std::to_string(options.texels_y) +
+                                              " texels: at most " + std::to_string(kMaxTexels) + " on a side");
+  }
+  const int resolution = options.light_resolution;
+  if (resolution < 2 || resolution > 128 || (resolution & (resolution - 1)) != 0) {
+    common::ThrowInvalidInput("--light-resolution", "must be a power of two from 2 to 128, got " + std::to_string(resolution));
+  }
+  if (fs::exists(out) && !fs::is_empty(out)) return;  // a resume: the store's files hold their space already
+  const double texels = static_cast<double>(options.texels_x) * options.texels_y;
+  const double store_bytes = texels * (3.0 * num_dots + 5.0 * resolution * resolution) * 2.0;
+  fs::path existing = fs::absolute(out);
+  while (!fs::exists(existing) && existing.has_parent_path() && existing != existing.parent_path()) {
+    existing = existing.parent_path();
+  }
+  std::error_code error;
+  const fs::space_info space = fs::space(existing, error);
+  if (!error && store_bytes > static_cast<double>(space.available)) {
+    common::ThrowIoError(out.string(), "the slice store of " + std::to_string(options.texels_x) + "x" +
+                                           std::to_string(options.texels_y) + " texels, " + std::to_string(num_dots) +
+                                           " dots and light resolution " + std::to_string(resolution) + " needs " +
+                                           Gigabytes(store_bytes) + "; " + Gigabytes(space.available) + " are free",
+                         "choose fewer --texels, a lower --light-resolution, or another disk");
+  }
+}
+
 }  // namespace
 
 ProcessReport ProcessSession(const session::Session& session, const calib::SessionCalibration& calibration, const fs::path& out,
@@ -321,6 +358,7 @@ ProcessReport ProcessSession(const session::Session& session, const calib::Sessi
   ResolveTexelGrid(session, calibration, &options);
   const int num_dots = static_cast<int>(calibration.monitor.dots.size());
   const CapturePlan plan = ParsePlan(session, num_dots);
+  RequireSaneSizes(options, num_dots, out);
 
   SliceStoreInfo info;
   info.texels_x = options.texels_x;

@@ -159,6 +159,10 @@ std::vector<fit::QualityWarning> AddQuality(Page& page, const fit::Material& mat
 
 void AddCompare(Page& page, const std::string& compare_file) {
   const nlohmann::json metrics = common::ReadJsonFile(compare_file);
+  if (!metrics.is_object() || !metrics.contains("texels_compared") || !metrics.contains("heldout_rel_rmse")) {
+    common::ThrowFormatError(compare_file, "is not the output of 'svbtdf compare --json'",
+                             "give --compare the file written by svbtdf compare MATERIAL TRUTH --json FILE");
+  }
   page.Heading("Against the ground truth");
   std::string table = "<table>";
   for (const auto& [key, value] : metrics.items()) table += "<tr><th>" + key + "</th><td>" + value.dump() + "</td></tr>";

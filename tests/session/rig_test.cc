@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "svbtdf/common/error.h"
 #include "svbtdf/session/rig.h"
@@ -86,6 +88,35 @@ TEST(RigDescription, AFieldOfTheWrongTypeIsNamedWithItsFile) {
   m = message({{"monitor", 3}});
   EXPECT_NE(m.find("rig.monitor must be an object"), std::string::npos) << m;
   EXPECT_NE(message(json::array()).find("rig must be an object"), std::string::npos);
+}
+
+// Issue 15: nonsense was accepted (eta -1.5 or 1e308, a camera -240 or 1e12 pixels wide, a
+// sample 0 m wide, a bit depth of 100) and failed later, unnamed. Each is refused by field.
+TEST(RigDescription, PhysicallyImpossibleValuesAreRefusedNamingTheField) {
+  const std::vector<std::pair<json, std::string>> cases = {
+      {{{"sample", {{"eta", -1.5}}}}, "rig.sample.eta"},
+      {{{"sample", {{"eta", 1e308}}}}, "rig.sample.eta"},
+      {{{"camera", {{"width", -240}}}}, "rig.camera.width"},
+      {{{"camera", {{"width", 1e12}}}}, "rig.camera.width"},
+      {{{"camera", {{"width", 640.5}}}}, "rig.camera.width"},
+      {{{"camera", {{"bit_depth", 100}}}}, "rig.camera.bit_depth"},
+      {{{"camera", {{"bit_depth", -5}}}}, "rig.camera.bit_depth"},
+      {{{"sample", {{"width_m", 0.0}}}}, "rig.sample.width_m"},
+      {{{"sample", {{"texels_x", 100000}}}}, "rig.sample.texels_x"},
+      {{{"monitor", {{"gamma", -2.2}}}}, "rig.monitor.gamma"},
+      {{{"exposures_s", {0.01, -1.0}}}, "rig.exposures_s"},
+  };
+  for (const auto& [rig, field] : cases) {
+    try {
+      ParseRigDescription(rig, "SESSION/session.json");
+      ADD_FAILURE() << rig.dump() << " was accepted";
+    } catch (const common::Error& e) {
+      EXPECT_EQ(e.kind(), common::ErrorKind::kFormat);
+      EXPECT_NE(std::string(e.what()).find("SESSION/session.json"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_NO_THROW(ParseRigDescription(ToJson(Full()), "session.json"));
 }
 
 }  // namespace

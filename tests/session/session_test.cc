@@ -290,5 +290,35 @@ TEST_F(SessionTest, ImagesUnlikeTheRigsCameraAreRefusedNamingTheFile) {
   EXPECT_EQ(session.ReadImage("dot/q0001/e0/r0").width, 8);
 }
 
+// Issue 15: a journal "time" that is not a string was an "internal error" naming nothing, and a
+// version of 1.5 was read as 1.
+TEST_F(SessionTest, FieldsOfTheWrongKindAreErrorsNamingTheFile) {
+  session::Session session = session::Session::Create(folder_, rig_, plan_);
+  session.AddImage("dark/e0", Frame(3), 0.1, 1.0);
+  const std::string journal = common::ReadTextFile(folder_ / "journal.jsonl");
+  std::string bad_time = journal;
+  const size_t time = bad_time.find("\"time\":\"");
+  ASSERT_NE(time, std::string::npos);
+  bad_time.replace(time, bad_time.find('"', time + 8) + 1 - time, "\"time\":5");
+  common::WriteTextAtomically(folder_ / "journal.jsonl", bad_time);
+  const auto expect_format_error = [&](const std::string& words) {
+    try {
+      session::Session::Open(folder_);
+      ADD_FAILURE() << "opened";
+    } catch (const common::Error& e) {
+      EXPECT_EQ(e.kind(), common::ErrorKind::kFormat);
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+  };
+  expect_format_error("journal.jsonl:1");
+  common::WriteTextAtomically(folder_ / "journal.jsonl", journal);
+  std::string manifest = common::ReadTextFile(folder_ / "session.json");
+  const size_t version = manifest.find("\"version\": 1");
+  ASSERT_NE(version, std::string::npos) << manifest;
+  manifest.replace(version, 12, "\"version\": 1.5");
+  common::WriteTextAtomically(folder_ / "session.json", manifest);
+  expect_format_error("session.json");
+}
+
 }  // namespace
 }  // namespace svbtdf
