@@ -1,0 +1,177 @@
+#include "svbtdf/export/lobe_fit.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "svbtdf/common/parallel.h"
+#include "svbtdf/common/statistics.h"
+
+namespace svbtdf::exporter {
+namespace {
+
+constexpr double kMassFraction = 0.01;  // cells with D h.z >= 1% of the peak (fit::NdfRelativeL2's)
+// For a GGX lobe cut at D h.z >= 1% of its peak, E[slope_x^2] = c alpha_x^2 along each axis, with
+// c = (ln 10 - 0.9) / 1.8 (the slope density is (1 + r^2)^-2, cut at r^2 = 9; small alpha).
+constexpr double kTruncatedSlopeMoment = (2.302585092994046 - 0.9) / 1.8;
+constexpr double kMinAlpha = 1e-3, kMaxAlpha = 4.0;
+constexpr int kMaxIterations = 30;
+
+// The parameters Levenberg-Marquardt moves: ln alpha_x, ln alpha_y, azimuth, ln scale.
+using Params = Eigen::Vector4d;
+
+double WrapAzimuth(double azimuth) {
+  // A GGX lobe is symmetric under a half turn: keep the azimuth in [-pi/2, pi/2).
+  const double pi = std::numbers::pi;
+  azimuth = std::fmod(azimuth + pi / 2, pi);
+  return (azimuth < 0 ? azimuth + pi : azimuth) - pi / 2;
+}
+
+// Cost (squared relative L2) of `p` over `mass` cells, and when asked its normal equations.
+struct Evaluation {
+  double cost = 0;
+  Eigen::Matrix4d jtj = Eigen::Matrix4d::Zero();
+  Eigen::Vector4d jtr = Eigen::Vector4d::Zero();
+};
+
+}  // namespace
+
+GgxLobeFitter::GgxLobeFitter(const model::Hemicube& grid) {
+  cells_.reserve(grid.num_cells());
+  for (int c = 0; c < grid.num_cells(); ++c) {
+    const model::Vec3 h = grid.CellCenter(c);
+    cells_.push_back({h.x(), h.y(), h.z(), grid.CellSolidAngle(c)});
+  }
+}
+
+GgxLobe GgxLobeFitter::MomentStart(const std::vector<int>& mass, const std::vector<double>& d) const {
+  // The slopes' second moments under D h.z over the cells with mass, decomposed into the lobe's
+  // axes: close enough that a few Levenberg-Marquardt steps finish the fit.
+  Eigen::Matrix2d moments = Eigen::Matrix2d::Zero();
+  double total = 0;
+  for (const int c : mass) {
+    const Cell& cell = cells_[c];
+    const double weight = d[c] * cell.z * cell.solid_angle;
+    const Eigen::Vector2d slope(cell.x / cell.z, cell.y / cell.z);
+    moments += weight * slope * slope.transpose();
+    total += weight;
+  }
+  moments /= std::max(total, 1e-300);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver(moments);
+  const auto alpha = [](double variance) {
+    return std::clamp(std::sqrt(std::max(variance, 0.0) / kTruncatedSlopeMoment), kMinAlpha, kMaxAlpha);
+  };
+  const Eigen::Vector2d major = solver.eigenvectors().col(1);  // eigenvalues ascend
+  return {alpha(solver.eigenvalues()(1)), alpha(solver.eigenvalues()(0)), WrapAzimuth(std::atan2(major.y(), major.x()))};
+}
+
+LobeFit GgxLobeFitter::Fit(const std::vector<double>& cell_d) const {
+  const int count = static_cast<int>(cells_.size());
+  // Normalise the table by its own cell quadrature of D h.z; the lobe's fitted scale absorbs
+  // what that quadrature and the lobe's exact normalisation disagree on.
+  double peak = 0, integral = 0;
+  for (int c = 0; c < count; ++c) {
+    peak = std::max(peak, cell_d[c] * cells_[c].z);
+    integral += cell_d[c] * cells_[c].z * cells_[c].solid_angle;
+  }
+  std::vector<double> d(count);
+  for (int c = 0; c < count; ++c) d[c] = cell_d[c] / integral;
+  std::vector<int> mass;
+  for (int c = 0; c < count; ++c) {
+    if (cell_d[c] * cells_[c].z >= kMassFraction * peak && cells_[c].z > 0) mass.push_back(c);
+  }
+  double norm = 0;
+  for (const int c : mass) norm += d[c] * d[c] * cells_[c].solid_angle;
+
+  const auto evaluate = [&](const Params& p, bool with_jacobian) {
+    Evaluation e;
+    const double ax = std::exp(p[0]), ay = std::exp(p[1]), scale = std::exp(p[3]);
+    const double cos_a = std::cos(p[2]), sin_a = std::sin(p[2]);
+    const double inv_ax2 = 1.0 / (ax * ax), inv_ay2 = 1.0 / (ay * ay);
+    const double front = scale / (std::numbers::pi * ax * ay);
+    for (const int c : mass) {
+      const Cell& cell = cells_[c];
+      const double a = cell.x * cos_a + cell.y * sin_a, b = -cell.x * sin_a + cell.y * cos_a;
+      const double u = a * a * inv_ax2 + b * b * inv_ay2 + cell.z * cell.z;
+      const double model = front / (u * u);
+      const double w = cell.solid_angle / norm;
+      const double residual = model - d[c];
+      e.cost += w * residual * residual;
+      if (!with_jacobian) continue;
+      const Eigen::Vector4d gradient(model * (-1.0 + 4.0 * a * a * inv_ax2 / u), model * (-1.0 + 4.0 * b * b * inv_ay2 / u),
+                                     -4.0 * model * a * b * (inv_ax2 - inv_ay2) / u, model);
+      e.jtj.noalias() += w * gradient * gradient.transpose();
+      e.jtr.noalias() += w * residual * gradient;
+    }
+    return e;
+  };
+
+  const GgxLobe start = MomentStart(mass, d);
+  Params p(std::log(start.alpha_x), std::log(start.alpha_y), start.azimuth, 0.0);
+  Evaluation current = evaluate(p, true);
+  double damping = 1e-3;
+  int iteration = 0;
+  for (; iteration < kMaxIterations; ++iteration) {
+    Eigen::Matrix4d system = current.jtj;
+    // Marquardt's scaling, with a floor: the azimuth of a nearly isotropic lobe has no gradient.
+    for (int k = 0; k < 4; ++k) system(k, k) += damping * std::max(current.jtj(k, k), 1e-9);
+    Params candidate = p - system.ldlt().solve(current.jtr);
+    candidate[0] = std::clamp(candidate[0], std::log(kMinAlpha), std::log(kMaxAlpha));
+    candidate[1] = std::clamp(candidate[1], std::log(kMinAlpha), std::log(kMaxAlpha));
+    const Evaluation next = evaluate(candidate, true);
+    if (!(next.cost < current.cost)) {
+      damping *= 8;
+      if (damping > 1e8) break;
+      continue;
+    }
+    const double gain = current.cost - next.cost;
+    p = candidate, current = next;
+    damping = std::max(damping / 4, 1e-9);
+    if (gain < 1e-8 * current.cost + 1e-14) break;
+  }
+  LobeFit fit;
+  // The first axis is the longer one, as MomentStart chose it; keep that order if LM swapped them.
+  double ax = std::exp(p[0]), ay = std::exp(p[1]), azimuth = p[2];
+  if (ay > ax) std::swap(ax, ay), azimuth += std::numbers::pi / 2;
+  fit.lobe = {ax, ay, WrapAzimuth(azimuth)};
+  fit.relative_error = std::sqrt(current.cost);
+  fit.iterations = iteration;
+  return fit;
+}
+
+MaterialLobes FitMaterialLobes(const fit::Material& material, int threads) {
+  MaterialLobes lobes;
+  const int width = material.width, height = material.height;
+  lobes.alpha_x = common::FloatImage(width, height, 1);
+  lobes.alpha_y = common::FloatImage(width, height, 1);
+  lobes.azimuth = common::FloatImage(width, height, 1);
+  lobes.relative_error = common::FloatImage(width, height, 1);
+  if (material.model == fit::MaterialModel::kWalterGgx) {
+    // The baseline's texels are GGX lobes already (docs/material-format.md).
+    lobes.alpha_x = material.baseline_alpha_x, lobes.alpha_y = material.baseline_alpha_y;
+    lobes.azimuth = material.baseline_azimuth, lobes.exact = true;
+    return lobes;
+  }
+  const fit::MaterialEvaluator evaluator(material);
+  const GgxLobeFitter fitter{model::Hemicube(material.ndf_resolution)};
+  common::ParallelFor(static_cast<int64_t>(width) * height, threads, 256, [&](int64_t begin, int64_t end) {
+    for (int64_t texel = begin; texel < end; ++texel) {
+      const int x = static_cast<int>(texel % width), y = static_cast<int>(texel / width);
+      const LobeFit fit = fitter.Fit(evaluator.TexelCellD(x, y));
+      lobes.alpha_x.at(x, y) = static_cast<float>(fit.lobe.alpha_x);
+      lobes.alpha_y.at(x, y) = static_cast<float>(fit.lobe.alpha_y);
+      lobes.azimuth.at(x, y) = static_cast<float>(fit.lobe.azimuth);
+      lobes.relative_error.at(x, y) = static_cast<float>(fit.relative_error);
+    }
+  });
+  return lobes;
+}
+
+ErrorDistribution Distribution(const common::FloatImage& map) {
+  const std::vector<double> values(map.pixels.begin(), map.pixels.end());
+  return {common::Quantile(values, 0.5), common::Quantile(values, 0.9), common::Quantile(values, 1.0)};
+}
+
+}  // namespace svbtdf::exporter
