@@ -28,6 +28,9 @@ struct ExportCommandOptions {
 void RunExport(const ExportCommandOptions& options) {
   const int threads = common::ThreadCount(options.threads);  // a bad --threads fails before the work
   const fs::path folder = common::WithoutTrailingSeparators(options.material);
+  if (!fs::is_regular_file(folder / "material.json")) {
+    common::ThrowInvalidInput(folder.string(), "is not a material folder (it has no material.json)");
+  }
   const fit::Material material = fit::ReadMaterial(folder);
   const std::string name = options.name.empty() ? folder.filename().string() : options.name;
   if (name.empty() || name.find('/') != std::string::npos) common::ThrowInvalidInput("--name", "must be a plain file name");
