@@ -91,6 +91,23 @@ TEST(FitMaterialLobes, FitsEveryTexelOfAMaterial) {
   }
 }
 
+TEST(FitMaterialLobes, CrossedLobesAreNoEllipseAndTheErrorMapSaysWhere) {
+  // Inside a grid cell the lobe is GGX (0.40, 0.05); on a line it is turned a quarter; beside a
+  // line the two blend half and half, a cross.
+  const fit::Material material = GridSheetLikeMaterial(16, 8);
+  const MaterialLobes lobes = FitMaterialLobes(material, 2);
+  EXPECT_NEAR(lobes.alpha_x.at(4, 4), 0.40, 0.40 * 0.02);  // a cell's centre
+  EXPECT_NEAR(lobes.alpha_y.at(4, 4), 0.05, 0.05 * 0.02);
+  EXPECT_LT(AzimuthDistance(lobes.azimuth.at(4, 4), 0.0), 0.01);
+  EXPECT_LT(lobes.relative_error.at(4, 4), 0.01);
+  EXPECT_LT(AzimuthDistance(lobes.azimuth.at(8, 4), std::numbers::pi / 2), 0.01);  // on a line: turned
+  EXPECT_LT(lobes.relative_error.at(8, 4), 0.01);
+  EXPECT_GT(lobes.relative_error.at(7, 4), 0.3);  // beside it: the cross
+  const ErrorDistribution d = Distribution(lobes.relative_error);
+  EXPECT_LT(d.median, 0.01);
+  EXPECT_GT(d.max, 0.3);
+}
+
 TEST(Distribution, MedianNinetiethPercentileAndMaximum) {
   common::FloatImage map(10, 1, 1);
   for (int x = 0; x < 10; ++x) map.at(x, 0) = static_cast<float>(x + 1);
