@@ -41,7 +41,9 @@ TEST_P(RecoversTabulatedGgx, WithinTwoPercentAndAHundredthOfARadian) {
   const LobeFit fit = GgxLobeFitter(grid).Fit(Tabulate(grid, model::GgxNdf(truth.alpha_x, truth.alpha_y), truth.azimuth));
   EXPECT_NEAR(fit.lobe.alpha_x / truth.alpha_x, 1.0, 0.02);
   EXPECT_NEAR(fit.lobe.alpha_y / truth.alpha_y, 1.0, 0.02);
-  if (truth.alpha_x != truth.alpha_y) EXPECT_LT(AzimuthDistance(fit.lobe.azimuth, truth.azimuth), 0.01);
+  if (truth.alpha_x != truth.alpha_y) {
+    EXPECT_LT(AzimuthDistance(fit.lobe.azimuth, truth.azimuth), 0.01);
+  }
   EXPECT_LT(fit.relative_error, 0.01);
   EXPECT_GE(fit.lobe.azimuth, -std::numbers::pi / 2);
   EXPECT_LT(fit.lobe.azimuth, std::numbers::pi / 2);

@@ -38,28 +38,21 @@ inline fit::Material SmallMaterial(int width = 3, int height = 2) {
 // a sample whose roughness changes across it.
 inline fit::Material RegionsMaterial(int regions_x, int regions_y, int region, const std::vector<double>& alphas,
                                      double anisotropy = 1.0, double texel_m = 0.002, int ndf_resolution = 16) {
-  fit::Material m;
-  m.width = regions_x * region;
-  m.height = regions_y * region;
+  // SmallMaterial's constant maps (alpha, shadowing, k_s, rho_d, one weight channel), new NDFs.
+  fit::Material m = SmallMaterial(regions_x * region, regions_y * region);
   m.width_m = m.width * texel_m;
   m.height_m = m.height * texel_m;
   m.eta = 1.5;
   m.ndf_resolution = ndf_resolution;
   const model::Hemicube grid(ndf_resolution);
+  m.representative_texels.clear();
+  m.representative_ln_d.clear();
   for (int r = 0; r < regions_x * regions_y; ++r) {
     model::TabulatedNdf ndf(grid, model::GgxNdf(alphas.at(r), anisotropy * alphas.at(r)));
     ndf.Normalize();
     m.representative_ln_d.push_back(ndf.ln_d());
     m.representative_texels.push_back(static_cast<int64_t>((r / regions_x) * region) * m.width + (r % regions_x) * region);
   }
-  m.alpha = common::FloatImage(m.width, m.height, 1, 0.6f);
-  m.shadowing_roughness = common::FloatImage(m.width, m.height, 1, 0.0f);
-  m.k_s = common::FloatImage(m.width, m.height, 3, 0.85f);
-  m.rho_d = common::FloatImage(m.width, m.height, 3, 0.005f);
-  m.residual = common::FloatImage(m.width, m.height, 1, -1.0f);
-  m.cluster = common::FloatImage(m.width, m.height, 1, 0.0f);
-  m.weight_index = common::FloatImage(m.width, m.height, 1, 0.0f);
-  m.weight_value = common::FloatImage(m.width, m.height, 1, 1.0f);
   for (int y = 0; y < m.height; ++y) {
     for (int x = 0; x < m.width; ++x) {
       const int r = (y / region) * regions_x + x / region;
