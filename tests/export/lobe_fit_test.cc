@@ -110,6 +110,20 @@ TEST(FitMaterialLobes, CrossedLobesAreNoEllipseAndTheErrorMapSaysWhere) {
   EXPECT_GT(d.max, 0.3);
 }
 
+TEST(FitMaterialLobes, AWalterGgxMaterialsLobesAreExportedAsTheyAre) {
+  fit::Material material = SmallMaterial(3, 2);
+  material.model = fit::MaterialModel::kWalterGgx;
+  material.baseline_alpha_x = common::FloatImage(3, 2, 1, 0.3f);
+  material.baseline_alpha_y = common::FloatImage(3, 2, 1, 0.1f);
+  material.baseline_azimuth = common::FloatImage(3, 2, 1, 0.7f);
+  const MaterialLobes lobes = FitMaterialLobes(material, 1);
+  EXPECT_TRUE(lobes.exact);
+  EXPECT_EQ(lobes.alpha_x.at(2, 1), 0.3f);
+  EXPECT_EQ(lobes.alpha_y.at(2, 1), 0.1f);
+  EXPECT_EQ(lobes.azimuth.at(2, 1), 0.7f);
+  EXPECT_EQ(Distribution(lobes.relative_error).max, 0.0);
+}
+
 TEST(Distribution, MedianNinetiethPercentileAndMaximum) {
   common::FloatImage map(10, 1, 1);
   for (int x = 0; x < 10; ++x) map.at(x, 0) = static_cast<float>(x + 1);
