@@ -37,88 +37,37 @@ struct Evaluation {
   Eigen::Vector4d jtr = Eigen::Vector4d::Zero();
 };
 
-}  // namespace
+// A table's cells with mass, gathered so that every evaluation is a few vectorised passes.
+struct MassCells {
+  Eigen::ArrayXd x, y, z, target;  // cell centres; the table's D, normalised by its cell quadrature
+  Eigen::ArrayXd weight;           // solid angle / sum of solid angle x target^2: the cost is relative
 
-GgxLobeFitter::GgxLobeFitter(const model::Hemicube& grid) {
-  cells_.reserve(grid.num_cells());
-  for (int c = 0; c < grid.num_cells(); ++c) {
-    const model::Vec3 h = grid.CellCenter(c);
-    cells_.push_back({h.x(), h.y(), h.z(), grid.CellSolidAngle(c)});
-  }
-}
-
-GgxLobe GgxLobeFitter::MomentStart(const std::vector<int>& mass, const std::vector<double>& d) const {
-  // The slopes' second moments under D h.z over the cells with mass, decomposed into the lobe's
-  // axes: close enough that a few Levenberg-Marquardt steps finish the fit.
-  Eigen::Matrix2d moments = Eigen::Matrix2d::Zero();
-  double total = 0;
-  for (const int c : mass) {
-    const Cell& cell = cells_[c];
-    const double weight = d[c] * cell.z * cell.solid_angle;
-    const Eigen::Vector2d slope(cell.x / cell.z, cell.y / cell.z);
-    moments += weight * slope * slope.transpose();
-    total += weight;
-  }
-  moments /= std::max(total, 1e-300);
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver(moments);
-  const auto alpha = [](double variance) {
-    return std::clamp(std::sqrt(std::max(variance, 0.0) / kTruncatedSlopeMoment), kMinAlpha, kMaxAlpha);
-  };
-  const Eigen::Vector2d major = solver.eigenvectors().col(1);  // eigenvalues ascend
-  return {alpha(solver.eigenvalues()(1)), alpha(solver.eigenvalues()(0)), WrapAzimuth(std::atan2(major.y(), major.x()))};
-}
-
-LobeFit GgxLobeFitter::Fit(const std::vector<double>& cell_d) const {
-  const int count = static_cast<int>(cells_.size());
-  // Normalise the table by its own cell quadrature of D h.z; the lobe's fitted scale absorbs
-  // what that quadrature and the lobe's exact normalisation disagree on.
-  double peak = 0, integral = 0;
-  for (int c = 0; c < count; ++c) {
-    peak = std::max(peak, cell_d[c] * cells_[c].z);
-    integral += cell_d[c] * cells_[c].z * cells_[c].solid_angle;
-  }
-  std::vector<double> d(count);
-  for (int c = 0; c < count; ++c) d[c] = cell_d[c] / integral;
-  std::vector<int> mass;
-  for (int c = 0; c < count; ++c) {
-    if (cell_d[c] * cells_[c].z >= kMassFraction * peak && cells_[c].z > 0) mass.push_back(c);
-  }
-  // The cells with mass, gathered so that every evaluation below is a few vectorised passes.
-  const Eigen::Index n = static_cast<Eigen::Index>(mass.size());
-  Eigen::ArrayXd xs(n), ys(n), z2(n), weights(n), target(n);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const Cell& cell = cells_[mass[k]];
-    xs[k] = cell.x, ys[k] = cell.y, z2[k] = cell.z * cell.z, weights[k] = cell.solid_angle, target[k] = d[mass[k]];
-  }
-  weights /= (weights * target.square()).sum();  // the cost is the squared relative L2
-
-  const auto evaluate = [&](const Params& p) {
+  Evaluation Evaluate(const Params& p) const {
     Evaluation e;
     const double ax = std::exp(p[0]), ay = std::exp(p[1]), scale = std::exp(p[3]);
     const double cos_a = std::cos(p[2]), sin_a = std::sin(p[2]);
     const double inv_ax2 = 1.0 / (ax * ax), inv_ay2 = 1.0 / (ay * ay);
-    const double front = scale / (std::numbers::pi * ax * ay);
-    const Eigen::ArrayXd a = xs * cos_a + ys * sin_a, b = ys * cos_a - xs * sin_a;
+    const Eigen::ArrayXd a = x * cos_a + y * sin_a, b = y * cos_a - x * sin_a;  // along and across the axis
     const Eigen::ArrayXd a2 = a.square() * inv_ax2, b2 = b.square() * inv_ay2;
-    const Eigen::ArrayXd inv_u = (a2 + b2 + z2).inverse();
-    const Eigen::ArrayXd model = front * inv_u.square();
+    const Eigen::ArrayXd inv_u = (a2 + b2 + z.square()).inverse();
+    const Eigen::ArrayXd model = scale / (std::numbers::pi * ax * ay) * inv_u.square();  // scale x GGX D
     const Eigen::ArrayXd residual = model - target;
-    const Eigen::ArrayXd weighted = weights * residual;
-    e.cost = (weighted * residual).sum();
+    e.cost = (weight * residual.square()).sum();
     // d model / d(ln alpha_x, ln alpha_y, azimuth, ln scale)
-    std::array<Eigen::ArrayXd, 4> gradient = {model * (4.0 * a2 * inv_u - 1.0), model * (4.0 * b2 * inv_u - 1.0),
-                                              -4.0 * (inv_ax2 - inv_ay2) * model * a * b * inv_u, model};
+    const std::array<Eigen::ArrayXd, 4> gradient = {model * (4.0 * a2 * inv_u - 1.0), model * (4.0 * b2 * inv_u - 1.0),
+                                                    -4.0 * (inv_ax2 - inv_ay2) * model * a * b * inv_u, model};
     for (int i = 0; i < 4; ++i) {
-      const Eigen::ArrayXd weighted_gradient = weights * gradient[i];
+      const Eigen::ArrayXd weighted_gradient = weight * gradient[i];
       e.jtr[i] = (weighted_gradient * residual).sum();
       for (int j = 0; j <= i; ++j) e.jtj(i, j) = e.jtj(j, i) = (weighted_gradient * gradient[j]).sum();
     }
     return e;
-  };
+  }
+};
 
-  const GgxLobe start = MomentStart(mass, d);
-  Params p(std::log(start.alpha_x), std::log(start.alpha_y), start.azimuth, 0.0);
-  Evaluation current = evaluate(p);
+// Levenberg-Marquardt from `p`; returns the steps taken and leaves the minimum in `p`, its cost in `cost`.
+int Minimise(const MassCells& cells, Params& p, double& cost) {
+  Evaluation current = cells.Evaluate(p);
   double damping = 1e-3;
   int iteration = 0;
   for (; iteration < kMaxIterations; ++iteration) {
@@ -128,8 +77,8 @@ LobeFit GgxLobeFitter::Fit(const std::vector<double>& cell_d) const {
     Params candidate = p - system.ldlt().solve(current.jtr);
     candidate[0] = std::clamp(candidate[0], std::log(kMinAlpha), std::log(kMaxAlpha));
     candidate[1] = std::clamp(candidate[1], std::log(kMinAlpha), std::log(kMaxAlpha));
-    const Evaluation next = evaluate(candidate);
-    if (!(next.cost < current.cost)) {
+    const Evaluation next = cells.Evaluate(candidate);
+    if (!(next.cost < current.cost)) {  // worse, or not a number: a shorter step
       damping *= 8;
       if (damping > 1e8) break;
       continue;
@@ -140,13 +89,75 @@ LobeFit GgxLobeFitter::Fit(const std::vector<double>& cell_d) const {
     // Converged when the relative error moves by less than 0.01% of itself.
     if (gain < 2e-4 * current.cost + 1e-14) break;
   }
+  cost = current.cost;
+  return iteration;
+}
+
+// The slopes' second moments under D h.z, decomposed into the lobe's axes: close enough that a
+// few Levenberg-Marquardt steps finish the fit.
+GgxLobe MomentStart(const MassCells& cells) {
+  const Eigen::ArrayXd mass = cells.target * cells.z * cells.weight;  // any constant factor divides out
+  const Eigen::ArrayXd sx = cells.x / cells.z, sy = cells.y / cells.z;
+  Eigen::Matrix2d moments;
+  moments(0, 0) = (mass * sx * sx).sum();
+  moments(1, 1) = (mass * sy * sy).sum();
+  moments(0, 1) = moments(1, 0) = (mass * sx * sy).sum();
+  moments /= std::max(mass.sum(), 1e-300);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver(moments);
+  const auto alpha = [](double variance) {
+    return std::clamp(std::sqrt(std::max(variance, 0.0) / kTruncatedSlopeMoment), kMinAlpha, kMaxAlpha);
+  };
+  const Eigen::Vector2d major = solver.eigenvectors().col(1);  // eigenvalues ascend
+  return {alpha(solver.eigenvalues()(1)), alpha(solver.eigenvalues()(0)), WrapAzimuth(std::atan2(major.y(), major.x()))};
+}
+
+}  // namespace
+
+GgxLobeFitter::GgxLobeFitter(const model::Hemicube& grid) {
+  cells_.reserve(grid.num_cells());
+  for (int c = 0; c < grid.num_cells(); ++c) {
+    const model::Vec3 h = grid.CellCenter(c);
+    cells_.push_back({h.x(), h.y(), h.z(), grid.CellSolidAngle(c)});
+  }
+}
+
+// The cells where the table's D h.z is at least kMassFraction of its peak, D normalised by the
+// table's own cell quadrature of D h.z (the lobe's fitted scale absorbs what that quadrature and
+// the lobe's exact normalisation disagree on).
+template <typename Cells>
+MassCells GatherMassCells(const Cells& all, const std::vector<double>& cell_d) {
+  double peak = 0, integral = 0;
+  for (size_t c = 0; c < all.size(); ++c) {
+    peak = std::max(peak, cell_d[c] * all[c].z);
+    integral += cell_d[c] * all[c].z * all[c].solid_angle;
+  }
+  std::vector<int> mass;
+  for (size_t c = 0; c < all.size(); ++c) {
+    if (all[c].z > 0 && cell_d[c] * all[c].z >= kMassFraction * peak) mass.push_back(static_cast<int>(c));
+  }
+  const Eigen::Index n = static_cast<Eigen::Index>(mass.size());
+  MassCells cells{Eigen::ArrayXd(n), Eigen::ArrayXd(n), Eigen::ArrayXd(n), Eigen::ArrayXd(n), Eigen::ArrayXd(n)};
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const auto& cell = all[mass[k]];
+    cells.x[k] = cell.x, cells.y[k] = cell.y, cells.z[k] = cell.z;
+    cells.target[k] = cell_d[mass[k]] / integral, cells.weight[k] = cell.solid_angle;
+  }
+  cells.weight /= (cells.weight * cells.target.square()).sum();
+  return cells;
+}
+
+LobeFit GgxLobeFitter::Fit(const std::vector<double>& cell_d) const {
+  const MassCells cells = GatherMassCells(cells_, cell_d);
+  const GgxLobe start = MomentStart(cells);
+  Params p(std::log(start.alpha_x), std::log(start.alpha_y), start.azimuth, 0.0);
+  double cost = 0;
   LobeFit fit;
+  fit.iterations = Minimise(cells, p, cost);
+  fit.relative_error = std::sqrt(cost);
   // The first axis is the longer one, as MomentStart chose it; keep that order if LM swapped them.
   double ax = std::exp(p[0]), ay = std::exp(p[1]), azimuth = p[2];
   if (ay > ax) std::swap(ax, ay), azimuth += std::numbers::pi / 2;
   fit.lobe = {ax, ay, WrapAzimuth(azimuth)};
-  fit.relative_error = std::sqrt(current.cost);
-  fit.iterations = iteration;
   return fit;
 }
 

@@ -41,7 +41,6 @@ class GgxLobeFitter {
   struct Cell {
     double x, y, z, solid_angle;
   };
-  GgxLobe MomentStart(const std::vector<int>& cells, const std::vector<double>& d) const;
   std::vector<Cell> cells_;
 };
 
