@@ -13,8 +13,8 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <random>
 
+#include "paper_scale_material.h"
 #include "svbtdf/common/parallel.h"
 #include "svbtdf/common/random.h"
 #include "svbtdf/model/ggx.h"
@@ -26,41 +26,6 @@ using namespace svbtdf;
 
 double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
-
-fit::Material SyntheticMaterial(int side, int representatives) {
-  fit::Material m;
-  m.width = m.height = side;
-  m.eta = 1.5;
-  m.width_m = m.height_m = 0.08;
-  m.ndf_resolution = 32;
-  const model::Hemicube grid(m.ndf_resolution);
-  std::mt19937_64 rng(1);
-  std::uniform_real_distribution<double> u(0, 1);
-  for (int r = 0; r < representatives; ++r) {
-    model::TabulatedNdf table(grid, model::GgxNdf(0.1 + 0.3 * u(rng), 0.1 + 0.3 * u(rng)));
-    table.Normalize();
-    m.representative_ln_d.push_back(table.ln_d());
-    m.representative_texels.push_back(static_cast<int64_t>(u(rng) * side * side));
-  }
-  m.alpha = common::FloatImage(side, side, 1, 0.5f);
-  m.shadowing_roughness = common::FloatImage(side, side, 1, 0.2f);
-  m.k_s = common::FloatImage(side, side, 3, 0.9f);
-  m.rho_d = common::FloatImage(side, side, 3, 0.01f);
-  m.residual = common::FloatImage(side, side, 1, 0.0f);
-  m.cluster = common::FloatImage(side, side, 1, 0.0f);
-  m.weight_index = common::FloatImage(side, side, 4);
-  m.weight_value = common::FloatImage(side, side, 4);
-  for (int y = 0; y < side; ++y) {
-    for (int x = 0; x < side; ++x) {
-      const double weights[4] = {0.4, 0.3, 0.2, 0.1};
-      for (int k = 0; k < 4; ++k) {
-        m.weight_index.at(x, y, k) = static_cast<float>(static_cast<int>(u(rng) * representatives) % representatives);
-        m.weight_value.at(x, y, k) = static_cast<float>(weights[k]);
-      }
-    }
-  }
-  return m;
 }
 
 // The baseline: `samples` BSDF samples at random texels and views, spread over the threads.
@@ -94,7 +59,7 @@ int main(int argc, char** argv) {
   const int resolution = argc > 1 ? std::atoi(argv[1]) : 512;
   const int spp = argc > 2 ? std::atoi(argv[2]) : 64;
   auto start = std::chrono::steady_clock::now();
-  const fit::Material material = SyntheticMaterial(600, 3600);
+  const fit::Material material = PaperScaleMaterial(600, 3600);
   const render::MaterialSurface surface(material, material.width_m, material.height_m, "synthetic material");
   std::printf("600 x 600 material with 3,600 representatives built in %.1f s\n", Seconds(start));
 

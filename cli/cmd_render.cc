@@ -1,6 +1,7 @@
 // svbtdf render: path-traces a fitted material or a simulator truth in the background or the
 // environment scene (docs/render.md) and writes linear EXR, a tone-mapped PNG and, against a
-// reference rendering, the image error.
+// reference rendering, the image error. With --parametric, a fitted material's texels carry the
+// GGX lobes `svbtdf export` fits instead of their tables (docs/export.md).
 
 #include <nlohmann/json.hpp>
 
@@ -15,6 +16,8 @@
 #include "commands.h"
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
+#include "svbtdf/export/lobe_fit.h"
+#include "svbtdf/fit/material.h"
 #include "svbtdf/render/image_metrics.h"
 #include "svbtdf/render/renderer.h"
 #include "svbtdf/render/scene.h"
@@ -30,7 +33,29 @@ struct RenderCommandOptions {
   render::RenderOptions render;
   std::string background, environment, compare_to, json;
   double background_distance = 0.05, background_width = 0.0, checker_size = 0.01, exposure = 1.0;
+  bool parametric = false;
 };
+
+// A fitted material with every texel's NDF replaced by the GGX lobe `svbtdf export` fits
+// (--parametric): the material and its lobes, kept alive with the surface drawn on them.
+struct ParametricMaterial {
+  std::unique_ptr<fit::Material> material;
+  std::unique_ptr<render::LobeSurface> surface;
+};
+
+ParametricMaterial LoadParametric(const fs::path& folder, std::optional<std::pair<double, double>> sample_size, int threads) {
+  if (!fs::is_regular_file(folder / "material.json")) {
+    common::ThrowInvalidInput(folder.string(), "is not a fitted material (--parametric renders a material's GGX lobes)");
+  }
+  ParametricMaterial loaded{std::make_unique<fit::Material>(fit::ReadMaterial(folder)), nullptr};
+  const fit::Material& m = *loaded.material;
+  exporter::MaterialLobes lobes = exporter::FitMaterialLobes(m, threads);
+  const auto [width_m, height_m] = sample_size.value_or(std::pair{m.width_m, m.height_m});
+  loaded.surface = std::make_unique<render::LobeSurface>(m, std::move(lobes.alpha_x), std::move(lobes.alpha_y),
+                                                         std::move(lobes.azimuth), width_m, height_m,
+                                                         (folder / "material.json").string());
+  return loaded;
+}
 
 void RequireWritableFolderOf(const fs::path& file, const char* flag) {
   const fs::path parent = file.has_parent_path() ? file.parent_path() : fs::path(".");
@@ -69,10 +94,17 @@ void RunRender(RenderCommandOptions options) {
   std::optional<common::FloatImage> reference;
   if (!options.compare_to.empty()) reference = common::ReadFloatImage(options.compare_to);
 
-  const render::LoadedSurface loaded = render::LoadSurface(options.material, sample_size);
-  const std::unique_ptr<render::Scene> scene = MakeScene(options, loaded.surface());
+  std::optional<render::LoadedSurface> loaded;
+  ParametricMaterial parametric;
+  if (options.parametric) {
+    parametric = LoadParametric(options.material, sample_size, options.render.threads);
+  } else {
+    loaded = render::LoadSurface(options.material, sample_size);
+  }
+  const render::Surface& surface = options.parametric ? *parametric.surface : loaded->surface();
+  const std::unique_ptr<render::Scene> scene = MakeScene(options, surface);
   const auto start = std::chrono::steady_clock::now();
-  const common::FloatImage image = render::Render(loaded.surface(), *scene, options.render);
+  const common::FloatImage image = render::Render(surface, *scene, options.render);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   common::WriteFloatImage(options.out, image, /*half_precision=*/false, /*overwrite=*/true);
@@ -81,8 +113,7 @@ void RunRender(RenderCommandOptions options) {
   }
   const double samples = static_cast<double>(image.width) * image.height * options.render.samples_per_pixel;
   std::printf("rendered the %s %s (%.4g x %.4g m) in %dx%d at %d spp: %.1f s, %.2f M samples/s -> %s\n",
-              loaded.surface().description().c_str(), options.material.c_str(), loaded.surface().width_m(),
-              loaded.surface().height_m(), image.width, image.height, options.render.samples_per_pixel, seconds,
+              surface.description().c_str(), options.material.c_str(), surface.width_m(), surface.height_m(), image.width, image.height, options.render.samples_per_pixel, seconds,
               samples / seconds * 1e-6, options.out.c_str());
   nlohmann::json metrics = {{"image", options.out}, {"seconds", seconds}, {"samples_per_pixel", options.render.samples_per_pixel}};
   if (reference) {
@@ -131,6 +162,8 @@ void AddRenderCommand(CLI::App& app) {
   command->add_option("--sample-size", options->sample_size,
                       "the sample's size W H (m), for a material that does not record it")
       ->expected(2);
+  command->add_flag("--parametric", options->parametric,
+                    "render a fitted material's GGX lobes (what `svbtdf export` writes) instead of its tables");
   command->add_option("--compare-to", options->compare_to, "reference EXR: print the relative RMSE and SSIM against it");
   command->add_option("--json", options->json, "write the timing and the comparison as JSON");
   command->callback([options] { RunRender(*options); });

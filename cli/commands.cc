@@ -9,6 +9,7 @@ void AddAllCommands(CLI::App& app) {
   AddCompareCommand(app);
   AddDevicesCommand(app);
   AddEvalCommand(app);
+  AddExportCommand(app);
   AddFitCommand(app);
   AddProcessCommand(app);
   AddRenderCommand(app);

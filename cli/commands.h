@@ -16,6 +16,7 @@ void AddCalibrateCommand(CLI::App& app);      // svbtdf calibrate
 void AddCompareCommand(CLI::App& app);        // svbtdf compare
 void AddDevicesCommand(CLI::App& app);         // svbtdf devices
 void AddEvalCommand(CLI::App& app);            // svbtdf eval
+void AddExportCommand(CLI::App& app);          // svbtdf export
 void AddFitCommand(CLI::App& app);             // svbtdf fit
 void AddProcessCommand(CLI::App& app);         // svbtdf process
 void AddRenderCommand(CLI::App& app);          // svbtdf render

@@ -19,19 +19,19 @@ if [ -e "$OUT" ]; then
 fi
 mkdir -p "$OUT"
 
-echo "== 1/6 simulating a capture session of the 'demo' material (a few minutes)"
+echo "== 1/7 simulating a capture session of the 'demo' material (a few minutes)"
 "$SVBTDF" simulate --preset demo --out "$OUT/simulated"
 
-echo "== 2/6 calibrating, processing and fitting the session (svbtdf run)"
+echo "== 2/7 calibrating, processing and fitting the session (svbtdf run)"
 "$SVBTDF" run "$OUT/simulated/session" --out "$OUT/material" --holdout 0.1
 
-echo "== 3/6 comparing the fitted material with the ground truth"
+echo "== 3/7 comparing the fitted material with the ground truth"
 "$SVBTDF" compare "$OUT/material" "$OUT/simulated/truth" --json "$OUT/compare.json"
 
-echo "== 4/6 pictures of the material beside the truth"
+echo "== 4/7 pictures of the material beside the truth"
 "$SVBTDF" report "$OUT/material" --out "$OUT/material-report" --truth "$OUT/simulated/truth" --compare "$OUT/compare.json"
 
-echo "== 5/6 rendering the fitted material beside its truth, from a view the rig never saw"
+echo "== 5/7 rendering the fitted material beside its truth, from a view the rig never saw"
 mkdir -p "$OUT/render"
 render_views=("0 0" "25 90")
 for k in 0 1; do
@@ -46,7 +46,16 @@ for k in 0 1; do
     --png "$OUT/render/view$k-material.png" --compare-to "$OUT/render/view$k-truth.exr" --json "$OUT/render/view$k.json"
 done
 
-echo "== 6/6 validating the dual-microfacet model against a Monte Carlo slab (about a minute)"
+echo "== 6/7 exporting the fitted material as glTF 2.0 (docs/export.md)"
+"$SVBTDF" export "$OUT/material" --gltf "$OUT/gltf"
+if command -v blender >/dev/null; then
+  # Blender's picture of the export: Cycles, head-on, 2 cm in front of a checkerboard.
+  blender -b --factory-startup --python tools/blender/render_export.py -- --gltf "$OUT/gltf/material.gltf" \
+    --png "$OUT/gltf/blender.png" --json "$OUT/gltf/blender.json" > "$OUT/gltf/blender.log" 2>&1 ||
+    echo "warning: demo: Blender could not render the export (see $OUT/gltf/blender.log)" >&2
+fi
+
+echo "== 7/7 validating the dual-microfacet model against a Monte Carlo slab (about a minute)"
 "$SVBTDF" validate-model --json "$OUT/validation.json" --plots "$OUT/validation"
 
 # A small report page: the simulated images next to the model validation.
@@ -86,7 +95,12 @@ against the truth", takes the noise out: the demo material is within 2% of its t
 <tr><td>0, 0</td><td><img src="render/view0-truth.png"></td><td><img src="render/view0-material.png"><br>$(render_metrics "$OUT/render/view0.json")<br>truth, another seed: $(render_metrics "$OUT/render/view0-noise.json")</td></tr>
 <tr><td>25, 90</td><td><img src="render/view1-truth.png"></td><td><img src="render/view1-material.png"><br>$(render_metrics "$OUT/render/view1.json")<br>truth, another seed: $(render_metrics "$OUT/render/view1-noise.json")</td></tr>
 </table>
-<h2>4. The dual-microfacet model against a Monte Carlo slab</h2>
+<h2>4. The material exported to glTF 2.0</h2>
+<p><code>svbtdf export</code> (docs/export.md) wrote <code>gltf/material.gltf</code>: every texel's NDF as an anisotropic
+GGX lobe, with the Khronos transmission, volume, IOR, anisotropy and diffuse-transmission extensions.
+$( [ -e "$OUT/gltf/blender.png" ] && echo 'Blender 3.4 imported it and rendered it with Cycles in front of a checkerboard (it ignores the anisotropy and the diffuse transmission):</p><p><img src="gltf/blender.png">' || echo '(Blender is not installed: no picture.)')</p>
+<pre>$(cat "$OUT/gltf/material.export.json")</pre>
+<h2>5. The dual-microfacet model against a Monte Carlo slab</h2>
 <p>Relative L2 errors of the model and of single-interface baselines, with plane-of-incidence plots:
 <a href="validation/index.html">validation/index.html</a> (docs/validation.md explains the cases).</p>
 </body></html>
@@ -99,6 +113,7 @@ echo "  simulated session:  $OUT/simulated/session   (truth: $OUT/simulated/trut
 echo "  model validation:   $OUT/validation.json"
 echo "  report:             $OUT/index.html"
 echo "  fitted material:    $OUT/material"
+echo "  glTF export:        $OUT/gltf/material.gltf"
 echo "  error against the truth: held-out BTDF relative RMSE $(metric heldout_rel_rmse)," \
      "alpha within 0.05 on a fraction $(metric alpha_within_0_05) of texels," \
      "NDF relative L2 median $(metric ndf_rel_l2_median)  (all metrics: $OUT/compare.json)"

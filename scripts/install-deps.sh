@@ -12,6 +12,7 @@ PACKAGES=(
   libgphoto2-dev libsdl2-dev libjpeg-dev
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  blender   # tests/export's Blender check and the demo's Blender picture (docs/export.md)
 )
 
 missing=()
@@ -19,14 +20,29 @@ for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 
-if [ ${#missing[@]} -eq 0 ]; then
-  echo "svbtdf: all ${#PACKAGES[@]} dependencies already installed"
-  exit 0
-fi
-
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-echo "svbtdf: installing ${#missing[@]} packages: ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+
+install_packages() {
+  echo "svbtdf: installing $#: $*"
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "$@"
+}
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "svbtdf: all ${#PACKAGES[@]} dependencies already installed"
+else
+  install_packages "${missing[@]}"
+fi
+
+# The Khronos glTF-Validator (tests/export), pinned in tools/gltf/package-lock.json: node from
+# Debian when this machine has none, then `npm ci`, again only when the lock changed.
+if ! command -v node >/dev/null || ! command -v npm >/dev/null; then install_packages nodejs npm; fi
+GLTF_TOOLS="$(cd "$(dirname "$0")/.." && pwd)/tools/gltf"
+STAMP="$GLTF_TOOLS/node_modules/.svbtdf-package-lock.json"  # the lock that was installed
+if ! cmp -s "$GLTF_TOOLS/package-lock.json" "$STAMP" 2>/dev/null; then
+  echo "svbtdf: installing the pinned glTF-Validator (npm ci in tools/gltf)"
+  (cd "$GLTF_TOOLS" && npm ci --no-audit --no-fund --loglevel=error)
+  cp "$GLTF_TOOLS/package-lock.json" "$STAMP"
+fi

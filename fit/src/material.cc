@@ -340,6 +340,14 @@ std::optional<BaselineLobe> MaterialEvaluator::Lobe(int x, int y) const {
 model::TabulatedNdf MaterialEvaluator::TexelNdf(int x, int y) const {
   // The baseline's texel NDF is its own interpolated lobe, the one Evaluate uses.
   if (const std::optional<BaselineLobe> lobe = Lobe(x, y)) return model::TabulatedNdf(grid_, BaselineLnD(grid_, *lobe));
+  std::vector<double> ln_d = TexelCellD(x, y);
+  for (double& value : ln_d) value = std::log(value);
+  model::TabulatedNdf ndf(grid_, std::move(ln_d));
+  ndf.Normalize();
+  return ndf;
+}
+
+std::vector<double> MaterialEvaluator::TexelCellD(int x, int y) const {
   // The representatives' D are blended scaled by their k_s, so that k_s D (what the data
   // constrain) is blended rather than each factor on its own: a representative whose fit put
   // much of D's mass where no dot looks, and a large k_s to compensate, then weighs in by what it
@@ -366,11 +374,9 @@ model::TabulatedNdf MaterialEvaluator::TexelNdf(int x, int y) const {
   // Representatives that transmit nothing (k_s = 0) leave the plain blend.
   if (!(total_scale > 0)) d = blend(/*by_scale=*/false, &total_scale);
   // Affine weights may be negative: keep D positive where the combination undershoots.
-  std::vector<double> ln_d(cells);
-  for (int c = 0; c < cells; ++c) ln_d[c] = std::log(std::max(d[c], 1e-12 * std::max(total_scale, 1.0)));
-  model::TabulatedNdf ndf(grid_, std::move(ln_d));
-  ndf.Normalize();
-  return ndf;
+  const double floor = 1e-12 * std::max(total_scale, 1.0);
+  for (double& value : d) value = std::max(value, floor);
+  return d;
 }
 
 TexelBtdf MaterialEvaluator::Texel(int x, int y) const {

@@ -1,6 +1,7 @@
 #include "svbtdf/render/surface.h"
 
 #include <algorithm>
+#include <utility>
 #include <cmath>
 
 #include "svbtdf/common/error.h"
@@ -136,6 +137,36 @@ const model::Bsdf& TruthSurface::At(int col, int row, BsdfScratch& scratch) cons
   const simulate::SpatialBtdf* btdf = &truth_.btdf();
   return scratch.evaluated.emplace(
       [btdf, index](const model::Vec3& i, const model::Vec3& o) { return btdf->Evaluate(index, i, o); });
+}
+
+// ---------------------------------------------------------------------------------------------
+// LobeSurface
+
+LobeSurface::LobeSurface(const fit::Material& material, common::FloatImage alpha_x, common::FloatImage alpha_y,
+                         common::FloatImage azimuth, double width_m, double height_m, const std::string& source)
+    : Surface(material.width, material.height, width_m, height_m, source),
+      material_(material),
+      alpha_x_(std::move(alpha_x)),
+      alpha_y_(std::move(alpha_y)),
+      azimuth_(std::move(azimuth)) {
+  if (material.model != fit::MaterialModel::kDualMicrofacet) {
+    common::ThrowInvalidInput(source, "is a walter-ggx material: its texels are GGX lobes already");
+  }
+  for (const common::FloatImage* map : {&alpha_x_, &alpha_y_, &azimuth_}) {
+    if (map->width != material.width || map->height != material.height || map->channels != 1) {
+      common::ThrowInvalidInput(source, "has lobe maps of another size than the material");
+    }
+  }
+}
+
+std::string LobeSurface::description() const { return "fitted dual-microfacet material, GGX lobe per texel"; }
+
+const model::Bsdf& LobeSurface::At(int col, int row, BsdfScratch& scratch) const {
+  // The Ellipsoid NDF with no skew is anisotropic GGX turned by theta_z; it turns the lobe's x
+  // axis to -theta_z (A^-T = S^-1 Rz(theta_z)), hence the minus.
+  const model::Ndf& ndf = scratch.ellipsoid.emplace(alpha_x_.at(col, row), alpha_y_.at(col, row), 0.0, 0.0,
+                                                    -static_cast<double>(azimuth_.at(col, row)));
+  return scratch.dual.emplace(ndf, fit::TexelParams(material_, col, row));
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -121,6 +121,40 @@ TEST(MaterialSurface, ABaselineTexelIsTheEvaluatorsWalterTexel) {
   EXPECT_EQ(surface.description(), "fitted walter-ggx material");
 }
 
+// A material whose one representative is an anisotropic GGX lobe turned by 0.6 rad, tabulated.
+fit::Material TurnedLobeMaterial(const fit::BaselineLobe& lobe) {
+  fit::Material m = SmallMaterial(3, 2);
+  m.ndf_resolution = 32;
+  model::TabulatedNdf table(model::Hemicube(32), fit::BaselineLnD(model::Hemicube(32), lobe));
+  table.Normalize();
+  m.representative_ln_d = {table.ln_d()};
+  return m;
+}
+
+TEST(LobeSurface, ATurnedLobeIsTheMaterialsTabulatedTexel) {
+  const fit::BaselineLobe lobe{0.35, 0.12, 0.6};
+  const fit::Material material = TurnedLobeMaterial(lobe);
+  const auto map = [&](double value) { return common::FloatImage(3, 2, 1, static_cast<float>(value)); };
+  const LobeSurface surface(material, map(lobe.alpha_x), map(lobe.alpha_y), map(lobe.azimuth), 0.03, 0.02, "lobes");
+  BsdfScratch scratch;
+  const fit::TexelBtdf reference = fit::MaterialEvaluator(material).Texel(1, 1);
+  // The table is the lobe at cell centres, interpolated: they agree to the table's resolution.
+  EXPECT_LT(RelativeL2(surface.At(1, 1, scratch), reference), 0.05);
+  // The same lobe turned the other way is far off: the azimuth's sign is right.
+  const LobeSurface mirrored(material, map(lobe.alpha_x), map(lobe.alpha_y), map(-lobe.azimuth), 0.03, 0.02, "lobes");
+  EXPECT_GT(RelativeL2(mirrored.At(1, 1, scratch), reference), 0.3);
+  for (const Vec3& wo : {Direction(0, 0), Direction(50, 120)}) {
+    const model::testing::BsdfSamplerCheck c = model::testing::CheckBsdf(surface.At(1, 1, scratch), wo, 200000, 22);
+    EXPECT_TRUE(c.Passes()) << "chi2 " << c.chi2 << " over " << c.bins;
+  }
+}
+
+TEST(LobeSurface, RefusesLobeMapsOfAnotherSize) {
+  const fit::Material material = SmallMaterial(3, 2);
+  const common::FloatImage wrong(2, 2, 1, 0.2f), right(3, 2, 1, 0.2f);
+  EXPECT_THROW(LobeSurface(material, wrong, right, right, 0.03, 0.02, "lobes"), common::Error);
+}
+
 TEST(LoadSurface, ReadsMaterialsAndNamesWhatIsMissing) {
   const testing::TempFolder folder;
   fit::Material m = SmallMaterial();

@@ -118,6 +118,11 @@ class MaterialEvaluator {
   // The texel's own NDF table: the weighted sum of the representatives' D, each scaled by its
   // transmission scale k_s (docs/material-format.md), normalised.
   model::TabulatedNdf TexelNdf(int x, int y) const;
+  // The dual-microfacet texel's blend at the hemicube's cells before TexelNdf interpolates and
+  // normalises it: d_c of docs/material-format.md, clamped, positive, in an arbitrary scale (one
+  // value per cell of Hemicube(ndf_resolution)). For a dual-microfacet material only: a
+  // walter-ggx texel's lobe is in its baseline maps.
+  std::vector<double> TexelCellD(int x, int y) const;
   // The scale a representative's D is weighted by in TexelNdf (its own k_s, channel mean).
   double RepresentativeScale(int representative) const { return representative_scale_.at(representative); }
 

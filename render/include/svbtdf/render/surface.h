@@ -15,6 +15,7 @@
 
 #include "svbtdf/fit/material.h"
 #include "svbtdf/model/bsdf.h"
+#include "svbtdf/model/ellipsoid_ndf.h"
 #include "svbtdf/model/ggx.h"
 #include "svbtdf/model/ndf_blend.h"
 #include "svbtdf/model/tabulated_ndf.h"
@@ -26,6 +27,7 @@ namespace svbtdf::render {
 struct BsdfScratch {
   std::optional<model::TabulatedNdfBlend> blend;
   std::optional<model::GgxNdf> ggx;
+  std::optional<model::EllipsoidNdf> ellipsoid;  // a rotated GGX lobe (LobeSurface)
   std::optional<model::DualMicrofacetBsdf> dual;
   std::optional<model::WalterBsdf> walter;
   std::optional<model::EvaluatedBsdf> evaluated;
@@ -73,6 +75,25 @@ class MaterialSurface final : public Surface {
   // Per texel with a negative weight, the integral of its clamped blend, computed on first use
   // (0: not yet). A pure function of the texel, so whichever thread computes it stores the same.
   mutable std::vector<std::atomic<float>> clamped_integral_;
+};
+
+// A fitted dual-microfacet material with every texel's tabulated NDF replaced by an anisotropic
+// GGX lobe (alpha_x along an axis at `azimuth` radians from +x, alpha_y across it: the lobes
+// `svbtdf export` fits, exporter::MaterialLobes): alpha, shadowing, k_s and rho_d stay the
+// material's, so a render against MaterialSurface's measures what the lobe fit alone loses
+// (`svbtdf render --parametric`, docs/export.md). `material` must outlive the surface.
+class LobeSurface final : public Surface {
+ public:
+  // Throws svbtdf::Error(kInvalidInput) naming `source` for a walter-ggx material (its texels are
+  // GGX lobes already) or lobe maps of another size than the material.
+  LobeSurface(const fit::Material& material, common::FloatImage alpha_x, common::FloatImage alpha_y,
+              common::FloatImage azimuth, double width_m, double height_m, const std::string& source);
+  std::string description() const override;
+  const model::Bsdf& At(int col, int row, BsdfScratch& scratch) const override;
+
+ private:
+  const fit::Material& material_;
+  common::FloatImage alpha_x_, alpha_y_, azimuth_;
 };
 
 // A simulator truth (either kind): the analytic dual-microfacet texel with its own NDF, or the
