@@ -9,6 +9,7 @@
 #include <string>
 
 #include "commands.h"
+#include "svbtdf/common/folder_lock.h"
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/parallel.h"
@@ -35,6 +36,7 @@ void RunExport(const ExportCommandOptions& options) {
   const std::string name = options.name.empty() ? folder.filename().string() : options.name;
   if (name.empty() || name.find('/') != std::string::npos) common::ThrowInvalidInput("--name", "must be a plain file name");
 
+  const common::FolderLock lock = common::FolderLock::Acquire(options.gltf, "svbtdf export");
   const auto start = std::chrono::steady_clock::now();
   const exporter::MaterialLobes lobes = exporter::FitMaterialLobes(material, threads);
   const double fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

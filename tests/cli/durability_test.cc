@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <functional>
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
@@ -20,6 +21,7 @@
 #include "run_command.h"
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/folder_lock.h"
+#include "svbtdf/common/image_io.h"
 #include "svbtdf/session/session.h"
 #include "temp_folder.h"
 
@@ -47,44 +49,76 @@ int TemporaryFilesUnder(const fs::path& folder) {
   return count;
 }
 
+// Pixels of every image map in `folder` and the bytes of its other files (EXR headers carry the
+// time they were written, so maps are compared by their values).
+std::map<std::string, std::string> Contents(const fs::path& folder) {
+  std::map<std::string, std::string> contents;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    const std::string name = entry.path().filename().string();
+    if (name == "progress.jsonl" || name == "material.json" || name == "quality.json") continue;  // paths, times
+    if (entry.path().extension() == ".exr") {
+      const common::FloatImage image = common::ReadFloatImage(entry.path());
+      contents[name] = std::string(reinterpret_cast<const char*>(image.pixels.data()), image.pixels.size() * sizeof(float));
+    } else {
+      contents[name] = common::ReadTextFile(entry.path());
+    }
+  }
+  return contents;
+}
+
 class Durability : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     reference_ = new testing::TempFolder();
-    const auto run = RunSvbtdf("-q simulate --preset tiny --out " + (reference_->path() / "tiny").string());
-    ASSERT_EQ(run.exit_code, 0) << run.output;
-    reference_images_ = new std::map<std::string, std::string>(Images(reference_->path() / "tiny" / "session"));
+    const fs::path tiny = reference_->path() / "tiny";
+    ASSERT_EQ(RunSvbtdf("-q simulate --preset tiny --out " + tiny.string()).exit_code, 0);
+    reference_images_ = new std::map<std::string, std::string>(Images(tiny / "session"));
+    // The calibrated session, its store and its material, for the walks of process and fit.
+    ASSERT_EQ(RunSvbtdf("-q calibrate " + (tiny / "session").string()).exit_code, 0);
+    ASSERT_EQ(RunSvbtdf("-q process " + (tiny / "session").string() + " --out " + Store().string()).exit_code, 0);
+    ASSERT_EQ(RunSvbtdf("-q fit " + Store().string() + " --out " + Material().string()).exit_code, 0);
   }
   static void TearDownTestSuite() {
     delete reference_images_;
     delete reference_;
   }
+  static fs::path Session() { return reference_->path() / "tiny" / "session"; }
+  static fs::path Store() { return reference_->path() / "store"; }
+  static fs::path Material() { return reference_->path() / "material"; }
 
-  // Simulates tiny into OUT with the N-th durable operation failing as `action` does, then resumes
-  // without faults; the session must be complete, decode, and equal the uninterrupted run's.
-  // Returns false when the run had fewer than N durable operations (nothing was injected).
-  bool FaultThenResume(int64_t n, const std::string& action) {
-    const fs::path out = folder_.path() / (action + std::to_string(n));
-    const std::string simulate = "-q simulate --preset tiny --out " + out.string();
-    const auto faulted = RunSvbtdf(simulate, "SVBTDF_INJECT_FAULT=" + std::to_string(n) + ":" + action);
-    if (faulted.exit_code == 0) {  // fewer operations than n: an undisturbed run
-      EXPECT_TRUE(Images(out / "session") == *reference_images_) << "operation " << n;
-      fs::remove_all(out);
-      return false;
-    }
+  // Runs `svbtdf ARGUMENTS --out OUT` with the n-th durable operation failing as `action` says
+  // (enospc or kill), then again without faults. Returns false when the run had fewer than n
+  // durable operations (nothing was injected); then the run itself must have succeeded.
+  bool FaultThenResume(const std::string& arguments, const fs::path& out, int64_t n, const std::string& action) {
+    const std::string command = "-q " + arguments + " --out " + out.string();
+    const auto faulted = RunSvbtdf(command, "SVBTDF_INJECT_FAULT=" + std::to_string(n) + ":" + action);
+    if (faulted.exit_code == 0) return false;
     if (action == "enospc") {
-      EXPECT_EQ(faulted.exit_code, 1) << "operation " << n << ": " << faulted.output;
+      EXPECT_EQ(faulted.exit_code, 1) << arguments << ", operation " << n << ": " << faulted.output;
       EXPECT_NE(faulted.output.find("No space left on device"), std::string::npos) << n << ": " << faulted.output;
       EXPECT_NE(faulted.output.find(out.string()), std::string::npos) << "the message names the file: " << faulted.output;
     }
-    const auto resumed = RunSvbtdf(simulate);
-    EXPECT_EQ(resumed.exit_code, 0) << "operation " << n << " (" << action << "): " << resumed.output;
-    const auto verify = RunSvbtdf("session verify --decode " + (out / "session").string());
-    EXPECT_EQ(verify.exit_code, 0) << "operation " << n << ": " << verify.output;
-    EXPECT_TRUE(Images(out / "session") == *reference_images_) << "operation " << n << " (" << action << ")";
-    EXPECT_EQ(TemporaryFilesUnder(out), 0) << "operation " << n;
-    fs::remove_all(out);
+    const auto resumed = RunSvbtdf(command);
+    EXPECT_EQ(resumed.exit_code, 0) << arguments << ", operation " << n << " (" << action << "): " << resumed.output;
     return true;
+  }
+
+  // Walks `points` (alternating a full disk and a kill) over `arguments`; `check(out, n)` judges
+  // each resumed result. Returns how many points were injected.
+  int Walk(const std::string& arguments, const std::vector<int64_t>& points,
+           const std::function<void(const fs::path&, int64_t)>& check) {
+    int injected = 0;
+    for (size_t k = 0; k < points.size(); ++k) {
+      const fs::path out = folder_.path() / ("out" + std::to_string(points[k]));
+      const bool fault = FaultThenResume(arguments, out, points[k], k % 2 == 0 ? "enospc" : "kill");
+      check(out, points[k]);
+      EXPECT_EQ(TemporaryFilesUnder(out.parent_path()), 0) << "operation " << points[k];
+      fs::remove_all(out);
+      fs::remove(out.string() + ".partial-fits.jsonl");
+      if (!fault) break;
+      ++injected;
+    }
+    return injected;
   }
 
   testing::TempFolder folder_;
@@ -95,42 +129,51 @@ class Durability : public ::testing::Test {
 testing::TempFolder* Durability::reference_ = nullptr;
 std::map<std::string, std::string>* Durability::reference_images_ = nullptr;
 
-// Which durable operations of `simulate --preset tiny` to fail. The first ones create the truth
-// and the session; then each capture is six (the image's write, fsync, rename and folder fsync,
-// the journal line's write and fsync), so six in a row meet every step of a capture. Each point
-// costs about one whole simulation (the faulted run and its resume), so the default run takes a
-// sample; SVBTDF_WALK_EVERY_OPERATION=K walks every K-th operation to the end (K = 1: all of them).
-std::vector<int64_t> OperationsToWalk() {
-  std::vector<int64_t> walk;
+// Every K-th operation to the end when SVBTDF_WALK_EVERY_OPERATION=K is set (K = 1: all).
+std::vector<int64_t> PointsOrEvery(std::vector<int64_t> points) {
   if (const char* every = std::getenv("SVBTDF_WALK_EVERY_OPERATION")) {
+    points.clear();
     const int64_t stride = std::max<int64_t>(1, std::atoll(every));
-    for (int64_t n = 1; n <= 100000; n += stride) walk.push_back(n);
-    return walk;
+    for (int64_t n = 1; n <= 100000; n += stride) points.push_back(n);
   }
-  for (int64_t n = 1; n <= 8; ++n) walk.push_back(n);
-  for (int64_t n = 200; n < 206; ++n) walk.push_back(n);
-  walk.push_back(100000);  // beyond the end: the run must not be disturbed
-  return walk;
+  points.push_back(100000);  // beyond the end: an undisturbed run
+  return points;
 }
 
-TEST_F(Durability, AFullDiskAtAnyWriteResumesToTheSameSession) {
-  int injected = 0;
-  for (const int64_t n : OperationsToWalk()) {
-    if (!FaultThenResume(n, "enospc")) break;
-    ++injected;
-  }
-  EXPECT_GE(injected, 14) << "the walk must reach the captures";
-  std::printf("full disk injected at %d durable operations of `simulate --preset tiny`\n", injected);
+// `simulate --preset tiny` makes about 591 durable operations: the truth's six files and rig.json
+// (four each: write, fsync, rename, folder fsync), the session's creation (plan.json and
+// session.json in a staging folder, its fsync and rename), then six per capture (the image's
+// four, the journal line's write and fsync). The points meet each of those; six in a row meet
+// every step of one capture. Each costs about one whole simulation.
+TEST_F(Durability, AFullDiskOrAKillAtAnyWriteOfSimulateResumesToTheSameSession) {
+  const int injected = Walk("simulate --preset tiny", PointsOrEvery({1, 4, 24, 27, 31, 38, 200, 201, 202, 203, 204, 205, 591}),
+                            [&](const fs::path& out, int64_t n) {
+                              const auto verify = RunSvbtdf("session verify --decode " + (out / "session").string());
+                              EXPECT_EQ(verify.exit_code, 0) << "operation " << n << ": " << verify.output;
+                              EXPECT_TRUE(Images(out / "session") == *reference_images_) << "operation " << n;
+                            });
+  EXPECT_GE(injected, 13);
+  std::printf("simulate: a full disk or a kill at %d durable operations, each resumed to the same session\n", injected);
 }
 
-TEST_F(Durability, AKillAtAnyWriteResumesToTheSameSession) {
-  int injected = 0;
-  for (const int64_t n : OperationsToWalk()) {
-    if (!FaultThenResume(n, "kill")) break;
-    ++injected;
-  }
-  EXPECT_GE(injected, 14) << "the walk must reach the captures";
-  std::printf("SIGKILL injected at %d durable operations of `simulate --preset tiny`\n", injected);
+// `process` (about 171 operations on tiny: the store's files sized, its tiles written and synced,
+// the progress journal, the maps) and `fit` (about 67: the checkpoint's lines, the material built
+// in a staging folder) resume from any fault to the uninterrupted run's values.
+TEST_F(Durability, AFullDiskOrAKillAtAnyWriteOfProcessOrFitResumesToTheSameResult) {
+  const std::map<std::string, std::string> store = Contents(Store());
+  const int processed = Walk("process " + Session().string(),
+                             PointsOrEvery({1, 2, 3, 4, 5, 6, 20, 41, 62, 83, 104, 125, 146, 167, 171}),
+                             [&](const fs::path& out, int64_t n) {
+                               EXPECT_TRUE(Contents(out) == store) << "process, operation " << n;
+                             });
+  const std::map<std::string, std::string> material = Contents(Material());
+  const int fitted = Walk("fit " + Store().string(), PointsOrEvery({1, 2, 3, 4, 5, 6, 15, 29, 43, 57, 64, 67}),
+                          [&](const fs::path& out, int64_t n) {
+                            EXPECT_TRUE(Contents(out) == material) << "fit, operation " << n;
+                          });
+  EXPECT_GE(processed, 15);
+  EXPECT_GE(fitted, 12);
+  std::printf("process: %d faults, fit: %d faults, each resumed to the same result\n", processed, fitted);
 }
 
 // A second writer of one folder is refused, naming the holder, and changes nothing.
