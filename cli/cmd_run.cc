@@ -28,7 +28,7 @@ void Run(RunOptions options) {
   pipeline.session = options.session;
   pipeline.out = options.out;
   pipeline.work = options.work;
-  pipeline.fit.representative_fraction = ParseRepresentatives(options.representatives);
+  pipeline.fit.representative_fraction = fit::ParseRepresentativeFraction(options.representatives);
   const process::PipelineOutcome outcome = process::RunPipeline(pipeline, ConsoleListener());
   std::printf("intermediate files (calibrated slices, reusable): %s\n", outcome.work.c_str());
   const fs::path quality = pipeline.out / "quality.json";

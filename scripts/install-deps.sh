@@ -12,6 +12,7 @@ PACKAGES=(
   libgphoto2-dev libsdl2-dev libjpeg-dev
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  pybind11-dev python3-dev python3-numpy python3-pytest
 )
 
 missing=()
