@@ -2,6 +2,8 @@
 
 import json
 import os
+import re
+import shutil
 import signal
 import time
 
@@ -69,3 +71,33 @@ def test_render_is_an_image_of_the_documented_shape_and_deterministic(tiny, tmp_
     np.testing.assert_array_equal(svbtdf.render(tiny.material, threads=1, **options), image)
     with pytest.raises(svbtdf.InvalidInputError, match="--scene"):
         svbtdf.render(tiny.material, scene="studio", **options)
+
+
+def test_calibrate_process_and_run_equal_the_command_line(tiny, tmp_path):
+    session = str(tmp_path / "session")
+    shutil.copytree(tiny.session, session, ignore=shutil.ignore_patterns("calibration.json"))
+    with pytest.raises(svbtdf.InvalidInputError, match=re.escape(session) + ": has no calibration.json"):
+        svbtdf.process(session, str(tmp_path / "early"))
+
+    calibrated = svbtdf.calibrate(session)
+    assert calibrated["file"] == os.path.join(session, "calibration.json")
+    with open(calibrated["file"]) as f:
+        assert calibrated["calibration"] == json.load(f)
+    with open(os.path.join(tiny.session, "calibration.json")) as f:
+        by_cli = json.load(f)
+    assert calibrated["calibration"]["camera"] == by_cli["camera"]  # `svbtdf run` calibrated the same
+
+    reported = []
+    work = tmp_path / "work"
+    processed = svbtdf.process(session, str(work / "processed"), progress=lambda *p: reported.append(p))
+    assert processed["texels"] == processed["valid_texels"] > 0 and processed["dots"] > 0
+    assert reported and reported[-1][1] == reported[-1][2]  # the last report is the finished bar
+    store, cli_store = svbtdf.SliceStore.open(processed["store"]), svbtdf.SliceStore.open(tiny.processed)
+    np.testing.assert_array_equal(store.rho_d, cli_store.rho_d)
+    np.testing.assert_array_equal(store.samples(4, 4)["values"], cli_store.samples(4, 4)["values"])
+
+    lines = []
+    result = svbtdf.run(session, str(tmp_path / "material"), work=str(work), representatives=0.02, log=lines.append)
+    assert result["work"] == str(work)
+    assert "== 2/3 processing: using " + str(work / "processed") in lines
+    assert svbtdf.Material.load(result["material"]).width == store.info["texels_x"]
