@@ -3,6 +3,7 @@
 // loop with the GIL released, and the renderer-ready BSDF (render::MaterialSurface) for sampling.
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -23,6 +24,14 @@ namespace {
 
 // Loops over N items of at least this many per chunk, so that small calls stay on one thread.
 constexpr int64_t kChunk = 4096;
+
+// work() with the GIL released (other Python threads run meanwhile), taken back before anything
+// touches a Python object again.
+template <typename Work>
+auto WithoutGil(const Work& work) {
+  py::gil_scoped_release release;
+  return work();
+}
 
 class Material {
  public:
@@ -45,11 +54,7 @@ class Material {
   // (2,) array for every i; svbtdf::Error naming "texels" outside the material.
   int64_t TexelIndex(const IntArray& texels, int64_t i) const {
     const int64_t* p = texels.data() + (texels.ndim() == 1 ? 0 : 2 * i);
-    if (p[0] < 0 || p[1] < 0 || p[0] >= material_.width || p[1] >= material_.height) {
-      common::ThrowInvalidInput("texels", "(" + std::to_string(p[0]) + ", " + std::to_string(p[1]) + ") is outside the " +
-                                              std::to_string(material_.width) + "x" + std::to_string(material_.height) +
-                                              " material");
-    }
+    CheckTexel(p[0], p[1]);
     return p[1] * material_.width + p[0];
   }
 
@@ -68,27 +73,28 @@ class Material {
     return n;
   }
 
-  // R(x, i, o) as `svbtdf eval` computes it: (N, 3).
+  // R(x, i, o) as `svbtdf eval` computes it: (N, 3). The directions are read, checked and
+  // normalised inside the parallel loop: done up front, on one thread, they took as long as the
+  // evaluations.
   py::array_t<double> Eval(const IntArray& texels, const DoubleArray& wi, const DoubleArray& wo, int threads) {
     const int64_t n = Count(texels, {DirectionCount(wi, "wi"), DirectionCount(wo, "wo")});
     py::array_t<double> out({n, int64_t{3}});
     double* values = out.mutable_data();
-    std::vector<int64_t> index(n);
-    std::vector<model::Vec3> in(n), view(n);
-    for (int64_t k = 0; k < n; ++k) {
-      index[k] = TexelIndex(texels, k);
-      in[k] = CheckedDirection(wi, k, "wi", /*toward_light=*/true);
-      view[k] = CheckedDirection(wo, k, "wo", /*toward_light=*/false);
-    }
-    py::gil_scoped_release release;
-    std::lock_guard<std::mutex> lock(texels_mutex_);
-    BuildTexels(index, threads);
-    common::ParallelFor(n, threads, kChunk, [&](int64_t begin, int64_t end) {
-      for (int64_t k = begin; k < end; ++k) {
-        const model::Rgb r = (*texels_[index[k]])->Evaluate(in[k], view[k]);
-        std::copy(r.begin(), r.end(), values + 3 * k);
-      }
+    const std::vector<int64_t> index = Indices(texels, n);
+    const int64_t refused = WithoutGil([&] {
+      std::lock_guard<std::mutex> lock(texels_mutex_);
+      BuildTexels(index, threads);
+      return ParallelOverPairs(n, threads, [&] {
+        return [&](int64_t k) {
+          const std::optional<model::Vec3> i = UnitOnSide(Direction(wi, k), kBelow), o = UnitOnSide(Direction(wo, k), kAbove);
+          if (!i || !o) return false;
+          const model::Rgb r = (*texels_[index[k]])->Evaluate(*i, *o);
+          std::copy(r.begin(), r.end(), values + 3 * k);
+          return true;
+        };
+      });
     });
+    if (refused >= 0) RefusePair(wi, wo, refused, kBelow, kAbove);
     return out;
   }
 
@@ -98,12 +104,16 @@ class Material {
     py::array_t<double> out({n, int64_t{3}});
     double* values = out.mutable_data();
     const std::vector<int64_t> index = Indices(texels, n);
-    const std::vector<model::Vec3> in = UnitDirections(wi, n, "wi"), view = UnitDirections(wo, n, "wo");
-    py::gil_scoped_release release;
-    ForEachBsdf(index, threads, [&](int64_t k, const model::Bsdf& bsdf) {
-      const model::Rgb f = bsdf.Eval(in[k], view[k]);
-      std::copy(f.begin(), f.end(), values + 3 * k);
+    const int64_t refused = WithoutGil([&] {
+      return ForEachBsdf(index, threads, [&](int64_t k, const model::Bsdf& bsdf) {
+        const std::optional<model::Vec3> i = UnitOnSide(Direction(wi, k), kEither), o = UnitOnSide(Direction(wo, k), kEither);
+        if (!i || !o) return false;
+        const model::Rgb f = bsdf.Eval(*i, *o);
+        std::copy(f.begin(), f.end(), values + 3 * k);
+        return true;
+      });
     });
+    if (refused >= 0) RefusePair(wi, wo, refused, kEither, kEither);
     return out;
   }
 
@@ -113,9 +123,15 @@ class Material {
     py::array_t<double> out(n);
     double* values = out.mutable_data();
     const std::vector<int64_t> index = Indices(texels, n);
-    const std::vector<model::Vec3> in = UnitDirections(wi, n, "wi"), view = UnitDirections(wo, n, "wo");
-    py::gil_scoped_release release;
-    ForEachBsdf(index, threads, [&](int64_t k, const model::Bsdf& bsdf) { values[k] = bsdf.Pdf(in[k], view[k]); });
+    const int64_t refused = WithoutGil([&] {
+      return ForEachBsdf(index, threads, [&](int64_t k, const model::Bsdf& bsdf) {
+        const std::optional<model::Vec3> i = UnitOnSide(Direction(wi, k), kEither), o = UnitOnSide(Direction(wo, k), kEither);
+        if (!i || !o) return false;
+        values[k] = bsdf.Pdf(*i, *o);
+        return true;
+      });
+    });
+    if (refused >= 0) RefusePair(wi, wo, refused, kEither, kEither);
     return out;
   }
 
@@ -123,35 +139,36 @@ class Material {
   py::tuple Sample(const IntArray& texels, const DoubleArray& wo, const DoubleArray& u, int threads) const {
     const int64_t n = Count(texels, {DirectionCount(wo, "wo"), DirectionCount(u, "u")});
     const std::vector<int64_t> index = Indices(texels, n);
-    const std::vector<model::Vec3> view = UnitDirections(wo, n, "wo");
-    std::vector<model::Vec3> random(n);
-    for (int64_t k = 0; k < n; ++k) {
-      random[k] = Direction(u, k);
-      if (!(random[k].minCoeff() >= 0 && random[k].maxCoeff() < 1)) common::ThrowInvalidInput("u", "must lie in [0, 1)");
-    }
     py::array_t<double> wi({n, int64_t{3}}), pdf(n), weight({n, int64_t{3}});
     py::array_t<bool> valid(n);
     double *wi_out = wi.mutable_data(), *pdf_out = pdf.mutable_data(), *weight_out = weight.mutable_data();
     bool* valid_out = valid.mutable_data();
-    {
-      py::gil_scoped_release release;
-      ForEachBsdf(index, threads, [&](int64_t k, const model::Bsdf& bsdf) {
-        const std::optional<model::BsdfSample> s =
-            bsdf.Sample(view[k], random[k].x(), model::Vec2(random[k].y(), random[k].z()));
+    const int64_t refused = WithoutGil([&] {
+      return ForEachBsdf(index, threads, [&](int64_t k, const model::Bsdf& bsdf) {
+        const std::optional<model::Vec3> o = UnitOnSide(Direction(wo, k), kEither);
+        const model::Vec3 r = Direction(u, k);
+        if (!o || !(r.minCoeff() >= 0 && r.maxCoeff() < 1)) return false;
+        const std::optional<model::BsdfSample> s = bsdf.Sample(*o, r.x(), model::Vec2(r.y(), r.z()));
         valid_out[k] = s.has_value();
         for (int c = 0; c < 3; ++c) {
           wi_out[3 * k + c] = s ? s->wi[c] : 0.0;
           weight_out[3 * k + c] = s ? s->weight[c] : 0.0;
         }
         pdf_out[k] = s ? s->pdf : 0.0;
+        return true;
       });
+    });
+    if (refused >= 0) {
+      RefuseDirection(wo, refused, "wo", kEither);
+      common::ThrowInvalidInput("u[" + std::to_string(refused) + "]", "must lie in [0, 1)");
     }
     return py::make_tuple(wi, pdf, weight, valid);
   }
 
   // The texel's NDF table (fit::MaterialEvaluator::TexelNdf) as D per hemicube cell.
   py::array_t<double> NdfCells(int col, int row) const {
-    const model::TabulatedNdf ndf = evaluator_.TexelNdf(CheckedCol(col, row), row);
+    CheckTexel(col, row);
+    const model::TabulatedNdf ndf = evaluator_.TexelNdf(col, row);
     py::array_t<double> out(static_cast<py::ssize_t>(ndf.ln_d().size()));
     std::transform(ndf.ln_d().begin(), ndf.ln_d().end(), out.mutable_data(), [](double l) { return std::exp(l); });
     return out;
@@ -160,7 +177,8 @@ class Material {
   // The same NDF at arbitrary unit normals h (N, 3): D(h), 0 below the horizon.
   py::array_t<double> NdfAt(int col, int row, const DoubleArray& h) const {
     const int64_t n = DirectionCount(h, "h");
-    const model::TabulatedNdf ndf = evaluator_.TexelNdf(CheckedCol(col, row), row);
+    CheckTexel(col, row);
+    const model::TabulatedNdf ndf = evaluator_.TexelNdf(col, row);
     py::array_t<double> out(n);
     for (int64_t k = 0; k < n; ++k) {
       const model::Vec3 v = Direction(h, k);
@@ -170,9 +188,13 @@ class Material {
   }
 
  private:
-  int CheckedCol(int col, int row) const {
-    evaluator_.Texel(col, row);  // throws naming the texel outside the material; cheap next to TexelNdf
-    return col;
+  // Throws naming the texel when (col, row) lies outside the material.
+  void CheckTexel(int64_t col, int64_t row) const {
+    if (col < 0 || row < 0 || col >= material_.width || row >= material_.height) {
+      common::ThrowInvalidInput("texel", "(" + std::to_string(col) + ", " + std::to_string(row) + ") is outside the " +
+                                             std::to_string(material_.width) + "x" + std::to_string(material_.height) +
+                                             " material");
+    }
   }
 
   std::vector<int64_t> Indices(const IntArray& texels, int64_t n) const {
@@ -181,30 +203,53 @@ class Material {
     return index;
   }
 
-  // Like `svbtdf eval`'s --wi and --wo: non-zero, finite, on the right side, normalised.
-  static model::Vec3 CheckedDirection(const DoubleArray& a, int64_t k, const char* name, bool toward_light) {
-    const model::Vec3 v = Direction(a, k);
-    const std::string subject = std::string(name) + "[" + std::to_string(k) + "]";
-    if (!v.allFinite() || v.norm() == 0.0) common::ThrowInvalidInput(subject, "must be a non-zero finite vector X Y Z");
-    if (toward_light ? !(v.z() < 0) : !(v.z() > 0)) {
-      common::ThrowInvalidInput(subject, toward_light ? "must point toward the light, below the sample (z < 0)"
-                                                      : "must point toward the camera, above the sample (z > 0)");
-    }
-    return v.normalized();
+  // Which side of the sample a direction must point to: the light's (z < 0) and the camera's
+  // (z > 0) for `svbtdf eval`; either, off the plane, for the renderer's BSDF.
+  enum Side { kBelow, kAbove, kEither };
+
+  // The unit direction of v, or nothing when v is zero, not finite or on the wrong side.
+  static std::optional<model::Vec3> UnitOnSide(const model::Vec3& v, Side side) {
+    const double norm = v.norm();
+    if (!(norm > 0 && std::isfinite(norm))) return std::nullopt;
+    if (side == kBelow ? !(v.z() < 0) : side == kAbove ? !(v.z() > 0) : v.z() == 0) return std::nullopt;
+    return v / norm;
   }
 
-  // Directions on either side (the renderer's BSDF handles both), normalised.
-  static std::vector<model::Vec3> UnitDirections(const DoubleArray& a, int64_t n, const char* name) {
-    std::vector<model::Vec3> out(n);
-    for (int64_t k = 0; k < n; ++k) {
-      const model::Vec3 v = Direction(a, k);
-      if (!v.allFinite() || v.norm() == 0.0 || v.z() == 0.0) {
-        common::ThrowInvalidInput(std::string(name) + "[" + std::to_string(k) + "]",
-                                  "must be a non-zero finite vector off the sample plane (z != 0)");
+  // Throws the error UnitOnSide's refusal of direction k of `a` stands for, as `svbtdf eval`
+  // words it for --wi and --wo; returns when that direction is fine.
+  static void RefuseDirection(const DoubleArray& a, int64_t k, const char* name, Side side) {
+    const model::Vec3 v = Direction(a, k);
+    if (UnitOnSide(v, side)) return;
+    const std::string subject = std::string(name) + "[" + std::to_string(k) + "]";
+    if (!v.allFinite() || v.norm() == 0.0) common::ThrowInvalidInput(subject, "must be a non-zero finite vector X Y Z");
+    if (side == kBelow) common::ThrowInvalidInput(subject, "must point toward the light, below the sample (z < 0)");
+    if (side == kAbove) common::ThrowInvalidInput(subject, "must point toward the camera, above the sample (z > 0)");
+    common::ThrowInvalidInput(subject, "must not lie in the sample's plane (z = 0)");
+  }
+
+  static void RefusePair(const DoubleArray& wi, const DoubleArray& wo, int64_t k, Side wi_side, Side wo_side) {
+    RefuseDirection(wi, k, "wi", wi_side);
+    RefuseDirection(wo, k, "wo", wo_side);
+  }
+
+  // Runs each(k) over [0, n) on the parallel loop, with each = make_each() made once per chunk
+  // (for state a chunk reuses). each returns false for an input it refuses (and leaves its output
+  // alone). Returns the smallest refused k, or -1, so that the error names the first bad row
+  // whatever the threads did.
+  template <typename MakeEach>
+  static int64_t ParallelOverPairs(int64_t n, int threads, const MakeEach& make_each) {
+    std::atomic<int64_t> first_refused{n};
+    common::ParallelFor(n, threads, kChunk, [&](int64_t begin, int64_t end) {
+      auto each = make_each();
+      for (int64_t k = begin; k < end; ++k) {
+        if (each(k)) continue;
+        int64_t seen = first_refused.load();
+        while (k < seen && !first_refused.compare_exchange_weak(seen, k)) {
+        }
+        break;  // later rows of this chunk cannot be smaller
       }
-      out[k] = v.normalized();
-    }
-    return out;
+    });
+    return first_refused < n ? first_refused.load() : -1;
   }
 
   // Builds the TexelBtdf of every texel in `index` not built yet, in parallel; texels_mutex_ held.
@@ -229,14 +274,15 @@ class Material {
     }
   }
 
+  // ParallelOverPairs with texel k's BSDF from the renderer's surface, built in a scratch that
+  // each chunk reuses from pair to pair (a scratch belongs to one surface: never keep it longer).
   template <typename Body>
-  void ForEachBsdf(const std::vector<int64_t>& index, int threads, const Body& body) const {
-    common::ParallelFor(static_cast<int64_t>(index.size()), threads, kChunk, [&](int64_t begin, int64_t end) {
-      render::BsdfScratch scratch;  // one per chunk: At() reuses it from texel to texel
-      for (int64_t k = begin; k < end; ++k) {
+  int64_t ForEachBsdf(const std::vector<int64_t>& index, int threads, const Body& body) const {
+    return ParallelOverPairs(static_cast<int64_t>(index.size()), threads, [&] {
+      return [&, scratch = std::make_shared<render::BsdfScratch>()](int64_t k) {
         const int64_t t = index[k];
-        body(k, surface_.At(static_cast<int>(t % material_.width), static_cast<int>(t / material_.width), scratch));
-      }
+        return body(k, surface_.At(static_cast<int>(t % material_.width), static_cast<int>(t / material_.width), *scratch));
+      };
     });
   }
 

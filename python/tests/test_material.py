@@ -65,17 +65,23 @@ def test_eval_broadcasts_one_texel_and_one_direction(material):
 
 
 def test_bad_input_raises_the_documented_exceptions(tiny, material):
-    with pytest.raises(svbtdf.InvalidInputError, match=r"texels: \(%d, 0\) is outside" % material.width) as info:
+    with pytest.raises(svbtdf.InvalidInputError, match=r"texel: \(%d, 0\) is outside" % material.width) as info:
         material.eval([material.width, 0], [0, 0, -1], [0, 0, 1])
-    assert info.value.kind == "invalid_input" and info.value.subject == "texels"
+    assert info.value.kind == "invalid_input" and info.value.subject == "texel"
     assert isinstance(info.value, svbtdf.Error) and isinstance(info.value, ValueError)
     with pytest.raises(svbtdf.InvalidInputError, match=r"wi\[1\]: must point toward the light"):
         material.eval([0, 0], [[0, 0, -1], [0, 0, 1]], [0, 0, 1])
+    many = np.tile([0.1, 0.2, -1.0], (20000, 1))
+    many[[15000, 9000], 2] = 0.0
+    with pytest.raises(svbtdf.InvalidInputError, match=r"wi\[9000\]: must point toward the light"):
+        material.eval([0, 0], many, [0, 0, 1])  # the first bad row, whichever thread met it
+    with pytest.raises(svbtdf.InvalidInputError, match=r"wo\[0\]: must not lie in the sample's plane"):
+        material.pdf([0, 0], [0, 0, -1], [1, 0, 0])
     with pytest.raises(svbtdf.InvalidInputError, match="shape"):
         material.eval([0, 0], [0, -1], [0, 0, 1])
     with pytest.raises(svbtdf.InvalidInputError, match="different lengths"):
         material.eval([[0, 0], [1, 1]], np.tile([0, 0, -1.0], (3, 1)), [0, 0, 1])
-    with pytest.raises(svbtdf.InvalidInputError, match=r"u: must lie in \[0, 1\)"):
+    with pytest.raises(svbtdf.InvalidInputError, match=r"u\[0\]: must lie in \[0, 1\)"):
         material.sample([0, 0], [0, 0, 1], [0.5, 0.5, 1.0])
     with pytest.raises(svbtdf.Error, match="material.json"):
         svbtdf.Material.load(os.path.join(tiny.root, "no-such-material"))

@@ -85,7 +85,9 @@ def test_calibrate_process_and_run_equal_the_command_line(tiny, tmp_path):
         assert calibrated["calibration"] == json.load(f)
     with open(os.path.join(tiny.session, "calibration.json")) as f:
         by_cli = json.load(f)
-    assert calibrated["calibration"]["camera"] == by_cli["camera"]  # `svbtdf run` calibrated the same
+    # `svbtdf run` calibrated the same, to the last digits the solvers' threads leave open.
+    for key in ("fx", "fy", "cx", "cy", "distortion", "rms_px"):
+        assert calibrated["calibration"]["camera"][key] == pytest.approx(by_cli["camera"][key], rel=1e-8, abs=1e-12), key
 
     reported = []
     work = tmp_path / "work"
@@ -93,8 +95,8 @@ def test_calibrate_process_and_run_equal_the_command_line(tiny, tmp_path):
     assert processed["texels"] == processed["valid_texels"] > 0 and processed["dots"] > 0
     assert reported and reported[-1][1] == reported[-1][2]  # the last report is the finished bar
     store, cli_store = svbtdf.SliceStore.open(processed["store"]), svbtdf.SliceStore.open(tiny.processed)
-    np.testing.assert_array_equal(store.rho_d, cli_store.rho_d)
-    np.testing.assert_array_equal(store.samples(4, 4)["values"], cli_store.samples(4, 4)["values"])
+    np.testing.assert_allclose(store.rho_d, cli_store.rho_d, rtol=1e-5)
+    np.testing.assert_allclose(store.samples(4, 4)["values"], cli_store.samples(4, 4)["values"], rtol=1e-5)
 
     lines = []
     result = svbtdf.run(session, str(tmp_path / "material"), work=str(work), representatives=0.02, log=lines.append)
