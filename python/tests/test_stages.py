@@ -95,8 +95,10 @@ def test_calibrate_process_and_run_equal_the_command_line(tiny, tmp_path):
     assert processed["texels"] == processed["valid_texels"] > 0 and processed["dots"] > 0
     assert reported and reported[-1][1] == reported[-1][2]  # the last report is the finished bar
     store, cli_store = svbtdf.SliceStore.open(processed["store"]), svbtdf.SliceStore.open(tiny.processed)
-    np.testing.assert_allclose(store.rho_d, cli_store.rho_d, rtol=1e-5)
-    np.testing.assert_allclose(store.samples(4, 4)["values"], cli_store.samples(4, 4)["values"], rtol=1e-5)
+    # Samples are stored as float16: a calibration differing in its 12th digit may round one the
+    # other way (2^-11 relative).
+    np.testing.assert_allclose(store.rho_d, cli_store.rho_d, rtol=1e-3)
+    np.testing.assert_allclose(store.samples(4, 4)["values"], cli_store.samples(4, 4)["values"], rtol=1e-3)
 
     lines = []
     result = svbtdf.run(session, str(tmp_path / "material"), work=str(work), representatives=0.02, log=lines.append)
