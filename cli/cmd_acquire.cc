@@ -6,6 +6,7 @@
 #include <string>
 
 #include "commands.h"
+#include "svbtdf/common/folder_lock.h"
 #include "svbtdf/acquire/capture_session.h"
 #include "svbtdf/acquire/lab_rig.h"
 #include "svbtdf/common/error.h"
@@ -32,6 +33,7 @@ void RunAcquire(const AcquireArgs& args) {
   // The plan is checked before any hardware is touched.
   const acquire::CapturePlan plan =
       args.plan.empty() ? acquire::MakePlanPreset(args.plan_preset) : acquire::ReadCapturePlan(args.plan);
+  const common::FolderLock lock = common::FolderLock::Acquire(args.out, "svbtdf acquire");
   acquire::LabRig rig = acquire::OpenLabRig(args.camera, args.display, args.calibration);
   acquire::AcquireOptions options;
   options.retries = args.retries;

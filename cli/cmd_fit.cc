@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "svbtdf/common/folder_lock.h"
 #include "fit_command.h"
 #include "quality_output.h"
 #include "svbtdf/common/error.h"
@@ -55,6 +56,7 @@ void AddFitCommand(CLI::App& app) {
   AddFitOptions(fit, &options->fit, &options->representatives);
   AddStrictFlag(fit, &options->strict);
   fit->callback([options] {
+    const common::FolderLock lock = common::FolderLock::Acquire(options->out, "svbtdf fit");
     fit::FitMaterialOptions fit_options = options->fit;
     fit_options.representative_fraction = fit::ParseRepresentativeFraction(options->representatives);
     ExitIfStrict(process::FitAndWriteMaterial(options->processed, options->out, fit_options, ConsoleListener()),

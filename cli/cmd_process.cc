@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "svbtdf/common/folder_lock.h"
 #include "quality_output.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/process/pipeline.h"
@@ -33,6 +34,7 @@ void ParseTexels(const std::string& text, process::ProcessOptions* options) {
 
 void RunProcess(ProcessCommandOptions options) {
   ParseTexels(options.texels, &options.process);
+  const common::FolderLock lock = common::FolderLock::Acquire(options.out, "svbtdf process");
   const process::ProcessStage stage = process::ProcessAndCheck(options.session, options.out, options.process);
   const process::ProcessReport& report = stage.report;
   std::printf("processed %d dots (%d resumed) from %lld images in %.1f s: %lld of %lld texels valid\n", report.dots,

@@ -8,12 +8,14 @@
 #include <vector>
 
 #include "commands.h"
+#include "svbtdf/common/folder_lock.h"
 #include "svbtdf/report/material_report.h"
 
 namespace svbtdf::cli {
 namespace {
 
 void RunReport(const report::MaterialReportOptions& options) {
+  const common::FolderLock lock = common::FolderLock::Acquire(options.out, "svbtdf report");
   const std::vector<fit::QualityWarning> warnings = report::WriteMaterialReport(options);
   std::printf("report: %s\n", (options.out / "index.html").c_str());
   if (!warnings.empty()) {

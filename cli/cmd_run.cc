@@ -8,6 +8,7 @@
 #include <string>
 
 #include "commands.h"
+#include "svbtdf/common/folder_lock.h"
 #include "fit_command.h"
 #include "quality_output.h"
 #include "svbtdf/process/pipeline.h"
@@ -29,6 +30,8 @@ void Run(RunOptions options) {
   pipeline.out = options.out;
   pipeline.work = options.work;
   pipeline.fit.representative_fraction = fit::ParseRepresentativeFraction(options.representatives);
+  // The material names the run; its work folder is only ever written under it.
+  const common::FolderLock lock = common::FolderLock::Acquire(pipeline.out, "svbtdf run");
   const process::PipelineOutcome outcome = process::RunPipeline(pipeline, ConsoleListener());
   std::printf("intermediate files (calibrated slices, reusable): %s\n", outcome.work.c_str());
   const fs::path quality = pipeline.out / "quality.json";

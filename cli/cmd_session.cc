@@ -17,6 +17,7 @@ constexpr int kIncompleteExitCode = 3;
 struct VerifyOptions {
   std::string session;
   bool skip_crc = false;
+  bool decode = false;
 };
 
 }  // namespace
@@ -29,9 +30,11 @@ void AddSessionCommand(CLI::App& app) {
       "verify", "Check a session against its plan and journal: exit 0 only when complete and intact");
   verify->add_option("session", options->session, "session folder")->required();
   verify->add_flag("--no-crc", options->skip_crc, "check sizes only (fast), not the CRC-32 of every image");
+  verify->add_flag("--decode", options->decode,
+                   "also decode every image (slow): finds images journalled with their damage");
   verify->callback([options] {
     const session::Session session = session::Session::Open(options->session);
-    const session::SessionVerification report = session.Verify(!options->skip_crc);
+    const session::SessionVerification report = session.Verify(!options->skip_crc, options->decode);
     std::printf("%s: %zu of %zu planned images journalled; %s\n", options->session.c_str(), session.entries().size(),
                 session.planned_keys().size(), report.Summary().c_str());
     const auto list = [](const char* what, const std::vector<std::string>& keys) {

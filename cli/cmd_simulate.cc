@@ -5,6 +5,7 @@
 #include <string>
 
 #include "commands.h"
+#include "svbtdf/common/folder_lock.h"
 #include "svbtdf/simulate/presets.h"
 #include "svbtdf/acquire/simulated_session.h"
 
@@ -33,7 +34,14 @@ void AddSimulateCommand(CLI::App& app) {
                      "show a mirror image of the screen (a mirrored display mode), which calibration must refuse");
   simulate->add_option("--threads", options->threads, "worker threads (0: all cores)")->capture_default_str();
   simulate->callback([options, out] {
+    const common::FolderLock lock = common::FolderLock::Acquire(*out, "svbtdf simulate");
     const acquire::SimulationOutput result = acquire::SimulateSession(*out, *options);
+    if (result.already_complete) {
+      std::printf("already complete: %lld images of preset '%s'; nothing to do\n  session: %s\n  truth:   %s\n",
+                  static_cast<long long>(result.images), options->preset.c_str(), result.session.c_str(),
+                  result.truth.c_str());
+      return;
+    }
     std::printf("simulated %lld images (%lld resumed) of preset '%s'\n  session: %s\n  truth:   %s\n",
                 static_cast<long long>(result.images), static_cast<long long>(result.resumed),
                 options->preset.c_str(), result.session.c_str(), result.truth.c_str());

@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <filesystem>
 #include <exception>
 #include <new>
 #include <string>
@@ -68,6 +69,11 @@ int main(int argc, char** argv) {
   } catch (const svbtdf::common::Error& e) {
     std::fprintf(stderr, "svbtdf: error: %s\n", e.what());
     return svbtdf::common::ExitCodeFor(e.kind());
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A folder the system refuses (a symbolic link loop, no permission, a file where a folder
+    // should be) is the user's to fix, not a bug: name the path and the system's reason.
+    std::fprintf(stderr, "svbtdf: error: %s: %s\n", e.path1().c_str(), e.code().message().c_str());
+    return 1;
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "svbtdf: error: out of memory (try a smaller --threads or tile size)\n");
     return 1;

@@ -13,6 +13,7 @@
 #include <set>
 #include <thread>
 
+#include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/common/progress.h"
@@ -278,6 +279,11 @@ uint64_t FreeSpaceAt(const fs::path& folder) {
 
 uint64_t EstimatedBytesPerImage(const CapturePlan& plan, const CameraInfo& camera) {
   if (plan.bytes_per_image > 0) return plan.bytes_per_image;
+  constexpr uint64_t kPngOverhead = 64 * 1024;
+  if (camera.frame_width > 0 && camera.frame_height > 0) {
+    const uint64_t channels = camera.frame_channels > 0 ? camera.frame_channels : 3;
+    return static_cast<uint64_t>(camera.frame_width) * camera.frame_height * channels * 2 + kPngOverhead;
+  }
   const std::regex size(R"((\d+)x(\d+))");
   uint64_t largest = 0;
   for (const std::string& format : camera.formats) {
@@ -286,9 +292,34 @@ uint64_t EstimatedBytesPerImage(const CapturePlan& plan, const CameraInfo& camer
       largest = std::max<uint64_t>(largest, std::stoull(match[1]) * std::stoull(match[2]));
     }
   }
-  constexpr uint64_t kPngOverhead = 64 * 1024;
   if (largest == 0) return 64ull * 1024 * 1024;  // unknown: a 10 MP RGB image, generously
   return largest * 3 * 2 + kPngOverhead;
+}
+
+uint64_t EstimatedBytes(const std::vector<PlannedCapture>& captures, const CapturePlan& plan, const CameraInfo& camera,
+                        const session::Session* captured) {
+  const uint64_t channels = camera.frame_channels > 0 ? camera.frame_channels : 3;
+  const bool windowed = !camera.window.whole_sensor();
+  // [0]: window-sized images, [1]: whole-sensor board views of a windowed camera.
+  std::array<uint64_t, 2> per_image = {EstimatedBytesPerImage(plan, camera), 0};
+  per_image[1] = windowed ? std::max(per_image[0], static_cast<uint64_t>(camera.window.sensor_width) *
+                                                       camera.window.sensor_height * channels * 2)
+                          : per_image[0];
+  if (captured) {
+    std::array<uint64_t, 2> largest = {0, 0};
+    for (const session::SessionEntry& entry : captured->entries()) {
+      const size_t size_class = windowed && entry.key.rfind("board/", 0) == 0 ? 1 : 0;
+      largest[size_class] = std::max(largest[size_class], entry.bytes);
+    }
+    for (size_t c = 0; c < 2; ++c) {
+      if (largest[c] > 0) per_image[c] = largest[c] + largest[c] / 10;
+    }
+  }
+  uint64_t bytes = 0;
+  for (const PlannedCapture& capture : captures) {
+    bytes += per_image[windowed && capture.scene == Scene::kBoardView ? 1 : 0];
+  }
+  return bytes + bytes / 20;
 }
 
 nlohmann::json AcquisitionRig(const CapturePlan& plan, const CameraInfo& camera, const DisplayInfo& display) {
@@ -342,9 +373,19 @@ AcquireResult Acquire(const CapturePlan& plan, Camera& camera, Display& display,
   result.planned = static_cast<int64_t>(keys.size());
   result.already = session ? static_cast<int64_t>(session->entries().size()) : 0;
   const int64_t missing = result.planned - result.already;
+  std::vector<PlannedCapture> to_capture;
+  for (const PlannedCapture& capture : captures) {
+    if (!session || !session->Contains(capture.key)) to_capture.push_back(capture);
+  }
   constexpr uint64_t kManifestAndJournal = 1 << 20;
-  RequireFreeSpace(session_folder, EstimatedBytesPerImage(plan, camera_info) * missing + kManifestAndJournal, missing,
+  RequireFreeSpace(session_folder,
+                   EstimatedBytes(to_capture, plan, camera_info, session ? &*session : nullptr) + kManifestAndJournal, missing,
                    options);
+  if (session) {
+    // Left by a kill mid-write; the lock (held by the command) says no other writer owns them.
+    const int removed = common::RemoveStaleTemporaryFiles(session_folder);
+    if (removed > 0) spdlog::info("{}: removed {} temporary files left by an interrupted run", session_folder.string(), removed);
+  }
   if (!session) {
     nlohmann::json rig = AcquisitionRig(plan, camera_info, display_info);
     rig.merge_patch(options.rig_additions);

@@ -1,11 +1,15 @@
 #include "svbtdf/acquire/simulated_session.h"
 
+#include <spdlog/spdlog.h>
+
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "svbtdf/acquire/capture_plan.h"
 #include "svbtdf/acquire/capture_session.h"
 #include "svbtdf/acquire/sim_hardware.h"
+#include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/session/session.h"
 
@@ -25,18 +29,28 @@ void CheckOutputFolder(const fs::path& out) {
   }
 }
 
-// A complete session is never overwritten, and a damaged one cannot be resumed: the journal is
-// append-only, so a damaged image could not be rendered again under its key.
-void CheckResumable(const fs::path& session_folder) {
-  if (!fs::exists(session_folder / "session.json")) return;
-  const session::SessionVerification check = session::Session::Open(session_folder).Verify(/*check_crc=*/true);
-  if (check.complete()) {
-    common::ThrowInvalidInput(session_folder.string(), "holds a complete simulated session already; it is never overwritten",
-                      "choose a new output folder");
-  }
+// A damaged session cannot be resumed: the journal is append-only, so a damaged image could not
+// be rendered again under its key. Returns the number of images when the session is complete.
+std::optional<int64_t> CheckResumable(const fs::path& session_folder, const simulate::SimulationOptions& options) {
+  if (!fs::exists(session_folder / "session.json")) return std::nullopt;
+  const session::Session session = session::Session::Open(session_folder);
+  const session::SessionVerification check = session.Verify(/*check_crc=*/true);
   if (!check.corrupt.empty() || !check.duplicated.empty()) {
     common::ThrowFormatError(session_folder.string(), "cannot be resumed: " + check.Summary(), "simulate into a new output folder");
   }
+  if (!check.complete()) return std::nullopt;
+  // A finished simulation of the same settings is done: a rerun says so and changes nothing. Of
+  // other settings, it is never overwritten.
+  const nlohmann::json& notes = session.rig_json().value("simulated", nlohmann::json::object());
+  const bool same_eta = options.eta == 0.0 || session.rig().sample.eta == options.eta;
+  if (notes.value("preset", "") != options.preset || notes.value("seed", uint64_t{0}) != options.seed ||
+      notes.value("truth", "") != options.truth || !same_eta) {
+    common::ThrowInvalidInput(session_folder.string(),
+                              "holds a complete simulated session of other settings (" + notes.dump() +
+                                  "); it is never overwritten",
+                              "choose a new output folder");
+  }
+  return static_cast<int64_t>(session.entries().size());
 }
 
 // What the manifest records beyond what the lab's acquisition writes: that the session is
@@ -51,8 +65,17 @@ nlohmann::json SimulationNotes(const simulate::SimulatedSetup& setup) {
 SimulationOutput SimulateSession(const fs::path& out, const simulate::SimulationOptions& options) {
   SimulationOutput output{out / "session", out / "truth"};
   simulate::PresetWithOptions(options);  // bad options are refused before anything is written
+  if (fs::is_directory(out)) {
+    // Left by a kill mid-write; the command's lock says no other writer owns them.
+    const int removed = common::RemoveStaleTemporaryFiles(out);
+    if (removed > 0) spdlog::info("{}: removed {} temporary files left by an interrupted run", out.string(), removed);
+  }
   CheckOutputFolder(out);
-  CheckResumable(output.session);
+  if (const std::optional<int64_t> images = CheckResumable(output.session, options)) {
+    output.images = output.resumed = *images;
+    output.already_complete = true;
+    return output;
+  }
   const std::shared_ptr<const simulate::SimulatedSetup> setup = simulate::PrepareSimulation(output.truth, options);
 
   auto world = std::make_shared<SimWorld>();

@@ -10,22 +10,26 @@
 
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/fault_injection.h"
 #include "svbtdf/common/json.h"
 
 namespace svbtdf::common {
 namespace fs = std::filesystem;
 namespace {
 
-// One write(2) of the whole line and its newline, then fsync: a crash leaves all of it, a
-// prefix of it, or none of it.
+// The line and its newline in one write (retried only if the kernel writes part of it), then
+// fsync: a crash leaves all of it, a prefix of it, or none of it.
 void AppendBytesDurably(const fs::path& path, const std::string& bytes) {
   const int fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0) ThrowIoError(path.string(), std::string("cannot open for appending: ") + std::strerror(errno));
-  const ssize_t written = ::write(fd, bytes.data(), bytes.size());
-  const bool ok = written == static_cast<ssize_t>(bytes.size()) && ::fsync(fd) == 0;
-  const int saved = errno;
+  if (fd < 0) ThrowSystemError(path.string(), "cannot open for appending", errno);
+  try {
+    WriteAllOrThrow(fd, bytes.data(), bytes.size(), path);
+    SyncOrThrow(fd, path);
+  } catch (...) {
+    ::close(fd);
+    throw;
+  }
   ::close(fd);
-  if (!ok) ThrowIoError(path.string(), std::string("append failed: ") + std::strerror(saved), "is the disk full?");
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "svbtdf/common/image_io.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imageio.h>
 
@@ -32,14 +33,26 @@ std::vector<std::string> ChannelNames(int channels) {
   return names;
 }
 
-// Writes pixels of `type` through OpenImageIO into `temp`, which WriteFileAtomically renames.
-void WritePixels(const fs::path& final_path, const fs::path& temp, OIIO::ImageSpec spec, const void* pixels) {
-  // The temporary name hides the extension, so the format is chosen from the final path.
-  auto output = OIIO::ImageOutput::create(final_path.string());
-  if (!output) ThrowIoError(final_path.string(), "no image writer for this extension: " + OIIO::geterror());
-  if (!output->open(temp.string(), spec) || !output->write_image(spec.format, pixels) || !output->close()) {
-    ThrowIoError(final_path.string(), "write failed: " + output->geterror(), "is the disk full?");
+// Encodes the image in memory and writes the bytes through WriteBytesAtomically, whose every
+// write is checked: OpenImageIO's PNG writer goes through stdio and does not report a full disk,
+// so a file it wrote itself could be short or empty and still look written.
+void EncodeAndWrite(const fs::path& path, const OIIO::ImageSpec& spec, OIIO::TypeDesc buffer_type, const void* pixels,
+                    bool overwrite) {
+  // The format is chosen from the path's extension.
+  auto output = OIIO::ImageOutput::create(path.string());
+  if (!output) ThrowIoError(path.string(), "no image writer for this extension: " + OIIO::geterror());
+  if (!output->supports("ioproxy")) {
+    ThrowInvalidInput(path.string(), std::string("cannot be written: the ") + output->format_name() +
+                                         " writer cannot encode to memory", "write PNG or EXR");
   }
+  std::vector<unsigned char> encoded;
+  OIIO::Filesystem::IOVecOutput memory(encoded);
+  if (!output->set_ioproxy(&memory) || !output->open(path.string(), spec) ||
+      !output->write_image(buffer_type, pixels) || !output->close()) {
+    ThrowIoError(path.string(), "cannot encode: " + output->geterror());
+  }
+  WriteBytesAtomically(path, std::string_view(reinterpret_cast<const char*>(encoded.data()), encoded.size()),
+                       overwrite);
 }
 
 }  // namespace
@@ -88,7 +101,7 @@ void WriteCameraImage(const fs::path& path, const CameraImage& image, bool overw
   // Camera noise barely compresses: zlib's fastest level writes a 1280 x 1024 frame about 4x
   // faster than its default for 2% more bytes.
   spec.attribute("png:compressionLevel", 1);
-  WriteFileAtomically(path, [&](const fs::path& temp) { WritePixels(path, temp, spec, image.pixels.data()); }, overwrite);
+  EncodeAndWrite(path, spec, spec.format, image.pixels.data(), overwrite);
 }
 
 void WriteRgb8Png(const fs::path& path, const std::vector<uint8_t>& pixels, int width, int height, bool overwrite) {
@@ -97,7 +110,7 @@ void WriteRgb8Png(const fs::path& path, const std::vector<uint8_t>& pixels, int 
   }
   OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
   spec.channelnames = ChannelNames(3);
-  WriteFileAtomically(path, [&](const fs::path& temp) { WritePixels(path, temp, spec, pixels.data()); }, overwrite);
+  EncodeAndWrite(path, spec, spec.format, pixels.data(), overwrite);
 }
 
 FloatImage ReadFloatImage(const fs::path& path) {
@@ -118,18 +131,8 @@ void WriteFloatImage(const fs::path& path, const FloatImage& image, bool half_pr
                        half_precision ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT);
   spec.channelnames = ChannelNames(image.channels);
   spec.attribute("compression", "zip");
-  // Convert on our side: OpenImageIO converts float -> half when the buffer type is FLOAT.
-  WriteFileAtomically(
-      path,
-      [&](const fs::path& temp) {
-        auto output = OIIO::ImageOutput::create(path.string());
-        if (!output) ThrowIoError(path.string(), "no image writer for this extension: " + OIIO::geterror());
-        if (!output->open(temp.string(), spec) || !output->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) ||
-            !output->close()) {
-          ThrowIoError(path.string(), "write failed: " + output->geterror(), "is the disk full?");
-        }
-      },
-      overwrite);
+  // OpenImageIO converts the float buffer to half when the file asks for it.
+  EncodeAndWrite(path, spec, OIIO::TypeDesc::FLOAT, image.pixels.data(), overwrite);
 }
 
 void RequireFinite(const FloatImage& image, const std::string& source) {

@@ -132,9 +132,6 @@ std::vector<fit::QualityWarning> FitAndWriteMaterial(const fs::path& processed, 
   const fit::SliceStore store = fit::SliceStore::Open(processed);
   options.checkpoint = FitCheckpointPath(out);
   const fit::Material material = fit::FitMaterial(store, options);
-  fit::WriteMaterial(out, material);
-  fs::remove(options.checkpoint);
-  SayWhatWasFitted(material, out, listener);
 
   std::vector<fit::QualityWarning> warnings;
   if (earlier) {
@@ -147,9 +144,16 @@ std::vector<fit::QualityWarning> FitAndWriteMaterial(const fs::path& processed, 
     Warn(listener, warnings);
   }
   const std::vector<fit::QualityWarning> fitted = fit::CheckMaterial(material, out);
-  Warn(listener, fitted);
   warnings.insert(warnings.end(), fitted.begin(), fitted.end());
-  fit::WriteQuality(out, warnings);
+  // The material appears whole or not at all: a kill or a full disk while it is written leaves
+  // the checkpoint, from which the same command resumes, and no half material under its name.
+  common::CreateFolderAtomically(out, [&](const fs::path& staging) {
+    fit::WriteMaterial(staging, material);
+    fit::WriteQuality(staging, warnings);
+  });
+  fs::remove(options.checkpoint);
+  SayWhatWasFitted(material, out, listener);
+  Warn(listener, fitted);
   return warnings;
 }
 

@@ -79,16 +79,16 @@ void BindSession(py::module_& m) {
           "The image journalled under a capture key (e.g. 'dot/q0012/e1/r0') as uint16 (H, W) or (H, W, 3), values "
           "as stored (8-bit files too). Raises svbtdf.InvalidInputError for a key not journalled, "
           "svbtdf.IoError/FormatError for a damaged file.")
-      .def("verify", [](const session::Session& s, bool check_crc) {
+      .def("verify", [](const session::Session& s, bool check_crc, bool decode) {
             session::SessionVerification v;
             {
               py::gil_scoped_release release;
-              v = s.Verify(check_crc);
+              v = s.Verify(check_crc, decode);
             }
             return VerificationToPython(v);
-          }, py::arg("check_crc") = true,
-          "`svbtdf session verify`: dict with complete (bool), missing, corrupt, duplicated, unexpected (lists of "
-          "keys) and summary (str).");
+          }, py::arg("check_crc") = true, py::arg("decode") = false,
+          "`svbtdf session verify [--no-crc] [--decode]`: dict with complete (bool), missing, corrupt, duplicated, "
+          "unexpected (lists of keys) and summary (str).");
 }
 
 }  // namespace svbtdf::python

@@ -1,6 +1,7 @@
 // The pipeline's stages as Python functions: the library entry points the command line calls
 // (process/pipeline.h, report/compare.h, render/), with its options as keyword arguments (bound
-// in python/svbtdf/__init__.py), a progress callback and Ctrl-C that stops them resumably.
+// in python/svbtdf/__init__.py), a progress callback and Ctrl-C that stops them resumably. Like
+// the commands, a stage holds its output folder's lock (common/folder_lock.h) while it writes.
 //
 // While a stage runs, the GIL is released and svbtdf's own SIGINT/SIGTERM handler
 // (common/interrupt.h) replaces Python's, so that Ctrl-C reaches the stage's safe points as on the
@@ -21,6 +22,7 @@
 
 #include "bindings.h"
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/folder_lock.h"
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/common/json.h"
@@ -170,7 +172,10 @@ py::dict Process(const std::string& session, const std::string& out_folder, std:
   options.light_resolution = light_resolution;
   options.threads = threads;
   Callbacks callbacks{progress, log};
-  const process::ProcessStage stage = RunStage(callbacks, [&] { return process::ProcessAndCheck(session, out_folder, options); });
+  const process::ProcessStage stage = RunStage(callbacks, [&] {
+    const common::FolderLock lock = common::FolderLock::Acquire(out_folder, "svbtdf.process (Python)");
+    return process::ProcessAndCheck(session, out_folder, options);
+  });
   callbacks.Listener().warn(stage.warnings);
   py::dict out;
   out["store"] = out_folder;
@@ -190,8 +195,10 @@ py::dict Fit(const std::string& processed, const std::string& out_folder, const 
   const fit::FitMaterialOptions options =
       FitOptions(model, eta, representatives, holdout, refine, fixed_horizon, ndf_resolution, seed, threads);
   Callbacks callbacks{progress, log};
-  const std::vector<fit::QualityWarning> warnings = RunStage(
-      callbacks, [&] { return process::FitAndWriteMaterial(processed, out_folder, options, callbacks.Listener()); });
+  const std::vector<fit::QualityWarning> warnings = RunStage(callbacks, [&] {
+    const common::FolderLock lock = common::FolderLock::Acquire(out_folder, "svbtdf.fit (Python)");
+    return process::FitAndWriteMaterial(processed, out_folder, options, callbacks.Listener());
+  });
   py::dict out;
   out["material"] = out_folder;
   out["warnings"] = ToPython(warnings);
@@ -209,8 +216,11 @@ py::dict Run(const std::string& session, const std::string& out_folder, const st
   options.process.threads = threads;
   options.fit = FitOptions(model, eta, representatives, holdout, refine, fixed_horizon, ndf_resolution, seed, threads);
   Callbacks callbacks{progress, log};
-  const process::PipelineOutcome outcome =
-      RunStage(callbacks, [&] { return process::RunPipeline(options, callbacks.Listener()); });
+  const process::PipelineOutcome outcome = RunStage(callbacks, [&] {
+    // As `svbtdf run`: the material names the run; its work folder is only ever written under it.
+    const common::FolderLock lock = common::FolderLock::Acquire(out_folder, "svbtdf.run (Python)");
+    return process::RunPipeline(options, callbacks.Listener());
+  });
   py::dict out;
   out["material"] = out_folder;
   out["work"] = outcome.work.string();

@@ -1,5 +1,6 @@
 """The pipeline's stages as functions: same results as the command line, progress, Ctrl-C."""
 
+import fcntl
 import json
 import os
 import re
@@ -105,3 +106,12 @@ def test_calibrate_process_and_run_equal_the_command_line(tiny, tmp_path):
     assert result["work"] == str(work)
     assert "== 2/3 processing: using " + str(work / "processed") in lines
     assert svbtdf.Material.load(result["material"]).width == store.info["texels_x"]
+
+
+def test_a_stage_refuses_an_output_folder_another_writer_holds(tiny, tmp_path):
+    out = tmp_path / "locked"
+    with open(tmp_path / ".locked.lock", "w") as held:  # common/folder_lock.h: PARENT/.NAME.lock
+        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        with pytest.raises(svbtdf.IoError, match=re.escape(str(out))):
+            svbtdf.fit(tiny.processed, str(out), representatives=0.02)
+    assert not out.exists()

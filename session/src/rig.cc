@@ -1,6 +1,8 @@
 #include "svbtdf/session/rig.h"
 
 #include <algorithm>
+#include <sstream>
+#include <type_traits>
 
 #include "svbtdf/common/error.h"
 
@@ -8,6 +10,11 @@ namespace svbtdf::session {
 namespace {
 
 using nlohmann::json;
+
+// Larger than any camera, monitor or texel grid a lab has, small enough that products of two fit
+// an int64 and that nothing allocates on a typo's behalf.
+constexpr int kMaxPixels = 65535;
+constexpr int kMaxTexels = 16384;
 
 // Reads the optional fields of one object of the rig, naming `where` (e.g. "rig.camera") in errors.
 class Fields {
@@ -35,6 +42,22 @@ class Fields {
     }
     return true;
   }
+  // Read, then refuse a value outside [lo, hi] (and a fraction where a whole number is meant):
+  // nonsense such as a camera 1e12 pixels wide or an eta of -1.5 would fail much later, unnamed.
+  template <typename T>
+  bool ReadInRange(const char* key, T* out, T lo, T hi) const {
+    const json* member = Find(key);
+    if (member && std::is_integral_v<T> && !member->is_number_integer()) {
+      common::ThrowFormatError(source_, where_ + "." + key + " must be a whole number, got " + member->dump());
+    }
+    if (!Read(key, out)) return false;
+    if (!(*out >= lo && *out <= hi)) {  // also refuses NaN
+      std::ostringstream range;
+      range << "[" << lo << ", " << hi << "]";
+      common::ThrowFormatError(source_, where_ + "." + key + " is " + member->dump() + ", outside " + range.str());
+    }
+    return true;
+  }
   void ReadBoard(const char* key, RigBoard* board) const {
     const Fields fields = Member(key);
     fields.Read("spec", &board->spec);
@@ -55,8 +78,8 @@ class Fields {
 SensorWindow ReadSensor(const Fields& camera, const std::string& source) {
   const Fields sensor = camera.Member("sensor");
   SensorWindow window;
-  sensor.Read("width", &window.sensor_width);
-  sensor.Read("height", &window.sensor_height);
+  sensor.ReadInRange("width", &window.sensor_width, 1, kMaxPixels);
+  sensor.ReadInRange("height", &window.sensor_height, 1, kMaxPixels);
   std::vector<int> offset;
   sensor.Read("window_offset", &offset);
   if (window.sensor_width > 0 || !offset.empty()) {
@@ -105,40 +128,45 @@ RigDescription ParseRigDescription(const json& rig, const std::string& source) {
   const Fields camera = all.Member("camera");
   camera.Read("id", &d.camera.id);
   camera.Read("model", &d.camera.model);
-  camera.Read("width", &d.camera.width);
-  camera.Read("height", &d.camera.height);
-  camera.Read("channels", &d.camera.channels);
-  camera.Read("bit_depth", &d.camera.bit_depth);
+  camera.ReadInRange("width", &d.camera.width, 1, kMaxPixels);
+  camera.ReadInRange("height", &d.camera.height, 1, kMaxPixels);
+  camera.ReadInRange("channels", &d.camera.channels, 1, 4);
+  camera.ReadInRange("bit_depth", &d.camera.bit_depth, 1, 16);
   camera.Read("response", &d.camera.response);
   d.camera.sensor = ReadSensor(camera, source);
 
   const Fields monitor = all.Member("monitor");
   monitor.Read("id", &d.monitor.id);
-  monitor.Read("width_px", &d.monitor.width_px);
-  monitor.Read("height_px", &d.monitor.height_px);
-  monitor.Read("gamma", &d.monitor.gamma);
-  monitor.Read("pixel_pitch_m", &d.monitor.pixel_pitch_m);
-  monitor.Read("distance_m", &d.monitor.distance_m);
-  monitor.Read("orientation_deg", &d.monitor.orientation_deg);
-  monitor.Read("black_level", &d.monitor.black_level);
+  monitor.ReadInRange("width_px", &d.monitor.width_px, 1, kMaxPixels);
+  monitor.ReadInRange("height_px", &d.monitor.height_px, 1, kMaxPixels);
+  monitor.ReadInRange("gamma", &d.monitor.gamma, 0.1, 10.0);
+  monitor.ReadInRange("pixel_pitch_m", &d.monitor.pixel_pitch_m, 1e-6, 0.01);
+  monitor.ReadInRange("distance_m", &d.monitor.distance_m, 1e-4, 100.0);
+  monitor.ReadInRange("orientation_deg", &d.monitor.orientation_deg, -360.0, 360.0);
+  monitor.ReadInRange("black_level", &d.monitor.black_level, 0.0, 0.999);
   monitor.Read("emission", &d.monitor.emission);
 
   const Fields dots = all.Member("dots");
-  dots.Read("cols", &d.dots.cols);
-  dots.Read("rows", &d.dots.rows);
-  dots.Read("radius_px", &d.dots.radius_px);
+  dots.ReadInRange("cols", &d.dots.cols, 1, 100000);
+  dots.ReadInRange("rows", &d.dots.rows, 1, 100000);
+  dots.ReadInRange("radius_px", &d.dots.radius_px, 0.01, 1e5);
   dots.Read("positions_px", &d.dots.positions_px);
   if (std::vector<int> fiducials; dots.Read("fiducials", &fiducials)) d.dots.fiducials = std::move(fiducials);
 
   all.ReadBoard("board", &d.board);
   all.ReadBoard("sample_plane_board", &d.sample_plane_board);
   const Fields sample = all.Member("sample");
-  sample.Read("width_m", &d.sample.width_m);
-  sample.Read("height_m", &d.sample.height_m);
-  sample.Read("texels_x", &d.sample.texels_x);
-  sample.Read("texels_y", &d.sample.texels_y);
-  sample.Read("eta", &d.sample.eta);
+  sample.ReadInRange("width_m", &d.sample.width_m, 1e-6, 100.0);
+  sample.ReadInRange("height_m", &d.sample.height_m, 1e-6, 100.0);
+  sample.ReadInRange("texels_x", &d.sample.texels_x, 1, kMaxTexels);
+  sample.ReadInRange("texels_y", &d.sample.texels_y, 1, kMaxTexels);
+  sample.ReadInRange("eta", &d.sample.eta, 1.0 + 1e-9, 5.0);
   all.Read("exposures_s", &d.exposures_s);
+  for (const double exposure : d.exposures_s) {
+    if (!(exposure > 0.0 && exposure < 1e6)) {
+      common::ThrowFormatError(source, "rig.exposures_s holds " + std::to_string(exposure) + "; exposures are > 0 seconds");
+    }
+  }
   if (rig.contains("acquisition_plan")) d.acquisition_plan = rig.at("acquisition_plan");
   if (rig.contains("simulated")) d.simulated = rig.at("simulated");
   for (const auto& [key, value] : rig.items()) {

@@ -12,6 +12,7 @@
 #include <regex>
 #include <set>
 #include <sstream>
+#include <type_traits>
 
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/json.h"
@@ -46,6 +47,14 @@ void RequireValidKey(const std::string& key, const std::string& source) {
 template <typename T>
 T Field(const nlohmann::json& object, const char* name, const std::string& source) {
   if (!object.is_object() || !object.contains(name)) common::ThrowFormatError(source, std::string("missing field '") + name + "'");
+  // nlohmann converts 1.5 to the integer 1 and -1 to a huge unsigned: counts must be whole.
+  if constexpr (std::is_integral_v<T>) {
+    const nlohmann::json& value = object.at(name);
+    if (!value.is_number_integer() || (std::is_unsigned_v<T> && !value.is_number_unsigned())) {
+      common::ThrowFormatError(source, std::string("field '") + name + "' must be a whole number" +
+                                           (std::is_unsigned_v<T> ? " >= 0" : "") + ", got " + value.dump());
+    }
+  }
   try {
     return object.at(name).get<T>();
   } catch (const nlohmann::json::exception&) {
@@ -91,9 +100,6 @@ Session Session::Create(const fs::path& folder, const nlohmann::json& rig, const
     common::ThrowInvalidInput(folder.string(), "exists and is not empty; an existing session is never overwritten",
                  "choose a new output folder, or resume with the same command");
   }
-  std::error_code error;
-  fs::create_directories(folder / "images", error);
-  if (error) common::ThrowIoError(folder.string(), "cannot create: " + error.message());
   std::set<std::string> unique;
   for (const std::string& key : planned_keys) {
     RequireValidKey(key, "plan");
@@ -108,8 +114,13 @@ Session Session::Create(const fs::path& folder, const nlohmann::json& rig, const
   const nlohmann::json manifest = {{"format", "svbtdf-session"}, {"version", kSessionFormatVersion},
                                    {"created", UtcNow()},        {"software", "svbtdf"},
                                    {"rig", rig}};
-  common::WriteTextAtomically(folder / kPlan, nlohmann::json({{"captures", planned_keys}}).dump(1) + "\n", false);
-  common::WriteTextAtomically(folder / kManifest, manifest.dump(2) + "\n", false);
+  // Made whole under a temporary name and renamed into place, so that a kill leaves either no
+  // session or a complete empty one, never a folder that every rerun refuses.
+  common::CreateFolderAtomically(folder, [&](const fs::path& staging) {
+    fs::create_directories(staging / "images");
+    common::WriteTextAtomically(staging / kPlan, nlohmann::json({{"captures", planned_keys}}).dump(1) + "\n", false);
+    common::WriteTextAtomically(staging / kManifest, manifest.dump(2) + "\n", false);
+  });
   return session;
 }
 
@@ -162,7 +173,7 @@ void Session::ReadJournal() {
     entry.crc32 = Field<uint32_t>(object, "crc32", where);
     entry.exposure_s = Field<double>(object, "exposure_s", where);
     entry.gain = Field<double>(object, "gain", where);
-    entry.time = object.value("time", "");
+    if (object.contains("time")) entry.time = Field<std::string>(object, "time", where);
     index_.emplace(entry.key, entries_.size());
     entries_.push_back(std::move(entry));
   }
@@ -196,6 +207,9 @@ void Session::AddImage(const std::string& key, const common::CameraImage& image,
   // A file without a journal line is left over from a crash mid-capture: replace it.
   common::WriteCameraImage(file, image, /*overwrite=*/true);
   SessionEntry entry{key, FileForKey(key), fs::file_size(file), FileCrc32(file), exposure_s, gain, UtcNow()};
+  // The writer checks every byte it writes; this is the last line of defence for the journal,
+  // which must never vouch for an image that is not there.
+  if (entry.bytes == 0) common::ThrowIoError(file.string(), "was written empty; it is not journalled", "is the disk full?");
   const nlohmann::json line = {{"key", entry.key},   {"file", entry.file},       {"bytes", entry.bytes},
                                {"crc32", entry.crc32}, {"exposure_s", exposure_s}, {"gain", gain},
                                {"time", entry.time}};
@@ -214,10 +228,49 @@ common::CameraImage Session::ReadImage(const std::string& key, bool check_crc) c
   if (size != entry.bytes || (check_crc && FileCrc32(file) != entry.crc32)) {
     common::ThrowFormatError(file.string(), "does not match its journal entry (corrupt)", "re-capture it: resume the session");
   }
-  return common::ReadCameraImage(file);
+  common::CameraImage image = common::ReadCameraImage(file);
+  RequireMatchesRig(key, image, file.string());
+  return image;
 }
 
-SessionVerification Session::Verify(bool check_crc) const {
+// An 8-bit PNG, a JPEG or a colour image where the rig's camera stores 12-bit grey frames would
+// be processed into a silently wrong material: every image must be what the rig says it takes.
+void Session::RequireMatchesRig(const std::string& key, const common::CameraImage& image, const std::string& file) const {
+  const RigCamera& camera = rig_.camera;
+  const auto refuse = [&](const std::string& what, const std::string& expected) {
+    common::ThrowFormatError(file, "is " + what + " but the session's camera (session.json) stores " + expected,
+                             "the image was replaced or written by another tool: re-capture it");
+  };
+  if (camera.bit_depth > 8 && image.bits_per_sample <= 8) {
+    refuse("an 8-bit image", std::to_string(camera.bit_depth) + "-bit images");
+  }
+  if (camera.channels > 0 && image.channels != camera.channels) {
+    refuse("a " + std::to_string(image.channels) + "-channel image", std::to_string(camera.channels) + "-channel images");
+  }
+  // Board views of a camera that crops to a window are whole-sensor frames.
+  const bool whole_sensor = !camera.sensor.whole_sensor() && key.rfind("board/", 0) == 0;
+  const int width = whole_sensor ? camera.sensor.sensor_width : camera.width;
+  const int height = whole_sensor ? camera.sensor.sensor_height : camera.height;
+  if (width > 0 && height > 0 && (image.width != width || image.height != height)) {
+    refuse(std::to_string(image.width) + "x" + std::to_string(image.height) + " pixels",
+           std::to_string(width) + "x" + std::to_string(height) + "-pixel images");
+  }
+}
+
+namespace {
+
+bool Decodes(const fs::path& file) {
+  try {
+    common::ReadCameraImage(file);
+    return true;
+  } catch (const common::Error&) {
+    return false;
+  }
+}
+
+}  // namespace
+
+SessionVerification Session::Verify(bool check_crc, bool decode) const {
   SessionVerification report;
   const std::set<std::string> planned(planned_keys_.begin(), planned_keys_.end());
   std::set<std::string> seen;
@@ -227,7 +280,10 @@ SessionVerification Session::Verify(bool check_crc) const {
     const fs::path file = folder_ / entry.file;
     std::error_code error;
     const uint64_t size = fs::file_size(file, error);
-    if (error || size != entry.bytes || (check_crc && FileCrc32(file) != entry.crc32)) report.corrupt.push_back(entry.key);
+    if (error || size == 0 || size != entry.bytes || (check_crc && FileCrc32(file) != entry.crc32) ||
+        (decode && !Decodes(file))) {
+      report.corrupt.push_back(entry.key);
+    }
   }
   for (const std::string& key : planned_keys_) {
     if (!seen.count(key)) report.missing.push_back(key);

@@ -27,11 +27,13 @@ void WriteMaterialTruth(const fs::path& folder, const TruthMaterial& material) {
       }
     }
   }
-  common::WriteFloatImage(folder / "ndf_params.exr", ndf, /*half_precision=*/false, false);
-  common::WriteFloatImage(folder / "alpha.exr", alpha, false, false);
-  common::WriteFloatImage(folder / "shadowing_roughness.exr", shadowing, false, false);
-  common::WriteFloatImage(folder / "k_s.exr", k_s, false, false);
-  common::WriteFloatImage(folder / "rho_d.exr", rho_d, false, false);
+  // material.json, written last and never overwritten, says the truth is whole; maps without it
+  // are what an interrupted run left, and are written again.
+  common::WriteFloatImage(folder / "ndf_params.exr", ndf, /*half_precision=*/false, /*overwrite=*/true);
+  common::WriteFloatImage(folder / "alpha.exr", alpha, false, true);
+  common::WriteFloatImage(folder / "shadowing_roughness.exr", shadowing, false, true);
+  common::WriteFloatImage(folder / "k_s.exr", k_s, false, true);
+  common::WriteFloatImage(folder / "rho_d.exr", rho_d, false, true);
   const nlohmann::json manifest = {
       {"format", "svbtdf-truth-material"},
       {"version", kTruthFormatVersion},

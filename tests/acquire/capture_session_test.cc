@@ -172,8 +172,27 @@ TEST_F(AcquireOnSimulatedRig, NotEnoughFreeSpaceIsRefusedBeforeAnythingIsWritten
   EXPECT_EQ(asked, out);
   EXPECT_FALSE(fs::exists(out));
   EXPECT_EQ(world_->patterns_shown, 0);
-  options_.free_space = [](const fs::path&) { return uint64_t{40'000'000}; };
+  options_.free_space = [](const fs::path&) { return uint64_t{200'000'000}; };
   EXPECT_TRUE(Run(*camera_, out).complete());
+
+  // Issue 15: the estimate counted every image at the window's size (27.3 MB for a 49.5 MB
+  // session). Board views are whole-sensor frames; before any capture every image counts as
+  // uncompressed, after some as the largest captured of its size class plus a margin.
+  const session::Session session = session::Session::Open(out);
+  const std::vector<PlannedCapture> captures = ExpandPlan(*plan_);
+  uint64_t actual = 0;
+  for (const session::SessionEntry& entry : session.entries()) actual += entry.bytes;
+  const CameraInfo info = camera_->Info();
+  ASSERT_FALSE(info.window.whole_sensor());
+  const uint64_t fresh = EstimatedBytes(captures, *plan_, info);
+  const uint64_t resumed = EstimatedBytes(captures, *plan_, info, &session);
+  const uint64_t board_view = static_cast<uint64_t>(info.window.sensor_width) * info.window.sensor_height * 3 * 2;
+  EXPECT_GE(fresh, board_view * plan_->board_views) << "board views count at the sensor's size";
+  EXPECT_GE(fresh, actual);
+  EXPECT_GE(resumed, actual);
+  EXPECT_LE(resumed, actual * 3 / 2) << "from what was captured, within 50% of the real size";
+  std::printf("session %.1f MB; estimated %.1f MB before capturing, %.1f MB from its images\n", actual / 1e6,
+              fresh / 1e6, resumed / 1e6);
 }
 
 TEST_F(AcquireOnSimulatedRig, ADifferentPlanIsRefusedOnResume) {

@@ -139,7 +139,12 @@ TEST_F(SimulatedSession, ACompleteSessionOrAForeignFolderIsNeverTouched) {
     }
   };
   const auto before = fs::last_write_time(Whole() / "session" / "journal.jsonl");
-  expect_refused(Whole(), "complete");
+  const SimulationOutput again = SimulateSession(Whole(), Options());  // the same settings: done already
+  EXPECT_TRUE(again.already_complete);
+  EXPECT_EQ(again.resumed, again.images);
+  simulate::SimulationOptions other_seed = Options();
+  other_seed.seed += 1;
+  EXPECT_THROW(SimulateSession(Whole(), other_seed), common::Error);
   EXPECT_EQ(fs::last_write_time(Whole() / "session" / "journal.jsonl"), before);
   const fs::path foreign = folder_->path() / "foreign";
   fs::create_directories(foreign);

@@ -41,14 +41,22 @@ void ExpectCompleteSimulation(const fs::path& out, const char* map = "alpha.exr"
   EXPECT_TRUE(fs::exists(out / "truth" / map));
 }
 
-TEST_F(SimulateCommand, TinyPresetWritesACompleteSessionAndRefusesToOverwriteIt) {
+TEST_F(SimulateCommand, TinyPresetWritesACompleteSessionAndNeverOverwritesIt) {
   const fs::path out = root_ / "tiny";
   const auto first = RunSvbtdf("-q simulate --preset tiny --out " + out.string());
   ASSERT_EQ(first.exit_code, 0) << first.output;
   ExpectCompleteSimulation(out);
+  // A rerun of the same settings is done already (exit 0, as acquire's); of others, refused.
+  const auto journal_time = fs::last_write_time(out / "session" / "journal.jsonl");
   const auto again = RunSvbtdf("-q simulate --preset tiny --out " + out.string());
-  EXPECT_EQ(again.exit_code, 2) << again.output;
-  EXPECT_NE(again.output.find("never overwritten"), std::string::npos) << again.output;
+  EXPECT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_NE(again.output.find("already complete"), std::string::npos) << again.output;
+  const auto other_seed = RunSvbtdf("-q simulate --preset tiny --seed 9 --out " + out.string());
+  EXPECT_EQ(other_seed.exit_code, 2) << other_seed.output;
+  EXPECT_NE(other_seed.output.find("never overwritten"), std::string::npos) << other_seed.output;
+  EXPECT_EQ(fs::last_write_time(out / "session" / "journal.jsonl"), journal_time);
+  // --decode decodes every image as well: the intact session passes it.
+  EXPECT_EQ(RunSvbtdf("session verify --decode " + (out / "session").string()).exit_code, 0);
   // `session verify` accepts the session, then names a damaged image and exits 3.
   EXPECT_EQ(RunSvbtdf("session verify " + (out / "session").string()).exit_code, 0);
   fs::remove(out / "session" / session::Session::FileForKey("dot/q0003/e0/r0"));

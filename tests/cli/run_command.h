@@ -13,9 +13,10 @@ struct CommandResult {
   std::string output;  // stdout and stderr, interleaved
 };
 
-// Runs `svbtdf <arguments>` through the shell (arguments are not quoted for you).
-inline CommandResult RunSvbtdf(const std::string& arguments) {
-  const std::string command = std::string(SVBTDF_CLI_PATH) + " " + arguments + " 2>&1";
+// Runs `svbtdf <arguments>` through the shell (arguments are not quoted for you), with
+// `environment` (e.g. "SVBTDF_INJECT_FAULT=3:kill") set for it alone.
+inline CommandResult RunSvbtdf(const std::string& arguments, const std::string& environment = "") {
+  const std::string command = environment + " " + std::string(SVBTDF_CLI_PATH) + " " + arguments + " 2>&1";
   CommandResult result;
   FILE* pipe = ::popen(command.c_str(), "r");
   if (!pipe) return result;

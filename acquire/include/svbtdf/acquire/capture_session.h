@@ -20,6 +20,7 @@
 #include "svbtdf/acquire/camera.h"
 #include "svbtdf/acquire/capture_plan.h"
 #include "svbtdf/acquire/display.h"
+#include "svbtdf/session/session.h"
 
 namespace svbtdf::acquire {
 
@@ -86,9 +87,17 @@ struct AcquireResult {
 // Free bytes available to an unprivileged writer at `folder` or its first existing ancestor.
 uint64_t FreeSpaceAt(const std::filesystem::path& folder);
 
-// Bytes the plan's images need at most: the plan's bytes_per_image, else the largest frame size
-// the camera lists as 16-bit RGB (PNG never stores more than that plus its headers).
+// Bytes the plan's window-sized images need at most: the plan's bytes_per_image, else the
+// camera's frame as 16-bit samples (PNG never stores more than that plus its headers), else the
+// largest frame size the camera lists as 16-bit RGB.
 uint64_t EstimatedBytesPerImage(const CapturePlan& plan, const CameraInfo& camera);
+
+// Bytes `captures` need, each at its real size: board views of a camera that crops to a window
+// are whole-sensor frames. Before anything is captured, as uncompressed 16-bit samples (PNG never
+// stores more); when `captured` holds images of the same size class, as the largest of them plus
+// 10% (PNG compresses a scene about equally from one capture to the next). A 5% margin on top.
+uint64_t EstimatedBytes(const std::vector<PlannedCapture>& captures, const CapturePlan& plan, const CameraInfo& camera,
+                        const session::Session* captured = nullptr);
 
 // Runs (or resumes) the acquisition into `session_folder`. Throws svbtdf::Error:
 //   kInvalidInput  the folder holds a session of another plan, or dots lie off the display;

@@ -17,11 +17,13 @@ struct SimulationOutput {
   std::filesystem::path truth;    // OUT/truth
   int64_t images = 0;             // images in the session
   int64_t resumed = 0;            // of which were already there
+  bool already_complete = false;  // a rerun of a finished simulation of the same settings: nothing done
 };
 
 // Simulates `options` into OUT/session and OUT/truth. A folder holding an unfinished simulation
 // of the same settings is resumed (byte-identical to an uninterrupted run); any other non-empty
-// OUT is refused (svbtdf::Error(kInvalidInput)), and a complete session is never touched again.
+// OUT is refused (svbtdf::Error(kInvalidInput)). A complete session is never touched again: of
+// the same preset, seed, truth and eta the call returns at once (already_complete), else refuses.
 // Ctrl-C ends it between images with Error(kInterrupted), leaving a resumable session.
 SimulationOutput SimulateSession(const std::filesystem::path& out, const simulate::SimulationOptions& options);
 

@@ -43,10 +43,11 @@ struct SessionEntry {
 
 struct SessionVerification {
   std::vector<std::string> missing;     // planned but not journalled
-  std::vector<std::string> corrupt;     // journalled but the file is absent or its size/CRC differs
+  std::vector<std::string> corrupt;     // journalled but the file is absent, its size/CRC differs or it does not decode
   std::vector<std::string> duplicated;  // journalled more than once
   std::vector<std::string> unexpected;  // journalled but not planned
-  bool complete() const { return missing.empty() && corrupt.empty() && duplicated.empty(); }
+  // Unexpected keys count too: a journal that holds captures its plan does not means a damaged plan.
+  bool complete() const { return missing.empty() && corrupt.empty() && duplicated.empty() && unexpected.empty(); }
   std::string Summary() const;
 };
 
@@ -76,10 +77,14 @@ class Session {
   // Stores a captured image under `key` and journals it. Throws when the key is journalled
   // already or not planned.
   void AddImage(const std::string& key, const common::CameraImage& image, double exposure_s, double gain);
-  // Reads a journalled image, checking its size (and CRC when `check_crc`).
+  // Reads a journalled image, checking its size (and CRC when `check_crc`), and its bit depth,
+  // channels and size against the rig's camera (a kFormat error naming the file otherwise).
   common::CameraImage ReadImage(const std::string& key, bool check_crc = false) const;
 
-  SessionVerification Verify(bool check_crc = true) const;
+  // Checks every journalled image's size and (with `check_crc`) CRC-32; with `decode` also
+  // decodes each one, so that an image journalled with its own damage (a CRC of a cut-short
+  // file) is found too. Slow: a full decode of every image.
+  SessionVerification Verify(bool check_crc = true, bool decode = false) const;
 
   // images/<key>.png with the key's slashes kept as folders.
   static std::string FileForKey(const std::string& key);
@@ -87,6 +92,7 @@ class Session {
  private:
   Session() = default;
   void ReadJournal();
+  void RequireMatchesRig(const std::string& key, const common::CameraImage& image, const std::string& file) const;
 
   std::filesystem::path folder_;
   RigDescription rig_;
