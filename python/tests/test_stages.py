@@ -92,6 +92,7 @@ def test_calibrate_process_and_run_equal_the_command_line(tiny, tmp_path):
 
     reported = []
     work = tmp_path / "work"
+    work.mkdir()  # process, like `svbtdf process`, creates its store but not the folders above it
     processed = svbtdf.process(session, str(work / "processed"), progress=lambda *p: reported.append(p))
     assert processed["texels"] == processed["valid_texels"] > 0 and processed["dots"] > 0
     assert reported and reported[-1][1] == reported[-1][2]  # the last report is the finished bar
