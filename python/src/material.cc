@@ -51,7 +51,7 @@ class Material {
   const std::filesystem::path& folder() const { return folder_; }
 
   // The texel index (row * width + col) of texel i of an (N, 2) array of (col, row), or of a
-  // (2,) array for every i; svbtdf::Error naming "texels" outside the material.
+  // (2,) array for every i; svbtdf::Error naming the texel when it lies outside the material.
   int64_t TexelIndex(const IntArray& texels, int64_t i) const {
     const int64_t* p = texels.data() + (texels.ndim() == 1 ? 0 : 2 * i);
     CheckTexel(p[0], p[1]);
