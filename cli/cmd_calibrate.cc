@@ -16,8 +16,7 @@
 #include "svbtdf/calib/board_photos.h"
 #include "svbtdf/calib/calibrate_session.h"
 #include "svbtdf/calib/camera_calibration.h"
-#include "svbtdf/process/calibration_quality.h"
-#include "svbtdf/session/session.h"
+#include "svbtdf/process/pipeline.h"
 #include "svbtdf/common/error.h"
 
 namespace svbtdf::cli {
@@ -81,11 +80,11 @@ void RunCalibrateImages(const CalibrateOptions& options) {
 }
 
 void RunCalibrateSession(const CalibrateOptions& options) {
-  const session::Session session = session::Session::Open(options.session);
   calib::CalibrateSessionOptions calibrate_options;
   calibrate_options.camera.fix_k3 = options.fix_k3;
   if (options.full_lens_model) calibrate_options.camera.max_principal_point_std_fraction = 0;
-  const calib::SessionCalibration c = calib::CalibrateSession(session, calibrate_options);
+  const process::CalibrationStage stage = process::CalibrateAndCheck(options.session, calibrate_options);
+  const calib::SessionCalibration& c = stage.calibration;
   PrintSummary(c.camera);
   const model::Vec3 centre = c.sample_plane.CameraCentre();
   const double angle = std::acos(centre.normalized().z()) * 180.0 / 3.14159265358979;
@@ -98,12 +97,9 @@ void RunCalibrateSession(const CalibrateOptions& options) {
               c.monitor.residual_max_mm);
   std::printf("radiometry: %s response, %d bits, black offset %.1f DN\n", c.radiometry.response.c_str(),
               c.radiometry.bit_depth, c.radiometry.black_offset_dn);
-  const std::filesystem::path out = std::filesystem::path(options.session) / "calibration.json";
-  calib::WriteSessionCalibration(out, c);
-  std::printf("wrote %s\n", out.c_str());
-  const std::vector<fit::QualityWarning> warnings = process::CheckCalibration(c, out.string());
-  PrintQualityWarnings(warnings);
-  ExitIfStrict(warnings, options.strict);
+  std::printf("wrote %s\n", stage.file.c_str());
+  PrintQualityWarnings(stage.warnings);
+  ExitIfStrict(stage.warnings, options.strict);
 }
 
 }  // namespace

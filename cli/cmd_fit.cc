@@ -25,17 +25,6 @@ struct FitCommandOptions {
 
 }  // namespace
 
-double ParseRepresentatives(const std::string& text) {
-  if (text == "all") return 1.0;
-  try {
-    size_t used = 0;
-    const double fraction = std::stod(text, &used);
-    if (used == text.size() && fraction > 0 && fraction <= 1) return fraction;
-  } catch (const std::exception&) {
-  }
-  common::ThrowInvalidInput("--representatives", "must be a fraction in (0, 1] or 'all', got '" + text + "'");
-}
-
 void AddFitOptions(CLI::App* command, fit::FitMaterialOptions* options, std::string* representatives) {
   const std::map<std::string, fit::MaterialModel> models = {{"dual", fit::MaterialModel::kDualMicrofacet},
                                                             {"ggx", fit::MaterialModel::kWalterGgx}};
@@ -69,7 +58,7 @@ void AddFitCommand(CLI::App& app) {
   fit->callback([options] {
     const common::FolderLock lock = common::FolderLock::Acquire(options->out, "svbtdf fit");
     fit::FitMaterialOptions fit_options = options->fit;
-    fit_options.representative_fraction = ParseRepresentatives(options->representatives);
+    fit_options.representative_fraction = fit::ParseRepresentativeFraction(options->representatives);
     ExitIfStrict(process::FitAndWriteMaterial(options->processed, options->out, fit_options, ConsoleListener()),
                  options->strict);
   });

@@ -8,10 +8,8 @@
 #include "commands.h"
 #include "svbtdf/common/folder_lock.h"
 #include "quality_output.h"
-#include "svbtdf/calib/session_calibration.h"
 #include "svbtdf/common/error.h"
-#include "svbtdf/session/session.h"
-#include "svbtdf/process/process_session.h"
+#include "svbtdf/process/pipeline.h"
 
 namespace svbtdf::cli {
 namespace {
@@ -36,21 +34,15 @@ void ParseTexels(const std::string& text, process::ProcessOptions* options) {
 
 void RunProcess(ProcessCommandOptions options) {
   ParseTexels(options.texels, &options.process);
-  const session::Session session = session::Session::Open(options.session);
-  const std::filesystem::path calibration_path = std::filesystem::path(options.session) / "calibration.json";
-  if (!std::filesystem::exists(calibration_path)) {
-    common::ThrowInvalidInput(options.session, "has no calibration.json", "run 'svbtdf calibrate " + options.session + "' first");
-  }
-  const calib::SessionCalibration calibration = calib::ReadSessionCalibration(calibration_path);
   const common::FolderLock lock = common::FolderLock::Acquire(options.out, "svbtdf process");
-  const process::ProcessReport report = process::ProcessSession(session, calibration, options.out, options.process);
+  const process::ProcessStage stage = process::ProcessAndCheck(options.session, options.out, options.process);
+  const process::ProcessReport& report = stage.report;
   std::printf("processed %d dots (%d resumed) from %lld images in %.1f s: %lld of %lld texels valid\n", report.dots,
               report.dots_resumed, static_cast<long long>(report.images_read), report.seconds,
               static_cast<long long>(report.valid_texels), static_cast<long long>(report.texels));
   std::printf("slice store: %s\n", options.out.c_str());
-  const std::vector<fit::QualityWarning> warnings = fit::CheckSliceStore(options.out);
-  PrintQualityWarnings(warnings);
-  ExitIfStrict(warnings, options.strict);
+  PrintQualityWarnings(stage.warnings);
+  ExitIfStrict(stage.warnings, options.strict);
 }
 
 }  // namespace

@@ -31,8 +31,9 @@ struct RenderCommandOptions {
   std::string material, out, png, scene = "background";
   std::vector<double> view_deg = {0.0, 0.0}, resolution = {512, 512}, sample_size;
   render::RenderOptions render;
+  render::SceneOptions scene_options;
   std::string background, environment, compare_to, json;
-  double background_distance = 0.05, background_width = 0.0, checker_size = 0.01, exposure = 1.0;
+  double exposure = 1.0;
   bool parametric = false;
 };
 
@@ -62,21 +63,6 @@ void RequireWritableFolderOf(const fs::path& file, const char* flag) {
   if (!fs::is_directory(parent)) common::ThrowInvalidInput(flag, "names a file in " + parent.string() + ", which is not a folder");
 }
 
-std::unique_ptr<render::Scene> MakeScene(const RenderCommandOptions& options, const render::Surface& surface) {
-  if (options.scene == "environment") {
-    if (options.environment.empty()) common::ThrowInvalidInput("--environment", "is needed by --scene environment");
-    return std::make_unique<render::EnvironmentScene>(render::EnvironmentScene::FromImage(options.environment));
-  }
-  if (options.scene != "background") common::ThrowInvalidInput("--scene", "must be background or environment, not " + options.scene);
-  if (options.background.empty()) {
-    return std::make_unique<render::BackgroundScene>(
-        render::BackgroundScene::Checkerboard(options.background_distance, options.checker_size));
-  }
-  const double width = options.background_width > 0 ? options.background_width : 2.0 * surface.width_m();
-  return std::make_unique<render::BackgroundScene>(
-      render::BackgroundScene::FromImage(options.background, options.background_distance, width));
-}
-
 void RunRender(RenderCommandOptions options) {
   if (fs::path(options.out).extension() != ".exr") common::ThrowInvalidInput("--out", "must name an .exr file");
   RequireWritableFolderOf(options.out, "--out");
@@ -102,7 +88,10 @@ void RunRender(RenderCommandOptions options) {
     loaded = render::LoadSurface(options.material, sample_size);
   }
   const render::Surface& surface = options.parametric ? *parametric.surface : loaded->surface();
-  const std::unique_ptr<render::Scene> scene = MakeScene(options, surface);
+  options.scene_options.scene = options.scene;
+  options.scene_options.background = options.background;
+  options.scene_options.environment = options.environment;
+  const std::unique_ptr<render::Scene> scene = render::MakeScene(options.scene_options, surface.width_m());
   const auto start = std::chrono::steady_clock::now();
   const common::FloatImage image = render::Render(surface, *scene, options.render);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -153,11 +142,11 @@ void AddRenderCommand(CLI::App& app) {
   command->add_option("--seed", options->render.seed, "random seed (same seed, same image)")->capture_default_str();
   command->add_option("--threads", options->render.threads, "worker threads (0: all cores)")->capture_default_str();
   command->add_option("--background", options->background, "background picture (EXR linear; PNG/JPEG sRGB); default: a checkerboard");
-  command->add_option("--background-distance", options->background_distance, "background plane behind the sample (m)")
+  command->add_option("--background-distance", options->scene_options.background_distance_m, "background plane behind the sample (m)")
       ->capture_default_str();
-  command->add_option("--background-width", options->background_width,
+  command->add_option("--background-width", options->scene_options.background_width_m,
                       "physical width of the background picture, repeated over the plane (m; default: twice the sample's)");
-  command->add_option("--checker-size", options->checker_size, "the default checkerboard's square (m)")->capture_default_str();
+  command->add_option("--checker-size", options->scene_options.checker_size_m, "the default checkerboard's square (m)")->capture_default_str();
   command->add_option("--environment", options->environment, "equirectangular EXR environment of --scene environment");
   command->add_option("--sample-size", options->sample_size,
                       "the sample's size W H (m), for a material that does not record it")

@@ -29,7 +29,7 @@ void Run(RunOptions options) {
   pipeline.session = options.session;
   pipeline.out = options.out;
   pipeline.work = options.work;
-  pipeline.fit.representative_fraction = ParseRepresentatives(options.representatives);
+  pipeline.fit.representative_fraction = fit::ParseRepresentativeFraction(options.representatives);
   // The material names the run; its work folder is only ever written under it.
   const common::FolderLock lock = common::FolderLock::Acquire(pipeline.out, "svbtdf run");
   const process::PipelineOutcome outcome = process::RunPipeline(pipeline, ConsoleListener());

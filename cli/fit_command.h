@@ -11,6 +11,4 @@ namespace svbtdf::cli {
 
 // Declares the fit's options (--eta, --representatives, --holdout, ...) on `command`.
 void AddFitOptions(CLI::App* command, fit::FitMaterialOptions* options, std::string* representatives);
-// "all" or a fraction in (0, 1]; svbtdf::Error naming --representatives otherwise.
-double ParseRepresentatives(const std::string& text);
 }  // namespace svbtdf::cli

@@ -13,6 +13,7 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   blender   # tests/export's Blender check and the demo's Blender picture (docs/export.md)
+  pybind11-dev python3-dev python3-numpy python3-pytest
 )
 
 missing=()

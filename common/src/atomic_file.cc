@@ -181,6 +181,12 @@ void CreateFolderAtomically(const fs::path& folder, const std::function<void(con
     FsyncPath(staging, /*is_directory=*/true);
     RenameOrThrow(staging, target, /*overwrite=*/true);
     FsyncPath(parent, /*is_directory=*/true);
+  } catch (const Error& e) {
+    fs::remove_all(staging, error);
+    // The user knows the folder by its name, not by the staging folder's.
+    std::string subject = e.subject();
+    if (subject.rfind(staging.string(), 0) == 0) subject = target.string() + subject.substr(staging.string().size());
+    throw Error(e.kind(), subject, e.problem(), e.hint());
   } catch (...) {
     fs::remove_all(staging, error);
     throw;

@@ -42,10 +42,10 @@ fs::path LockFileFor(const fs::path& folder) {
 
 FolderLock FolderLock::Acquire(const fs::path& folder, const std::string& command) {
   const fs::path lock_file = LockFileFor(folder);
-  if (!fs::is_directory(lock_file.parent_path())) {
-    ThrowIoError(folder.string(), "cannot be created: its parent folder " + lock_file.parent_path().string() +
-                                      " does not exist");
-  }
+  // The command would create the folder's parents anyway; the lock needs them first.
+  std::error_code error;
+  fs::create_directories(lock_file.parent_path(), error);
+  if (error) ThrowSystemError(folder.string(), "cannot create its parent folder " + lock_file.parent_path().string(), error.value());
   for (int attempt = 0; attempt < 100; ++attempt) {
     const int fd = ::open(lock_file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
     if (fd < 0) ThrowSystemError(lock_file.string(), "cannot create the folder's lock file", errno);

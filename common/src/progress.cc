@@ -11,6 +11,20 @@ namespace {
 
 std::atomic<bool> g_progress_enabled{true};
 
+// The observer, if any; copied under the lock so that it can be replaced while bars report.
+std::mutex g_observer_mutex;
+ProgressBar::Observer g_observer;
+std::atomic<bool> g_has_observer{false};
+
+void Notify(const std::string& label, int64_t done, int64_t total) {
+  ProgressBar::Observer observer;
+  {
+    std::lock_guard<std::mutex> lock(g_observer_mutex);
+    observer = g_observer;
+  }
+  if (observer) observer(label, done, total);
+}
+
 std::string FormatDuration(double seconds) {
   if (!(seconds >= 0) || seconds > 359999) return "--:--";
   const int total = static_cast<int>(seconds + 0.5);
@@ -31,11 +45,18 @@ ProgressBar::ProgressBar(std::string label, int64_t total, std::string unit)
       total_(std::max<int64_t>(total, 0)),
       start_(std::chrono::steady_clock::now()),
       last_draw_(start_ - std::chrono::hours(1)),
+      last_report_(start_ - std::chrono::hours(1)),
       is_terminal_(::isatty(STDERR_FILENO) == 1) {}
 
 ProgressBar::~ProgressBar() { Finish(); }
 
 void ProgressBar::SetEnabled(bool enabled) { g_progress_enabled = enabled; }
+
+void ProgressBar::SetObserver(Observer observer) {
+  std::lock_guard<std::mutex> lock(g_observer_mutex);
+  g_has_observer = static_cast<bool>(observer);
+  g_observer = std::move(observer);
+}
 
 void ProgressBar::SkipAlreadyDone(int64_t n) {
   std::lock_guard<std::mutex> lock(draw_mutex_);
@@ -59,17 +80,23 @@ void ProgressBar::Finish() {
 }
 
 void ProgressBar::MaybeDraw(bool force) {
-  if (!g_progress_enabled) return;
+  const bool observed = g_has_observer.load(std::memory_order_relaxed);
+  if (!g_progress_enabled && !observed) return;
   const auto now = std::chrono::steady_clock::now();
   // A terminal is redrawn ~10 times a second; a log file gets a line every 5 seconds.
   const auto interval = is_terminal_ ? std::chrono::milliseconds(100) : std::chrono::milliseconds(5000);
   std::unique_lock<std::mutex> lock(draw_mutex_, std::try_to_lock);
   if (!lock.owns_lock() || finished_) return;
+  const int64_t fresh = done_.load(std::memory_order_relaxed);
+  const int64_t done = std::min(fresh + skipped_, total_ > 0 ? total_ : fresh + skipped_);
+  if (observed && (force || now - last_report_ >= std::chrono::milliseconds(100))) {
+    last_report_ = now;
+    Notify(label_, done, total_);
+  }
+  if (!g_progress_enabled) return;
   if (!force && now - last_draw_ < interval) return;
   last_draw_ = now;
 
-  const int64_t fresh = done_.load(std::memory_order_relaxed);
-  const int64_t done = std::min(fresh + skipped_, total_ > 0 ? total_ : fresh + skipped_);
   const double elapsed = std::chrono::duration<double>(now - start_).count();
   const double rate = elapsed > 0 ? fresh / elapsed : 0.0;
   const double left = rate > 0 ? (total_ - done) / rate : -1.0;

@@ -416,4 +416,15 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
   return material;
 }
 
+double ParseRepresentativeFraction(const std::string& text, const std::string& subject) {
+  if (text == "all") return 1.0;
+  try {
+    size_t used = 0;
+    const double fraction = std::stod(text, &used);
+    if (used == text.size() && fraction > 0 && fraction <= 1) return fraction;
+  } catch (const std::exception&) {
+  }
+  common::ThrowInvalidInput(subject, "must be a fraction in (0, 1] or 'all', got '" + text + "'");
+}
+
 }  // namespace svbtdf::fit

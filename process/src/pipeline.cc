@@ -96,6 +96,30 @@ void ProcessUnlessDone(const session::Session& session, const calib::SessionCali
 
 }  // namespace
 
+CalibrationStage CalibrateAndCheck(const fs::path& session_folder, const calib::CalibrateSessionOptions& options) {
+  const session::Session session = session::Session::Open(session_folder);
+  CalibrationStage stage;
+  stage.calibration = calib::CalibrateSession(session, options);
+  stage.file = session_folder / "calibration.json";
+  calib::WriteSessionCalibration(stage.file, stage.calibration);
+  stage.warnings = CheckCalibration(stage.calibration, stage.file.string());
+  return stage;
+}
+
+ProcessStage ProcessAndCheck(const fs::path& session_folder, const fs::path& out, const ProcessOptions& options) {
+  const session::Session session = session::Session::Open(session_folder);
+  const fs::path calibration_path = session_folder / "calibration.json";
+  if (!fs::exists(calibration_path)) {
+    common::ThrowInvalidInput(session_folder.string(), "has no calibration.json",
+                              "run 'svbtdf calibrate " + session_folder.string() + "' first");
+  }
+  const calib::SessionCalibration calibration = calib::ReadSessionCalibration(calibration_path);
+  ProcessStage stage;
+  stage.report = ProcessSession(session, calibration, out, options);
+  stage.warnings = fit::CheckSliceStore(out);
+  return stage;
+}
+
 fs::path FitCheckpointPath(const fs::path& material) {
   const fs::path folder = common::WithoutTrailingSeparators(material);
   return folder.parent_path() / (folder.filename().string() + ".partial-fits.jsonl");

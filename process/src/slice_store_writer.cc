@@ -189,13 +189,14 @@ SliceStoreWriter::SliceStoreWriter(const fs::path& folder, const SliceStoreInfo&
   if (fs::exists(folder) && !FolderIsEmpty(folder)) {
     common::ThrowInvalidInput(folder.string(), "is not empty and holds no unfinished processing", "choose a new output folder");
   }
-  std::error_code error;
-  fs::create_directories(folder, error);
-  if (error) common::ThrowIoError(folder.string(), "cannot create: " + error.message(), "is the folder writable?");
-  calib::WriteSessionCalibration(folder / kCalibration, calibration);
-  s.samples = std::make_unique<File>(folder / kSamples, O_RDWR | O_CREAT | O_TRUNC);
-  s.samples->Resize(bytes);  // sparse until written
-  WriteManifest(folder, info, s.geometry, /*complete=*/false, nlohmann::json::object());
+  // Made whole under a temporary name, so that a kill or a full disk leaves either nothing or a
+  // store that the same command resumes (its manifest is what marks a store).
+  common::CreateFolderAtomically(folder, [&](const fs::path& staging) {
+    calib::WriteSessionCalibration(staging / kCalibration, calibration);
+    File(staging / kSamples, O_RDWR | O_CREAT | O_TRUNC).Resize(bytes);  // sparse until written
+    WriteManifest(staging, info, s.geometry, /*complete=*/false, nlohmann::json::object());
+  });
+  s.samples = std::make_unique<File>(folder / kSamples, O_RDWR);
 }
 
 SliceStoreWriter::~SliceStoreWriter() = default;

@@ -126,4 +126,17 @@ model::Rgb EnvironmentScene::Radiance(const model::Vec3&, const model::Vec3& d) 
   return Bilinear(map_, u * map_.width, v * map_.height, /*wrap_y=*/false);
 }
 
+std::unique_ptr<Scene> MakeScene(const SceneOptions& options, double sample_width_m) {
+  if (options.scene == "environment") {
+    if (options.environment.empty()) common::ThrowInvalidInput("--environment", "is needed by --scene environment");
+    return std::make_unique<EnvironmentScene>(EnvironmentScene::FromImage(options.environment));
+  }
+  if (options.scene != "background") common::ThrowInvalidInput("--scene", "must be background or environment, not " + options.scene);
+  if (options.background.empty()) {
+    return std::make_unique<BackgroundScene>(BackgroundScene::Checkerboard(options.background_distance_m, options.checker_size_m));
+  }
+  const double width = options.background_width_m > 0 ? options.background_width_m : 2.0 * sample_width_m;
+  return std::make_unique<BackgroundScene>(BackgroundScene::FromImage(options.background, options.background_distance_m, width));
+}
+
 }  // namespace svbtdf::render

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
 #include <optional>
 #include <string>
 
@@ -67,10 +68,14 @@ TEST(FolderLock, AKilledHolderFreesTheFolder) {
   ::close(ready[1]);
 }
 
-TEST(FolderLock, AMissingParentIsAClearError) {
-  const std::string refusal = RefusalOf("/nonexistent/svbtdf/out");
-  EXPECT_NE(refusal.find("/nonexistent/svbtdf/out"), std::string::npos) << refusal;
-  EXPECT_NE(refusal.find("does not exist"), std::string::npos) << refusal;
+TEST(FolderLock, MissingParentsAreCreatedAndImpossibleOnesNamed) {
+  const testing::TempFolder root;
+  { const FolderLock lock = FolderLock::Acquire(root / "a" / "b" / "store", "svbtdf process"); }
+  EXPECT_TRUE(fs::is_directory(root / "a" / "b"));
+  std::ofstream(root / "file") << "not a folder";
+  const std::string refusal = RefusalOf(root / "file" / "out");
+  EXPECT_NE(refusal.find((root / "file" / "out").string()), std::string::npos) << refusal;
+  EXPECT_NE(refusal.find("cannot create its parent folder"), std::string::npos) << refusal;
 }
 
 }  // namespace

@@ -385,5 +385,20 @@ TEST_F(FitMaterialTest, ErrorsNameTheArgumentOrFile) {
             std::string::npos);
 }
 
+TEST(ParseRepresentativeFraction, TakesAllOrAFractionAndNamesTheOptionOtherwise) {
+  EXPECT_EQ(ParseRepresentativeFraction("all"), 1.0);
+  EXPECT_EQ(ParseRepresentativeFraction("0.05"), 0.05);
+  EXPECT_EQ(ParseRepresentativeFraction("1"), 1.0);
+  for (const char* bad : {"0", "2", "0.1x", "", "-0.5", "nan"}) {
+    try {
+      ParseRepresentativeFraction(bad, "representatives");
+      ADD_FAILURE() << "accepted '" << bad << "'";
+    } catch (const common::Error& e) {
+      EXPECT_EQ(e.kind(), common::ErrorKind::kInvalidInput);
+      EXPECT_EQ(e.subject(), "representatives") << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace svbtdf::fit

@@ -17,6 +17,8 @@
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/process/pipeline.h"
+#include "expect_error.h"
+#include "svbtdf/fit/slice_store.h"
 #include "temp_folder.h"
 
 namespace svbtdf::process {
@@ -145,6 +147,27 @@ TEST_F(Pipeline, AnIncompleteSessionIsRefusedNamingIt) {
     EXPECT_NE(std::string(e.what()).find("not a complete session"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find(session.string()), std::string::npos) << e.what();
   }
+}
+
+TEST_F(Pipeline, TheCalibrateAndProcessStagesOfTheCommandsRefuseAnUncalibratedSessionThenRun) {
+  Simulate();
+  const fs::path session = folder_->path() / "uncalibrated" / "session";
+  fs::create_directories(session.parent_path());
+  fs::copy(folder_->path() / "sim" / "session", session, fs::copy_options::recursive);
+  fs::remove(session / "calibration.json");
+  ProcessOptions process;
+  process.progress = false;
+  svbtdf::testing::ExpectError(common::ErrorKind::kInvalidInput, session.string() + ": has no calibration.json",
+                               [&] { ProcessAndCheck(session, folder_->path() / "early", process); });
+  calib::CalibrateSessionOptions calibrate;
+  calibrate.progress = false;
+  const CalibrationStage calibrated = CalibrateAndCheck(session, calibrate);
+  EXPECT_EQ(calibrated.file, session / "calibration.json");
+  EXPECT_TRUE(fs::exists(calibrated.file));
+  EXPECT_GT(calibrated.calibration.camera.camera.fx, 0);
+  const ProcessStage processed = ProcessAndCheck(session, folder_->path() / "uncalibrated" / "processed", process);
+  EXPECT_GT(processed.report.valid_texels, 0);
+  EXPECT_NO_THROW(fit::SliceStore::Open(folder_->path() / "uncalibrated" / "processed"));
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "svbtdf/common/error.h"
+#include "expect_error.h"
 #include "temp_folder.h"
 
 namespace svbtdf::render {
@@ -63,6 +64,18 @@ TEST(EnvironmentScene, BehindTheSampleIsTheMapsCentreAndUpIsItsTopRow) {
   const testing::TempFolder folder;
   common::WriteRgb8Png(folder / "env.png", std::vector<uint8_t>(8 * 4 * 3, 10), 8, 4);
   EXPECT_THROW(EnvironmentScene::FromImage(folder / "env.png"), common::Error);
+}
+
+TEST(MakeScene, BuildsTheNamedSceneAndRefusesUnknownOnesNamingTheOption) {
+  SceneOptions options;
+  const std::unique_ptr<Scene> checkerboard = MakeScene(options, 0.08);
+  const BackgroundScene expected = BackgroundScene::Checkerboard(options.background_distance_m, options.checker_size_m);
+  const model::Vec3 origin(0.001, 0.002, 0.0), direction = model::Vec3(0.1, -0.2, -1.0).normalized();
+  EXPECT_EQ(checkerboard->Radiance(origin, direction), expected.Radiance(origin, direction));
+  options.scene = "studio";
+  svbtdf::testing::ExpectError(common::ErrorKind::kInvalidInput, "--scene", [&] { MakeScene(options, 0.08); });
+  options.scene = "environment";
+  svbtdf::testing::ExpectError(common::ErrorKind::kInvalidInput, "--environment", [&] { MakeScene(options, 0.08); });
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <mutex>
 #include <string>
 
@@ -27,6 +28,13 @@ class ProgressBar {
   // Globally silences all bars (tests, --quiet).
   static void SetEnabled(bool enabled);
 
+  // A listener besides the terminal (the Python module's progress callback): every bar reports
+  // (label, items done including resumed ones, total) to it at most 10 times a second and once
+  // when it finishes, whether or not bars are drawn, from whichever thread advanced the bar. It
+  // must not throw. An empty function removes it.
+  using Observer = std::function<void(const std::string& label, int64_t done, int64_t total)>;
+  static void SetObserver(Observer observer);
+
  private:
   void MaybeDraw(bool force);
 
@@ -37,6 +45,7 @@ class ProgressBar {
   int64_t skipped_ = 0;
   std::chrono::steady_clock::time_point start_;
   std::chrono::steady_clock::time_point last_draw_;
+  std::chrono::steady_clock::time_point last_report_;  // to the observer
   std::mutex draw_mutex_;
   bool finished_ = false;
   bool is_terminal_ = false;

@@ -43,6 +43,10 @@ struct FitMaterialOptions {
 Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options);
 
 // The dots withheld by `holdout` with `seed` (sorted), as recorded in the material's provenance.
+// The fraction of texels fitted as representatives, from "all" or a fraction in (0, 1] as the
+// user wrote it (`--representatives`); svbtdf::Error(kInvalidInput) naming `subject` otherwise.
+double ParseRepresentativeFraction(const std::string& text, const std::string& subject = "--representatives");
+
 std::vector<int> HeldOutDots(int num_dots, double holdout, uint64_t seed);
 
 }  // namespace svbtdf::fit

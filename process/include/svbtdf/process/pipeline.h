@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "svbtdf/calib/calibrate_session.h"
 #include "svbtdf/fit/fit_material.h"
 #include "svbtdf/fit/quality.h"
 #include "svbtdf/process/process_session.h"
@@ -22,6 +23,25 @@ struct PipelineListener {
   std::function<void(const std::string& line)> say;
   std::function<void(const std::vector<fit::QualityWarning>& warnings)> warn;
 };
+
+// `svbtdf calibrate SESSION`: calibrates the session, writes SESSION/calibration.json and checks
+// it (docs/quality.md). The command line and the Python module both run this.
+struct CalibrationStage {
+  calib::SessionCalibration calibration;
+  std::filesystem::path file;                 // SESSION/calibration.json
+  std::vector<fit::QualityWarning> warnings;  // the calibration's
+};
+CalibrationStage CalibrateAndCheck(const std::filesystem::path& session, const calib::CalibrateSessionOptions& options);
+
+// `svbtdf process SESSION --out DIR`: a calibrated session into the slice store DIR (new, or an
+// unfinished processing to resume), checked. Throws svbtdf::Error(kInvalidInput) naming SESSION
+// when it has no calibration.json.
+struct ProcessStage {
+  ProcessReport report;
+  std::vector<fit::QualityWarning> warnings;  // the store's
+};
+ProcessStage ProcessAndCheck(const std::filesystem::path& session, const std::filesystem::path& out,
+                             const ProcessOptions& options);
 
 // The checkpoint of an unfinished fit of MATERIAL, next to it (the material folder itself is
 // written only once, complete).

@@ -61,6 +61,21 @@ class EnvironmentScene final : public Scene {
   common::FloatImage map_;
 };
 
+// The scene of `svbtdf render` as its options name it (docs/render.md, "Scenes").
+struct SceneOptions {
+  std::string scene = "background";   // background | environment
+  std::filesystem::path background;   // picture behind the sample; empty: the checkerboard
+  std::filesystem::path environment;  // equirectangular EXR of the environment scene
+  double background_distance_m = 0.05;
+  double background_width_m = 0.0;    // 0: twice the sample's width
+  double checker_size_m = 0.01;
+};
+
+// Builds that scene behind a sample `sample_width_m` wide. Throws svbtdf::Error(kInvalidInput)
+// naming the option (--scene, --environment) for an unknown scene or a missing picture, and the
+// file for one that cannot be read.
+std::unique_ptr<Scene> MakeScene(const SceneOptions& options, double sample_width_m);
+
 // Bilinear lookup of a 3-channel image at continuous pixel coordinates (x, y) (pixel centres at
 // +0.5), wrapping horizontally and clamping vertically when `wrap_y` is false.
 model::Rgb Bilinear(const common::FloatImage& image, double x, double y, bool wrap_y);
