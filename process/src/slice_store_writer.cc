@@ -180,6 +180,8 @@ SliceStoreWriter::SliceStoreWriter(const fs::path& folder, const SliceStoreInfo&
       common::ThrowInvalidInput(folder.string(), "holds an unfinished processing with other settings or another calibration",
                         "finish it with the same options, or choose a new output folder");
     }
+    // What a kill mid-write left; the command holds the folder's lock, so no other writer owns them.
+    common::RemoveStaleTemporaryFiles(folder);
     s.samples = std::make_unique<File>(folder / kSamples, O_RDWR);
     if (s.samples->Size() != bytes) common::ThrowFormatError((folder / kSamples).string(), "has the wrong size to resume");
     s.progress = common::DurableLog::Open(folder / kProgress);
