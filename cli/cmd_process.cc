@@ -37,9 +37,14 @@ void RunProcess(ProcessCommandOptions options) {
   const common::FolderLock lock = common::FolderLock::Acquire(options.out, "svbtdf process");
   const process::ProcessStage stage = process::ProcessAndCheck(options.session, options.out, options.process);
   const process::ProcessReport& report = stage.report;
-  std::printf("processed %d dots (%d resumed) from %lld images in %.1f s: %lld of %lld texels valid\n", report.dots,
-              report.dots_resumed, static_cast<long long>(report.images_read), report.seconds,
-              static_cast<long long>(report.valid_texels), static_cast<long long>(report.texels));
+  if (report.already_complete) {
+    std::printf("already complete: %d dots, %lld of %lld texels valid; nothing to do\n", report.dots,
+                static_cast<long long>(report.valid_texels), static_cast<long long>(report.texels));
+  } else {
+    std::printf("processed %d dots (%d resumed) from %lld images in %.1f s: %lld of %lld texels valid\n", report.dots,
+                report.dots_resumed, static_cast<long long>(report.images_read), report.seconds,
+                static_cast<long long>(report.valid_texels), static_cast<long long>(report.texels));
+  }
   std::printf("slice store: %s\n", options.out.c_str());
   PrintQualityWarnings(stage.warnings);
   ExitIfStrict(stage.warnings, options.strict);

@@ -128,9 +128,14 @@ fs::path FitCheckpointPath(const fs::path& material) {
 std::vector<fit::QualityWarning> FitAndWriteMaterial(const fs::path& processed, const fs::path& out,
                                                      fit::FitMaterialOptions options, const PipelineListener& listener,
                                                      const std::vector<fit::QualityWarning>* earlier) {
+  options.checkpoint = FitCheckpointPath(out);
+  if (fs::exists(out / "material.json") && fs::exists(options.checkpoint)) {
+    // A kill between the material's rename into place and the checkpoint's removal: the
+    // material is whole, so its checkpoint is of no further use.
+    fs::remove(options.checkpoint);
+  }
   RequireNewOrEmpty(out);
   const fit::SliceStore store = fit::SliceStore::Open(processed);
-  options.checkpoint = FitCheckpointPath(out);
   const fit::Material material = fit::FitMaterial(store, options);
 
   std::vector<fit::QualityWarning> warnings;

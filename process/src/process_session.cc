@@ -349,6 +349,18 @@ void RequireSaneSizes(const ProcessOptions& options, int num_dots, const fs::pat
   }
 }
 
+// What a rerun of a finished processing reports: the store as it is, nothing read or written.
+ProcessReport FinishedReport(const fs::path& out, int num_dots, std::chrono::steady_clock::time_point start) {
+  const SliceStore store = SliceStore::Open(out);
+  ProcessReport report;
+  report.already_complete = true;
+  report.texels = static_cast<int64_t>(store.mask().pixels.size());
+  for (float m : store.mask().pixels) report.valid_texels += m > 0;
+  report.dots = report.dots_resumed = num_dots;
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return report;
+}
+
 }  // namespace
 
 ProcessReport ProcessSession(const session::Session& session, const calib::SessionCalibration& calibration, const fs::path& out,
@@ -371,6 +383,7 @@ ProcessReport ProcessSession(const session::Session& session, const calib::Sessi
                      {"rectify_samples", options.rectify_samples},
                      {"diffuse_threshold", options.diffuse_threshold}};
   SliceStoreWriter writer(out, info, calibration);
+  if (writer.finished()) return FinishedReport(out, num_dots, start);
   const TexelGeometry geometry = MakeTexelGeometry(calibration, info.texels_x, info.texels_y);
   const Rectifier rectifier(calibration, geometry, options.rectify_samples);
 

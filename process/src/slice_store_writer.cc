@@ -132,6 +132,7 @@ struct SliceStoreWriter::State {
   std::unique_ptr<File> samples;
   std::set<int> dots_done;
   std::optional<common::DurableLog> progress;  // progress.jsonl: one line per dot written
+  bool finished = false;
 };
 
 namespace {
@@ -170,15 +171,21 @@ SliceStoreWriter::SliceStoreWriter(const fs::path& folder, const SliceStoreInfo&
   const uint64_t bytes = NumTiles(info) * TileBytes(info);
   if (fs::exists(folder / kManifest)) {
     const nlohmann::json manifest = ReadManifest(folder);
-    if (manifest.value("complete", false)) {
-      common::ThrowInvalidInput(folder.string(), "already holds a finished processing", "choose a new output folder");
-    }
+    const bool complete = manifest.value("complete", false);
     const nlohmann::json calibration_on_disk = common::ReadJsonFile(folder / kCalibration);
     if (manifest.at("texels_x") != info.texels_x || manifest.at("texels_y") != info.texels_y ||
         manifest.at("num_dots") != info.num_dots || manifest.at("light_resolution") != info.light_resolution ||
         manifest.at("tile_texels") != info.tile_texels || calibration_on_disk != calib::ToJson(calibration)) {
+      if (complete) {
+        common::ThrowInvalidInput(folder.string(), "already holds a finished processing of other settings or another "
+                                                   "calibration; it is never overwritten", "choose a new output folder");
+      }
       common::ThrowInvalidInput(folder.string(), "holds an unfinished processing with other settings or another calibration",
                         "finish it with the same options, or choose a new output folder");
+    }
+    if (complete) {  // the same processing, done already: nothing to write
+      s.finished = true;
+      return;
     }
     // What a kill mid-write left; the command holds the folder's lock, so no other writer owns them.
     common::RemoveStaleTemporaryFiles(folder);
@@ -203,6 +210,8 @@ SliceStoreWriter::SliceStoreWriter(const fs::path& folder, const SliceStoreInfo&
 
 SliceStoreWriter::~SliceStoreWriter() = default;
 SliceStoreWriter::SliceStoreWriter(SliceStoreWriter&&) noexcept = default;
+
+bool SliceStoreWriter::finished() const { return state_->finished; }
 
 bool SliceStoreWriter::HasDot(int dot) const { return state_->dots_done.count(dot) > 0; }
 

@@ -169,7 +169,8 @@ TEST_F(Durability, AFullDiskOrAKillAtAnyWriteOfProcessOrFitResumesToTheSameResul
                              });
   const std::map<std::string, std::string> material = Contents(Material());
   // Not 67, the fsync of the material's parent folder after the rename: a kill there leaves the
-  // whole material in place, which a rerun refuses to overwrite (exit 2), as it must.
+  // whole material in place, which a rerun refuses to overwrite (exit 2), as it must (the test
+  // AKillAfterTheMaterialIsInPlace... covers it).
   const int fitted = Walk("fit " + Store().string(), PointsOrEvery({1, 2, 3, 4, 5, 6, 15, 29, 43, 57, 64, 66}),
                           [&](const fs::path& out, int64_t n) {
                             EXPECT_TRUE(Contents(out) == material) << "fit, operation " << n;
@@ -177,6 +178,22 @@ TEST_F(Durability, AFullDiskOrAKillAtAnyWriteOfProcessOrFitResumesToTheSameResul
   EXPECT_GE(processed, 15);
   EXPECT_GE(fitted, 12);
   std::printf("process: %d faults, fit: %d faults, each resumed to the same result\n", processed, fitted);
+}
+
+// A kill after the material is renamed into place (fit's last durable operation, the parent
+// folder's fsync) leaves the whole material and its checkpoint: a rerun refuses to overwrite the
+// material and removes the checkpoint, which no longer serves anything.
+TEST_F(Durability, AKillAfterTheMaterialIsInPlaceLeavesItWholeAndItsCheckpointIsRemoved) {
+  const fs::path out = folder_.path() / "material";
+  const std::string fit = "-q fit " + Store().string() + " --out " + out.string();
+  EXPECT_NE(RunSvbtdf(fit, "SVBTDF_INJECT_FAULT=67:kill").exit_code, 0);
+  const fs::path checkpoint = out.string() + ".partial-fits.jsonl";
+  ASSERT_TRUE(fs::exists(checkpoint)) << "operation 67 is no longer the last: update the walk's points";
+  EXPECT_TRUE(Contents(out) == Contents(Material()));
+  const auto rerun = RunSvbtdf(fit);
+  EXPECT_EQ(rerun.exit_code, 2) << rerun.output;
+  EXPECT_NE(rerun.output.find("never overwritten"), std::string::npos) << rerun.output;
+  EXPECT_FALSE(fs::exists(checkpoint));
 }
 
 // A second writer of one folder is refused, naming the holder, and changes nothing.

@@ -194,14 +194,25 @@ TEST(ProcessSession, DefaultNoiseWithinThreePercentAndResumesWhereItStopped) {
 TEST(ProcessSession, ErrorsNameTheFile) {
   const Simulation sim = Simulate("errors", /*noise=*/true);
   const session::Session session = session::Session::Open(sim.folder / "session");
-  // A finished store is never overwritten.
+  // A finished store is never overwritten: of the same settings it is done already (nothing
+  // written), of others refused.
   const fs::path out = sim.folder / "processed";
   ProcessSession(session, sim.calibration, out, QuietOptions());
+  const auto manifest_time = fs::last_write_time(out / "processed.json");
+  const ProcessReport again = ProcessSession(session, sim.calibration, out, QuietOptions());
+  EXPECT_TRUE(again.already_complete);
+  EXPECT_EQ(again.images_read, 0);
+  EXPECT_EQ(again.dots_resumed, again.dots);
+  EXPECT_GT(again.valid_texels, 0);
+  EXPECT_EQ(fs::last_write_time(out / "processed.json"), manifest_time);
+  ProcessOptions other = QuietOptions();
+  other.light_resolution *= 2;
   try {
-    ProcessSession(session, sim.calibration, out, QuietOptions());
-    FAIL() << "a finished store was processed again";
+    ProcessSession(session, sim.calibration, out, other);
+    FAIL() << "a finished store was processed again with other settings";
   } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find(out.string()), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("never overwritten"), std::string::npos) << e.what();
   }
   // A calibrated camera of another size than the images.
   calib::SessionCalibration wrong = sim.calibration;

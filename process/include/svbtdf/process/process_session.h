@@ -30,10 +30,11 @@ struct ProcessReport {
   int dots = 0, dots_resumed = 0;
   int64_t images_read = 0;
   double seconds = 0.0;
+  bool already_complete = false;  // `out` held this processing, finished: nothing was done
 };
 
 // Writes the slice store into `out` (new, empty, or an unfinished processing of the same session
-// to resume). Throws svbtdf::Error naming the image or file for anything wrong with the input.
+// to resume; a finished one of the same settings is reported already_complete and left alone). Throws svbtdf::Error naming the image or file for anything wrong with the input.
 ProcessReport ProcessSession(const session::Session& session, const calib::SessionCalibration& calibration,
                              const std::filesystem::path& out, const ProcessOptions& options);
 

@@ -18,12 +18,15 @@ namespace svbtdf::process {
 class SliceStoreWriter {
  public:
   // Creates PROCESSED/ (new or empty folder), or resumes it when it holds an unfinished store
-  // with the same info and calibration (anything else is an svbtdf::Error naming the folder).
+  // with the same info and calibration, or finds it finished() when it holds that store complete
+  // (anything else is an svbtdf::Error naming the folder).
   SliceStoreWriter(const std::filesystem::path& folder, const fit::SliceStoreInfo& info,
                    const calib::SessionCalibration& calibration);
   ~SliceStoreWriter();
   SliceStoreWriter(SliceStoreWriter&&) noexcept;
 
+  // The folder holds this very store, complete: there is nothing to write.
+  bool finished() const;
   bool HasDot(int dot) const;
   // Dot q's R for every texel: rgb[3 * texel + c], NaN where not measured.
   void WriteDot(int dot, const std::vector<float>& rgb);
