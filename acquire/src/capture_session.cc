@@ -73,7 +73,7 @@ std::optional<session::Session> OpenExisting(const fs::path& folder, const Captu
 }
 
 void RequireFreeSpace(const fs::path& folder, uint64_t needed, int64_t images, const AcquireOptions& options) {
-  const uint64_t available = options.free_space ? options.free_space(folder) : FreeSpaceAt(folder);
+  const uint64_t available = options.free_space ? options.free_space(folder) : common::FreeSpaceAt(folder);
   if (available < needed) {
     common::ThrowIoError(folder.string(), "has " + Megabytes(available) + " free but the " + std::to_string(images) +
                                       " images still to capture need about " + Megabytes(needed),
@@ -264,17 +264,6 @@ bool ConsoleOperator::Prepare(Scene scene, int view, const std::string& instruct
   std::string line;
   if (!std::getline(in_, line)) return false;  // no operator after all
   return line.empty() || (line[0] != 's' && line[0] != 'S');
-}
-
-uint64_t FreeSpaceAt(const fs::path& folder) {
-  fs::path existing = fs::absolute(folder);
-  while (!fs::exists(existing) && existing.has_parent_path() && existing != existing.parent_path()) {
-    existing = existing.parent_path();
-  }
-  std::error_code error;
-  const fs::space_info space = fs::space(existing, error);
-  if (error) common::ThrowIoError(existing.string(), "cannot query its free space: " + error.message());
-  return space.available;
 }
 
 uint64_t EstimatedBytesPerImage(const CapturePlan& plan, const CameraInfo& camera) {

@@ -45,14 +45,7 @@ bool IsTemporaryName(const std::string& name) {
 }
 
 void RenameOrThrow(const fs::path& from, const fs::path& to, bool overwrite) {
-  switch (NextDurableOperation()) {
-    case FaultAction::kProceed:
-      break;
-    case FaultAction::kFail:
-      ThrowSystemError(to.string(), "cannot rename into place", ENOSPC);
-    case FaultAction::kKill:  // leaves the temporary file, as a crash before the rename would
-      KillProcessNow();
-  }
+  FailOrKillIfInjected(to.string(), "cannot rename into place");  // a kill leaves the temporary file
   if (!overwrite) {
     // link() fails if the target appeared meanwhile, so a concurrent writer cannot be clobbered.
     if (::link(from.c_str(), to.c_str()) != 0) ThrowSystemError(to.string(), "cannot create", errno);
@@ -95,14 +88,7 @@ void WriteAllOrThrow(int fd, const void* data, size_t size, const fs::path& path
 }
 
 void SyncOrThrow(int fd, const fs::path& path) {
-  switch (NextDurableOperation()) {
-    case FaultAction::kProceed:
-      break;
-    case FaultAction::kFail:
-      ThrowSystemError(path.string(), "fsync failed", ENOSPC);
-    case FaultAction::kKill:
-      KillProcessNow();
-  }
+  FailOrKillIfInjected(path.string(), "fsync failed");
   if (::fsync(fd) != 0) ThrowSystemError(path.string(), "fsync failed", errno);
 }
 
@@ -205,6 +191,17 @@ int RemoveStaleTemporaryFiles(const fs::path& folder) {
   int removed = 0;
   for (const fs::path& path : leftovers) removed += fs::remove_all(path, error) > 0;
   return removed;
+}
+
+uint64_t FreeSpaceAt(const fs::path& folder) {
+  fs::path existing = fs::absolute(folder);
+  while (!fs::exists(existing) && existing.has_parent_path() && existing != existing.parent_path()) {
+    existing = existing.parent_path();
+  }
+  std::error_code error;
+  const fs::space_info space = fs::space(existing, error);
+  if (error) ThrowIoError(existing.string(), "cannot query its free space: " + error.message());
+  return space.available;
 }
 
 fs::path WithoutTrailingSeparators(const fs::path& path) {

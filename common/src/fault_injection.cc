@@ -85,6 +85,17 @@ void InjectFaultForTesting(int64_t at, FaultAction action) {
   fault_at.store(at > 0 ? operations.load() + at : 0);
 }
 
+void FailOrKillIfInjected(const std::string& subject, const std::string& what) {
+  switch (NextDurableOperation()) {
+    case FaultAction::kProceed:
+      return;
+    case FaultAction::kFail:
+      ThrowSystemError(subject, what, ENOSPC);
+    case FaultAction::kKill:
+      KillProcessNow();
+  }
+}
+
 int64_t DurableOperationCount() { return operations.load(std::memory_order_relaxed); }
 
 void KillProcessNow() {

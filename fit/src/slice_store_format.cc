@@ -65,14 +65,7 @@ void File::WriteAt(const void* data, size_t bytes, uint64_t offset) const {
 
 void File::Resize(uint64_t bytes) const {
   const std::string what = "cannot allocate " + std::to_string(bytes) + " bytes";
-  switch (common::NextDurableOperation()) {
-    case common::FaultAction::kProceed:
-      break;
-    case common::FaultAction::kFail:
-      common::ThrowSystemError(path_.string(), what, ENOSPC);
-    case common::FaultAction::kKill:
-      common::KillProcessNow();
-  }
+  common::FailOrKillIfInjected(path_.string(), what);
   if (::ftruncate(fd_, static_cast<off_t>(bytes)) != 0) common::ThrowSystemError(path_.string(), what, errno);
 }
 

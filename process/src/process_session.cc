@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/common/parallel.h"
@@ -322,10 +323,10 @@ std::string Gigabytes(double bytes) {
 // A typo (--texels 99999x99999, --light-resolution 4096) must be refused by name before the
 // store is sized, not end in "out of memory" or a full disk hours later.
 void RequireSaneSizes(const ProcessOptions& options, int num_dots, const fs::path& out) {
-  constexpr int kMaxTexels = 16384;
-  if (options.texels_x > kMaxTexels || options.texels_y > kMaxTexels) {
+  if (options.texels_x > session::kMaxTexelsPerSide || options.texels_y > session::kMaxTexelsPerSide) {
     common::ThrowInvalidInput("--texels", std::to_string(options.texels_x) + "x" + std::to_string(options.texels_y) +
-                                              " texels: at most " + std::to_string(kMaxTexels) + " on a side");
+                                              " texels: at most " + std::to_string(session::kMaxTexelsPerSide) +
+                                              " on a side");
   }
   const int resolution = options.light_resolution;
   if (resolution < 2 || resolution > 128 || (resolution & (resolution - 1)) != 0) {
@@ -334,17 +335,12 @@ void RequireSaneSizes(const ProcessOptions& options, int num_dots, const fs::pat
   if (fs::exists(out) && !fs::is_empty(out)) return;  // a resume: the store's files hold their space already
   const double texels = static_cast<double>(options.texels_x) * options.texels_y;
   const double store_bytes = texels * (3.0 * num_dots + 5.0 * resolution * resolution) * 2.0;
-  fs::path existing = fs::absolute(out);
-  while (!fs::exists(existing) && existing.has_parent_path() && existing != existing.parent_path()) {
-    existing = existing.parent_path();
-  }
-  std::error_code error;
-  const fs::space_info space = fs::space(existing, error);
-  if (!error && store_bytes > static_cast<double>(space.available)) {
+  const uint64_t available = common::FreeSpaceAt(out);
+  if (store_bytes > static_cast<double>(available)) {
     common::ThrowIoError(out.string(), "the slice store of " + std::to_string(options.texels_x) + "x" +
                                            std::to_string(options.texels_y) + " texels, " + std::to_string(num_dots) +
                                            " dots and light resolution " + std::to_string(resolution) + " needs " +
-                                           Gigabytes(store_bytes) + "; " + Gigabytes(space.available) + " are free",
+                                           Gigabytes(store_bytes) + "; " + Gigabytes(available) + " are free",
                          "choose fewer --texels, a lower --light-resolution, or another disk");
   }
 }

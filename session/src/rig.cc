@@ -11,10 +11,9 @@ namespace {
 
 using nlohmann::json;
 
-// Larger than any camera, monitor or texel grid a lab has, small enough that products of two fit
-// an int64 and that nothing allocates on a typo's behalf.
+// Larger than any camera or monitor a lab has, small enough that products of two fit an int64
+// and that nothing allocates on a typo's behalf.
 constexpr int kMaxPixels = 65535;
-constexpr int kMaxTexels = 16384;
 
 // Reads the optional fields of one object of the rig, naming `where` (e.g. "rig.camera") in errors.
 class Fields {
@@ -158,8 +157,8 @@ RigDescription ParseRigDescription(const json& rig, const std::string& source) {
   const Fields sample = all.Member("sample");
   sample.ReadInRange("width_m", &d.sample.width_m, 1e-6, 100.0);
   sample.ReadInRange("height_m", &d.sample.height_m, 1e-6, 100.0);
-  sample.ReadInRange("texels_x", &d.sample.texels_x, 1, kMaxTexels);
-  sample.ReadInRange("texels_y", &d.sample.texels_y, 1, kMaxTexels);
+  sample.ReadInRange("texels_x", &d.sample.texels_x, 1, kMaxTexelsPerSide);
+  sample.ReadInRange("texels_y", &d.sample.texels_y, 1, kMaxTexelsPerSide);
   sample.ReadInRange("eta", &d.sample.eta, 1.0 + 1e-9, 5.0);
   all.Read("exposures_s", &d.exposures_s);
   for (const double exposure : d.exposures_s) {

@@ -84,9 +84,6 @@ struct AcquireResult {
   bool complete() const { return already + captured == planned; }
 };
 
-// Free bytes available to an unprivileged writer at `folder` or its first existing ancestor.
-uint64_t FreeSpaceAt(const std::filesystem::path& folder);
-
 // Bytes the plan's window-sized images need at most: the plan's bytes_per_image, else the
 // camera's frame as 16-bit samples (PNG never stores more than that plus its headers), else the
 // largest frame size the camera lists as 16-bit RGB.

@@ -46,6 +46,10 @@ int RemoveStaleTemporaryFiles(const std::filesystem::path& folder);
 void CreateFolderAtomically(const std::filesystem::path& folder,
                             const std::function<void(const std::filesystem::path& staging)>& fill);
 
+// Free bytes available to an unprivileged writer at `folder` or, when it does not exist yet, at
+// its first existing ancestor. Throws Error(kIo) naming the folder when the system cannot tell.
+uint64_t FreeSpaceAt(const std::filesystem::path& folder);
+
 // Reads a whole file; throws an Io error naming the file when it cannot.
 std::string ReadTextFile(const std::filesystem::path& path);
 

@@ -21,6 +21,11 @@ enum class FaultAction { kProceed, kFail, kKill };
 // Counts this durable operation and says whether a test asked it to fail.
 FaultAction NextDurableOperation();
 
+// Counts this durable operation; when a test asked it to fail, throws ThrowSystemError(subject,
+// what, ENOSPC), and when asked to kill, kills the process here. For operations that leave
+// nothing partial behind (fsync, rename, truncate); a write cuts itself in half first.
+void FailOrKillIfInjected(const std::string& subject, const std::string& what);
+
 // Durable operations counted so far in this process.
 int64_t DurableOperationCount();
 

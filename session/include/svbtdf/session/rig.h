@@ -33,6 +33,10 @@ struct SensorWindow {
   friend bool operator==(const SensorWindow&, const SensorWindow&) = default;
 };
 
+// The most texels along a side of a sample: larger than any lab's grid, small enough that nothing
+// allocates on a typo's behalf (session.json's sample.texels_x/y, `process --texels`).
+inline constexpr int kMaxTexelsPerSide = 16384;
+
 inline constexpr double kNotNoted = std::numeric_limits<double>::quiet_NaN();
 
 struct RigCamera {
