@@ -14,6 +14,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   blender   # tests/export's Blender check and the demo's Blender picture (docs/export.md)
   pybind11-dev python3-dev python3-numpy python3-pytest
+  clang-14 libclang-rt-14-dev   # scripts/sanitize.sh: AddressSanitizer, UBSan and libFuzzer (docs/testing.md)
 )
 
 missing=()
