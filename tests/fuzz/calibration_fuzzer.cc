@@ -3,17 +3,7 @@
 #include "fuzz_support.h"
 #include "svbtdf/calib/session_calibration.h"
 
-namespace {
-std::filesystem::path calibration_file;
-}
-
-extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  calibration_file = svbtdf::fuzz::ScratchFolder() / "calibration.json";
-  return 0;
-}
-
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  svbtdf::fuzz::WriteInput(calibration_file, data, size);
-  svbtdf::fuzz::ExpectOnlySvbtdfErrors([] { (void)svbtdf::calib::ReadSessionCalibration(calibration_file); });
+  svbtdf::fuzz::FuzzFile("calibration.json", data, size, [](const std::filesystem::path& path) { (void)svbtdf::calib::ReadSessionCalibration(path); });
   return 0;
 }

@@ -5,8 +5,6 @@
 #include "fuzz_support.h"
 #include "svbtdf/acquire/capture_plan.h"
 
-extern "C" int LLVMFuzzerInitialize(int*, char***) { return 0; }
-
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   svbtdf::fuzz::ExpectOnlySvbtdfErrors([&] {

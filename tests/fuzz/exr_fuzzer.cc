@@ -3,20 +3,9 @@
 #include "fuzz_support.h"
 #include "svbtdf/common/image_io.h"
 
-namespace {
-std::filesystem::path image_file;
-}
-
-extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  image_file = svbtdf::fuzz::ScratchFolder() / "map.exr";
-  return 0;
-}
-
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  svbtdf::fuzz::WriteInput(image_file, data, size);
-  svbtdf::fuzz::ExpectOnlySvbtdfErrors([] {
-    const svbtdf::common::FloatImage image = svbtdf::common::ReadFloatImage(image_file);
-    svbtdf::common::RequireFinite(image, image_file.string());
+  svbtdf::fuzz::FuzzFile("map.exr", data, size, [](const std::filesystem::path& path) {
+    svbtdf::common::RequireFinite(svbtdf::common::ReadFloatImage(path), path.string());
   });
   return 0;
 }

@@ -46,6 +46,13 @@ void WriteInput(const std::filesystem::path& path, const uint8_t* data, size_t s
   if (!out) FixtureBroken("cannot write the input to " + path.string());
 }
 
+void FuzzFile(const char* file_name, const uint8_t* data, size_t size,
+              const std::function<void(const std::filesystem::path&)>& read) {
+  static const std::filesystem::path path = ScratchFolder() / file_name;  // one file per target process
+  WriteInput(path, data, size);
+  ExpectOnlySvbtdfErrors([&] { read(path); });
+}
+
 std::filesystem::path CopyFixture(const std::string& name) {
   const std::filesystem::path source = std::filesystem::path(SVBTDF_FUZZ_FIXTURES) / name;
   const std::filesystem::path copy = ScratchFolder() / name;

@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include "svbtdf/common/error.h"
@@ -42,6 +43,11 @@ void ExpectOnlySvbtdfErrors(Read&& read) {
   } catch (const common::Error&) {
   }
 }
+
+// Writes the input to ScratchFolder()/`file_name` and reads it with `read(path)`, expecting only
+// svbtdf errors: the whole of a target whose reader takes one file.
+void FuzzFile(const char* file_name, const uint8_t* data, size_t size,
+              const std::function<void(const std::filesystem::path&)>& read);
 
 // Runs `read` on a fixture that must be read without error (see FixtureBroken).
 template <class Read>

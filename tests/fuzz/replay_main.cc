@@ -10,7 +10,8 @@
 #include <set>
 #include <vector>
 
-extern "C" int LLVMFuzzerInitialize(int* argc, char*** argv);
+// Optional, as in libFuzzer: the targets that need a fixture define it.
+extern "C" int LLVMFuzzerInitialize(int* argc, char*** argv) __attribute__((weak));
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size);
 
 namespace {
@@ -27,7 +28,7 @@ std::set<std::filesystem::path> InputsIn(const std::filesystem::path& path) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  LLVMFuzzerInitialize(&argc, &argv);
+  if (LLVMFuzzerInitialize) LLVMFuzzerInitialize(&argc, &argv);
   int replayed = 0;
   for (int a = 1; a < argc; ++a) {
     for (const std::filesystem::path& input : InputsIn(argv[a])) {
