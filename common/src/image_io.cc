@@ -5,11 +5,13 @@
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <memory>
 
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
+#include "png_reader.h"
 
 namespace svbtdf::common {
 namespace fs = std::filesystem;
@@ -22,17 +24,15 @@ std::unique_ptr<OIIO::ImageInput> OpenForReading(const fs::path& path) {
     ThrowFormatError(path.string(), "cannot be decoded as an image: " + OIIO::geterror(),
                      "is the file complete and in a format OpenImageIO reads (PNG, TIFF, EXR)?");
   }
-  // A header is a claim, not a fact: a few damaged bytes can claim 60000 x 60000 pixels, which
-  // would end in "out of memory" without naming the file.
   const OIIO::ImageSpec& spec = input->spec();
-  constexpr int64_t kMaxSamples = int64_t{1} << 30;
-  const int64_t samples = int64_t{spec.width} * spec.height * std::max(1, spec.nchannels);
-  if (spec.width <= 0 || spec.height <= 0 || samples > kMaxSamples) {
-    ThrowFormatError(path.string(), "claims " + std::to_string(spec.width) + " x " + std::to_string(spec.height) + " x " +
-                                        std::to_string(spec.nchannels) + " samples, more than svbtdf reads (2^30)",
-                     "the file is damaged or not an image of this rig");
-  }
+  RequireSaneImageSize(path, spec.width, spec.height, spec.nchannels);
   return input;
+}
+
+bool IsPng(const fs::path& path) {
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return std::tolower(c); });
+  return extension == ".png";
 }
 
 std::vector<std::string> ChannelNames(int channels) {
@@ -69,6 +69,7 @@ void EncodeAndWrite(const fs::path& path, const OIIO::ImageSpec& spec, OIIO::Typ
 }  // namespace
 
 CameraImage ReadCameraImage(const fs::path& path) {
+  if (IsPng(path)) return ReadPngCameraImage(path);
   auto input = OpenForReading(path);
   const OIIO::ImageSpec& spec = input->spec();
   if (spec.format.basetype != OIIO::TypeDesc::UINT8 && spec.format.basetype != OIIO::TypeDesc::UINT16) {

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <vector>
 
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
@@ -81,6 +82,48 @@ TEST_F(ImageIo, BrokenFilesGetErrorsNamingThem) {
   // A float map where camera values are expected.
   WriteFloatImage(dir_ / "map.exr", FloatImage(2, 2, 1, 0.5f));
   ExpectErrorNaming([&] { ReadCameraImage(dir_ / "map.exr"); }, dir_ / "map.exr");
+}
+
+TEST_F(ImageIo, EightBitPngsReadWithoutRescaling) {
+  std::vector<uint8_t> rgb;
+  for (int k = 0; k < 5 * 4 * 3; ++k) rgb.push_back(static_cast<uint8_t>(k * 13));
+  WriteRgb8Png(dir_ / "picture.png", rgb, 5, 4);
+  const CameraImage read = ReadCameraImage(dir_ / "picture.png");
+  EXPECT_EQ(read.bits_per_sample, 8);
+  ASSERT_EQ(read.pixels.size(), rgb.size());
+  for (size_t k = 0; k < rgb.size(); ++k) EXPECT_EQ(read.pixels[k], rgb[k]);
+}
+
+// The message of the error ReadCameraImage throws for `path` (empty when it reads).
+std::string ReadFailure(const fs::path& path) {
+  try {
+    ReadCameraImage(path);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return {};
+}
+
+// libpng's default error handler prints "libpng error: ..." on stderr; a user must see one line,
+// ours, which carries libpng's words.
+TEST_F(ImageIo, DamagedPngsAreReportedInOneLineThatSaysWhatLibpngFound) {
+  CameraImage image;
+  image.width = image.height = 32;
+  for (int k = 0; k < 32 * 32; ++k) image.pixels.push_back(static_cast<uint16_t>(k * 7));
+  WriteCameraImage(dir_ / "whole.png", image);
+  const std::string bytes = ReadTextFile(dir_ / "whole.png");
+  std::string bad_chunk = bytes;
+  bad_chunk[bad_chunk.find("IDAT") + 1] = '!';  // an invalid chunk type
+  WriteTextAtomically(dir_ / "bad_chunk.png", bad_chunk);
+  WriteTextAtomically(dir_ / "cut.png", bytes.substr(0, bytes.size() - 40));
+  for (const char* name : {"bad_chunk.png", "cut.png"}) {
+    ::testing::internal::CaptureStderr();
+    const std::string message = ReadFailure(dir_ / name);
+    EXPECT_EQ(::testing::internal::GetCapturedStderr(), "") << name;
+    EXPECT_NE(message.find((dir_ / name).string()), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  }
+  EXPECT_NE(ReadFailure(dir_ / "bad_chunk.png").find("invalid chunk type"), std::string::npos);
 }
 
 TEST_F(ImageIo, NonFiniteValuesAreReportedWithTheirPixel) {
