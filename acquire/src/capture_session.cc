@@ -29,12 +29,6 @@ std::string Megabytes(uint64_t bytes) {
   return buffer;
 }
 
-bool SamePattern(const Pattern& a, const Pattern& b) {
-  return a.kind == b.kind && a.x_px == b.x_px && a.y_px == b.y_px && a.dot_radius_px == b.dot_radius_px &&
-         a.intensity == b.intensity && a.all_dots_px == b.all_dots_px && a.board_cols == b.board_cols &&
-         a.board_rows == b.board_rows && a.board_square_px == b.board_square_px;
-}
-
 // A plan whose dots the display cannot show would fail late, after the calibration captures.
 void RequireDotsOnDisplay(const CapturePlan& plan, const DisplayInfo& display) {
   if (display.width_px <= 0 || display.height_px <= 0) return;  // size unknown

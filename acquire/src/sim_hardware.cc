@@ -126,7 +126,7 @@ SimCamera::Identified SimCamera::Identify() const {
     bool same = p.all_dots_px.size() == fiducials.size();
     for (size_t k = 0; same && k < fiducials.size(); ++k) {
       const simulate::Dot& dot = rig.dots()[fiducials[k]];
-      same = p.all_dots_px[k] == std::pair<double, double>(dot.monitor_x, dot.monitor_y);
+      same = p.all_dots_px[k] == std::pair<double, double>(dot.drawn_x, dot.drawn_y);
     }
     if (!same) NotSimulated(id_, "a set of lit dots other than the rig's dots or its fiducial dots");
     return known(CaptureKey::Fiducials());
@@ -136,11 +136,13 @@ SimCamera::Identified SimCamera::Identify() const {
   }
   if (world_->scene == Scene::kSample && p.kind == Pattern::Kind::kDot) {
     const simulate::MonitorConfig& m = rig.config().monitor;
+    // (A plan's intensity comes back from the displayed level through the gamma curve, so to
+    // within rounding.)
     const bool rig_like = p.dot_radius_px == rig.config().dots.radius_px &&
-                          p.intensity == m.Luminance(rig.config().dots.level);
+                          std::abs(p.intensity - m.Luminance(rig.config().dots.level)) <= 1e-12;
     for (size_t q = 0; rig_like && q < rig.dots().size(); ++q) {
       const simulate::Dot& dot = rig.dots()[q];
-      if (p.x_px == dot.monitor_x && p.y_px == dot.monitor_y) return known(CaptureKey::Dot(static_cast<int>(q), e));
+      if (p.x_px == dot.drawn_x && p.y_px == dot.drawn_y) return known(CaptureKey::Dot(static_cast<int>(q), e));
     }
     // Any other dot: rendered by the simulator all the same, with a noise stream of its own.
     return {{CaptureKey::Dot(-1, e), settings_.exposure_s},

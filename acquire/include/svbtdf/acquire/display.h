@@ -20,6 +20,14 @@ struct Pattern {
   double board_square_px = 80.0;       // kChessboard
 };
 
+// Whether showing `b` after `a` changes nothing on the screen (the capture loop then neither shows
+// it again nor waits the settle time).
+inline bool SamePattern(const Pattern& a, const Pattern& b) {
+  return a.kind == b.kind && a.x_px == b.x_px && a.y_px == b.y_px && a.dot_radius_px == b.dot_radius_px &&
+         a.intensity == b.intensity && a.all_dots_px == b.all_dots_px && a.board_cols == b.board_cols &&
+         a.board_rows == b.board_rows && a.board_square_px == b.board_square_px;
+}
+
 struct DisplayInfo {
   std::string id;             // the --display argument that selects it, e.g. "sdl:1" or "sim"
   int width_px = 0, height_px = 0;
