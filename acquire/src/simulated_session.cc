@@ -8,6 +8,7 @@
 #include <optional>
 #include <nlohmann/json.hpp>
 
+#include "svbtdf/acquire/capture_forecast.h"
 #include "svbtdf/acquire/capture_plan.h"
 #include "svbtdf/acquire/capture_session.h"
 #include "svbtdf/acquire/sim_hardware.h"
@@ -46,10 +47,10 @@ std::optional<int64_t> CheckResumable(const fs::path& session_folder, const simu
   // other settings, it is never overwritten.
   const nlohmann::json& notes = session.rig_json().value("simulated", nlohmann::json::object());
   const bool same_eta = options.eta == 0.0 || session.rig().sample.eta == options.eta;
-  // (The stored plan carries the simulated rig's notes: its dots and exposures are the plan's.)
+  // (The stored plan is the plan as simulated, AsSimulated: its dots and repeats are the plan's.)
   const nlohmann::json& stored = session.rig().acquisition_plan;
   const bool same_plan = !plan || (stored.is_object() && stored.value("dots", nlohmann::json()) == CapturePlanToJson(*plan)["dots"] &&
-                                   stored.value("exposures_s", nlohmann::json()) == CapturePlanToJson(*plan)["exposures_s"]);
+                                   stored.value("repeats", 0) == plan->repeats);
   if (notes.value("preset", "") != options.preset || notes.value("seed", uint64_t{0}) != options.seed ||
       notes.value("truth", "") != options.truth || !same_eta || notes.value("rig", "") != options.rig_source ||
       notes.value("plan", "") != (plan ? plan->name : "") || !same_plan) {
@@ -88,10 +89,18 @@ simulate::RigConfig RigForPlan(simulate::RigConfig rig, const CapturePlan& plan)
   return rig;
 }
 
-// The plan as the simulated lab takes it: the notes it leaves out, and the boards, are the
-// simulated rig's.
-CapturePlan WithSimulatedNotes(CapturePlan plan, const simulate::SimulatedSetup& setup) {
+// The plan as the simulated lab takes it. Its dot exposures are in seconds of the lab's camera, the
+// simulator's in its own radiometric unit: they are scaled so that the shortest is the simulator's
+// base exposure (the brightest dot image at 90% of full scale, which is how docs/capture.md tells
+// a lab to choose it), the brackets keeping their ratios. The calibration captures, lit by the
+// room, take the simulator's exposures. The notes it leaves out, and the boards (the simulator
+// renders its own), are the simulated rig's.
+CapturePlan AsSimulated(const CapturePlan& lab_plan, const simulate::SimulatedSetup& setup) {
   const CapturePlan simulated = PlanFromSimulation(setup);
+  CapturePlan plan = ScaleExposures(lab_plan, simulated.exposures_s.front());
+  plan.board_exposure_s = lab_plan.board_views + lab_plan.sample_plane_views > 0 ? simulated.board_exposure_s : 0.0;
+  plan.all_dots_exposure_s = lab_plan.all_dots ? simulated.all_dots_exposure_s : 0.0;
+  plan.flat_white_exposure_s = lab_plan.flat_white ? simulated.flat_white_exposure_s : 0.0;
   RigNotes& notes = plan.rig;
   const RigNotes& truth = simulated.rig;
   if (!(notes.monitor_distance_mm > 0)) notes.monitor_distance_mm = truth.monitor_distance_mm;
@@ -139,7 +148,7 @@ SimulationOutput SimulateSession(const fs::path& out, const simulate::Simulation
   acquire_options.rig_additions = SimulationNotes(*setup, options, plan);
   acquire_options.before_capture = AnnounceCaptures(world);
   acquire_options.sleep = [](double) {};  // a simulated monitor settles at once
-  const CapturePlan capture_plan = plan ? WithSimulatedNotes(*plan, *setup) : PlanFromSimulation(*setup);
+  const CapturePlan capture_plan = plan ? AsSimulated(*plan, *setup) : PlanFromSimulation(*setup);
   const AcquireResult result = Acquire(capture_plan, camera, display, op, output.session, acquire_options);
   output.resumed = result.already;
   output.images = result.already + result.captured;

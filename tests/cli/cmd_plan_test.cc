@@ -27,8 +27,8 @@ class PlanCommand : public ::testing::Test {
     std::ofstream(path) << text;
     return path;
   }
-  // A lab's plan: 3 x 3 of the tiny preset's dots (the inner ones), two brackets a quarter of
-  // the preset's, four board views.
+  // A lab's plan: 3 x 3 of the tiny preset's dots (the inner ones), brackets of 20 and 320 ms,
+  // four board views.
   fs::path LabPlan() {
     acquire::CapturePlan plan = acquire::MakePlanPreset("tiny");
     std::vector<std::pair<double, double>> dots;
@@ -38,7 +38,8 @@ class PlanCommand : public ::testing::Test {
     plan.name = "lab-subset";
     plan.dot_cols = plan.dot_rows = 3;
     plan.dots_px = dots;
-    for (double& e : plan.exposures_s) e /= 4;
+    plan.exposures_s = {0.02, 0.32};
+    plan.board_exposure_s = plan.all_dots_exposure_s = plan.flat_white_exposure_s = 0.01;
     plan.board_views = 4;
     return Write("plan.json", acquire::CapturePlanToJson(plan).dump(1));
   }
@@ -96,6 +97,10 @@ TEST_F(PlanCommand, ALabsPlanIsSimulatedOnItsOwnRigAndCalibratesBackToIt) {
   EXPECT_NE(forecast.output.find("images:    " + std::to_string(session.entries().size()) + " "), std::string::npos)
       << forecast.output;
   EXPECT_EQ(session.rig().acquisition_plan.at("dots"), acquire::CapturePlanToJson(read).at("dots"));
+  // The brackets keep their ratio, the shortest becoming the simulator's base exposure.
+  const std::vector<double> exposures = session.rig().exposures_s;
+  ASSERT_EQ(exposures.size(), 2u);
+  EXPECT_NEAR(exposures[1] / exposures[0], 16.0, 1e-9);
   const nlohmann::json notes = session.rig_json().at("simulated");
   EXPECT_EQ(notes.at("rig"), rig.string());
   EXPECT_EQ(notes.at("plan"), "lab-subset");

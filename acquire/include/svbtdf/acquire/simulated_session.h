@@ -28,9 +28,12 @@ struct SimulationOutput {
 // Ctrl-C ends it between images with Error(kInterrupted), leaving a resumable session.
 //
 // With a `plan` (`svbtdf simulate --plan`) the capture is that plan's: its dots replace the
-// rig's grid (positions, radius, intensity), its board views and dark frames are the simulated
-// ones, and its exposures are used as they are; the rig notes it leaves out, and the boards (the
-// simulator renders its own), are the simulated rig's, so the session calibrates like any other.
+// rig's grid (positions, radius, intensity), its board views, dark frames, brackets' ratios and
+// repeats are the simulated ones; its shortest dot exposure becomes the simulator's base exposure
+// (seconds of a lab's camera mean nothing to the simulator's radiometric unit) and the
+// calibration captures take the simulator's exposures; the rig notes it leaves out, and the
+// boards (the simulator renders its own), are the simulated rig's, so the session calibrates like
+// any other.
 SimulationOutput SimulateSession(const std::filesystem::path& out, const simulate::SimulationOptions& options,
                                  const CapturePlan* plan = nullptr);
 
