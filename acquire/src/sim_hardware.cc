@@ -23,13 +23,14 @@ namespace {
 
 SimDisplay::SimDisplay(std::shared_ptr<SimWorld> world, DisplayInfo info) : world_(std::move(world)), info_(std::move(info)) {}
 
-void SimDisplay::Show(const Pattern& pattern) {
+Presentation SimDisplay::Show(const Pattern& pattern) {
   if (!(pattern.intensity >= 0.0 && pattern.intensity <= 1.0) || !std::isfinite(pattern.x_px) ||
       !std::isfinite(pattern.y_px)) {
     common::ThrowInvalidInput(info_.id, "pattern with a non-finite position or an intensity outside [0, 1]");
   }
   world_->pattern = pattern;
   ++world_->patterns_shown;
+  return {MonotonicSeconds(), 0, false};
 }
 
 std::vector<uint8_t> SimDisplay::Raster() const {
