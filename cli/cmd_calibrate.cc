@@ -29,6 +29,7 @@ struct CalibrateOptions {
   std::string json_path;
   bool fix_k3 = false;
   bool full_lens_model = false;
+  bool centred_lens_model = false;
   bool strict = false;
 };
 
@@ -54,8 +55,12 @@ void PrintSummary(const calib::CalibrationReport& report) {
               report.intrinsics_std[2], c.cy, report.intrinsics_std[3]);
   std::printf("distortion k1 %.5f k2 %.5f p1 %.6f p2 %.6f k3 %.5f\n", c.distortion[0], c.distortion[1],
               c.distortion[2], c.distortion[3], c.distortion[4]);
-  std::printf("reprojection RMS %.3f px over %d of %zu views\n", report.rms_px, report.used_views(),
-              report.views.size());
+  std::printf("reprojection RMS %.3f px over %d of %zu views (%s lens model)\n", report.rms_px, report.used_views(),
+              report.views.size(), report.FittedLensModel().c_str());
+  const calib::ProjectionUncertainty& u = report.projection_uncertainty;
+  std::printf("projection uncertainty (1 sigma, worst direction): centre %.3f px, corners %.3f %.3f %.3f %.3f px, "
+              "worst %.3f px\n",
+              u.centre_px, u.corners_px[0], u.corners_px[1], u.corners_px[2], u.corners_px[3], u.worst_px);
   if (!report.narrow_lens_because.empty()) {
     spdlog::warn("narrow-lens model (square pixels, centred principal point, k1 only): {}; "
                  "--full-lens-model keeps the full one", report.narrow_lens_because);
@@ -65,11 +70,17 @@ void PrintSummary(const calib::CalibrationReport& report) {
   }
 }
 
+calib::CalibrationOptions CameraOptions(const CalibrateOptions& options) {
+  calib::CalibrationOptions camera;
+  camera.fix_k3 = options.fix_k3;
+  if (options.full_lens_model) camera.max_principal_point_std_fraction = 0;
+  if (options.centred_lens_model) camera.lens_model = calib::CalibrationOptions::LensModel::kCentred;
+  return camera;
+}
+
 void RunCalibrateImages(const CalibrateOptions& options) {
   const calib::BoardSpec board = calib::BoardSpec::Parse(options.board);
-  calib::CalibrationOptions calibration_options;
-  calibration_options.fix_k3 = options.fix_k3;
-  if (options.full_lens_model) calibration_options.max_principal_point_std_fraction = 0;
+  const calib::CalibrationOptions calibration_options = CameraOptions(options);
   const calib::CalibrationReport report =
       calib::CalibrateFromPhotos(ExpandGlob(options.images_glob), board, calibration_options);
   PrintSummary(report);
@@ -81,8 +92,7 @@ void RunCalibrateImages(const CalibrateOptions& options) {
 
 void RunCalibrateSession(const CalibrateOptions& options) {
   calib::CalibrateSessionOptions calibrate_options;
-  calibrate_options.camera.fix_k3 = options.fix_k3;
-  if (options.full_lens_model) calibrate_options.camera.max_principal_point_std_fraction = 0;
+  calibrate_options.camera = CameraOptions(options);
   const process::CalibrationStage stage = process::CalibrateAndCheck(options.session, calibrate_options);
   const calib::SessionCalibration& c = stage.calibration;
   PrintSummary(c.camera);
@@ -113,13 +123,18 @@ void AddCalibrateCommand(CLI::App& app) {
   CLI::Option* images = calibrate->add_option("--images", options->images_glob, "glob of board photos, e.g. 'boards/*.png'");
   session->excludes(images);
   images->excludes(session);
-  calibrate->add_option("--board", options->board, "chessboard:COLSxROWS:SQUARE_MM or charuco:COLSxROWS:SQUARE_MM:MARKER_MM[:DICT]")
+  calibrate->add_option("--board", options->board, "chessboard:COLSxROWS:SQUARE_MM, charuco:COLSxROWS:SQUARE_MM:MARKER_MM[:DICT], "
+                      "circles:COLSxROWS:SPACING_MM or acircles:COLSxROWS:SPACING_MM (OpenCV's circle grids)")
       ->capture_default_str();
   calibrate->add_option("--json", options->json_path, "write the calibration to this JSON file");
   calibrate->add_flag("--fix-k3", options->fix_k3, "hold the k3 distortion coefficient at zero");
   calibrate->add_flag("--full-lens-model", options->full_lens_model,
                       "estimate the principal point and all distortion terms even when the views cannot "
                       "determine them (by default a long lens falls back to the narrow-lens model)");
+  calibrate->add_flag("--centred-lens-model", options->centred_lens_model,
+                      "square pixels, the principal point held at the image centre, no tangential terms, k1 k2 k3 "
+                      "(OpenCV's FIX_ASPECT_RATIO | FIX_PRINCIPAL_POINT | ZERO_TANGENT_DIST)")
+      ->excludes("--full-lens-model");
   AddStrictFlag(calibrate, &options->strict);
   calibrate->callback([options] {
     if (!options->session.empty()) return RunCalibrateSession(*options);

@@ -2,11 +2,14 @@
 
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "commands.h"
 #include "svbtdf/common/folder_lock.h"
+#include "svbtdf/common/error.h"
 #include "svbtdf/simulate/presets.h"
+#include "svbtdf/simulate/rig_file.h"
 #include "svbtdf/acquire/simulated_session.h"
 
 namespace svbtdf::cli {
@@ -14,11 +17,19 @@ namespace svbtdf::cli {
 void AddSimulateCommand(CLI::App& app) {
   auto options = std::make_shared<simulate::SimulationOptions>();
   auto out = std::make_shared<std::string>();
+  auto plan_file = std::make_shared<std::string>();
+  auto rig_file = std::make_shared<std::string>();
   std::string presets;
   for (const std::string& name : simulate::PresetNames()) presets += (presets.empty() ? "" : ", ") + name;
   CLI::App* simulate = app.add_subcommand(
       "simulate", "Render a synthetic capture session (OUT/session) of a known material (OUT/truth)");
-  simulate->add_option("--preset", options->preset, "rig and material preset: " + presets)->required();
+  CLI::Option* preset = simulate->add_option("--preset", options->preset, "rig and material preset: " + presets);
+  simulate->add_option("--plan", *plan_file,
+                       "capture plan file (docs/capture.md): simulate that capture (its dots, exposures, repeats and "
+                       "calibration captures) instead of the preset's");
+  simulate->add_option("--rig", *rig_file,
+                       "rig file (docs/capture.md): simulate on this rig instead of the preset's (its preset gives the "
+                       "material)");
   simulate->add_option("--out", *out, "output folder (new, or an unfinished simulation to resume)")->required();
   simulate->add_option("--seed", options->seed, "seed of the material pattern and the noise")->capture_default_str();
   simulate->add_option("--eta", options->eta, "override the preset's relative index of refraction (> 1)");
@@ -33,9 +44,25 @@ void AddSimulateCommand(CLI::App& app) {
   simulate->add_flag("--mirror-monitor", options->mirror_monitor,
                      "show a mirror image of the screen (a mirrored display mode), which calibration must refuse");
   simulate->add_option("--threads", options->threads, "worker threads (0: all cores)")->capture_default_str();
-  simulate->callback([options, out] {
+  simulate->callback([options, out, plan_file, rig_file, preset] {
+    if (!rig_file->empty()) {
+      const simulate::RigFile rig = simulate::ReadRigFile(*rig_file);
+      if (preset->count() > 0 && options->preset != rig.preset) {
+        common::ThrowInvalidInput("--preset", "is '" + options->preset + "' but " + *rig_file + " starts from preset '" +
+                                                  rig.preset + "'",
+                                  "leave --preset out: the rig file names the preset whose material is simulated");
+      }
+      options->preset = rig.preset;
+      options->rig = rig.rig;
+      options->rig_source = *rig_file;
+      if (options->eta == 0.0) options->eta = rig.eta;
+    } else if (preset->count() == 0) {
+      common::ThrowInvalidInput("simulate", "needs --preset NAME or --rig FILE");
+    }
+    std::optional<acquire::CapturePlan> plan;
+    if (!plan_file->empty()) plan = acquire::ReadCapturePlan(*plan_file);
     const common::FolderLock lock = common::FolderLock::Acquire(*out, "svbtdf simulate");
-    const acquire::SimulationOutput result = acquire::SimulateSession(*out, *options);
+    const acquire::SimulationOutput result = acquire::SimulateSession(*out, *options, plan ? &*plan : nullptr);
     if (result.already_complete) {
       std::printf("already complete: %lld images of preset '%s'; nothing to do\n  session: %s\n  truth:   %s\n",
                   static_cast<long long>(result.images), options->preset.c_str(), result.session.c_str(),

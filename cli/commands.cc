@@ -11,6 +11,7 @@ void AddAllCommands(CLI::App& app) {
   AddEvalCommand(app);
   AddExportCommand(app);
   AddFitCommand(app);
+  AddPlanCommand(app);
   AddProcessCommand(app);
   AddRenderCommand(app);
   AddReportCommand(app);

@@ -18,6 +18,7 @@ void AddDevicesCommand(CLI::App& app);         // svbtdf devices
 void AddEvalCommand(CLI::App& app);            // svbtdf eval
 void AddExportCommand(CLI::App& app);          // svbtdf export
 void AddFitCommand(CLI::App& app);             // svbtdf fit
+void AddPlanCommand(CLI::App& app);            // svbtdf plan
 void AddProcessCommand(CLI::App& app);         // svbtdf process
 void AddRenderCommand(CLI::App& app);          // svbtdf render
 void AddReportCommand(CLI::App& app);          // svbtdf report

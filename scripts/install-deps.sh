@@ -10,7 +10,8 @@ PACKAGES=(
   libopencv-dev
   libopenimageio-dev openimageio-tools libopenexr-dev libpng-dev zlib1g-dev
   libcamera-dev linux-libc-dev libv4l-dev
-  libgphoto2-dev libsdl2-dev libjpeg-dev
+  libgphoto2-dev libsdl2-dev libjpeg-dev libx11-dev
+  xvfb x11-apps   # the SDL display tested in a real X11 window (tests/acquire/sdl_display_test.cc)
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   blender   # tests/export's Blender check and the demo's Blender picture (docs/export.md)

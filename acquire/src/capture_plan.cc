@@ -20,70 +20,11 @@ using nlohmann::json;
 
 constexpr const char* kFormatName = "svbtdf-capture-plan";
 
-// Typed, range-checked access to one JSON object of the plan; errors name the file and field.
-// Unknown fields are refused, so that a misspelt setting is not silently ignored.
-class Fields {
+// A plan's objects, read through the house's strict field reader.
+class Fields : public common::JsonFields {
  public:
   Fields(const json& object, std::string source, std::string prefix, std::set<std::string> known)
-      : object_(object), source_(std::move(source)), prefix_(std::move(prefix)) {
-    if (!object_.is_object()) Fail(prefix_.empty() ? "the plan" : prefix_, "must be a JSON object");
-    for (const auto& item : object_.items()) {
-      if (!known.count(item.key())) Fail(prefix_ + item.key(), "is not a plan field (misspelt?)");
-    }
-  }
-  bool Has(const std::string& name) const { return object_.contains(name); }
-  const json& Raw(const std::string& name) const {
-    if (!Has(name)) Fail(prefix_ + name, "is missing");
-    return object_.at(name);
-  }
-  double Number(const std::string& name, double lo, double hi) const { return CheckNumber(Raw(name), name, lo, hi); }
-  double Number(const std::string& name, double lo, double hi, double fallback) const {
-    return Has(name) ? Number(name, lo, hi) : fallback;
-  }
-  int Integer(const std::string& name, int lo, int hi) const {
-    const json& value = Raw(name);
-    if (!value.is_number_integer()) Fail(prefix_ + name, "must be an integer");
-    const int64_t v = value.get<int64_t>();
-    if (v < lo || v > hi) Fail(prefix_ + name, "must lie in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-    return static_cast<int>(v);
-  }
-  int Integer(const std::string& name, int lo, int hi, int fallback) const { return Has(name) ? Integer(name, lo, hi) : fallback; }
-  std::string Text(const std::string& name, const std::string& fallback) const {
-    if (!Has(name)) return fallback;
-    if (!object_.at(name).is_string()) Fail(prefix_ + name, "must be a string");
-    return object_.at(name).get<std::string>();
-  }
-  bool Flag(const std::string& name, bool fallback) const {
-    if (!Has(name)) return fallback;
-    if (!object_.at(name).is_boolean()) Fail(prefix_ + name, "must be true or false");
-    return object_.at(name).get<bool>();
-  }
-  std::pair<double, double> Pair(const std::string& name, double lo, double hi) const {
-    const json& value = Raw(name);
-    if (!value.is_array() || value.size() != 2) Fail(prefix_ + name, "must be a pair [x, y]");
-    return {CheckNumber(value[0], name, lo, hi), CheckNumber(value[1], name, lo, hi)};
-  }
-  double CheckNumber(const json& value, const std::string& name, double lo, double hi) const {
-    if (!value.is_number()) Fail(prefix_ + name, "must be a number");
-    const double v = value.get<double>();
-    if (!std::isfinite(v) || v < lo || v > hi) {
-      Fail(prefix_ + name, "must lie in [" + Short(lo) + ", " + Short(hi) + "], got " + Short(v));
-    }
-    return v;
-  }
-  [[noreturn]] void Fail(const std::string& field, const std::string& problem) const {
-    common::ThrowFormatError(source_, "field '" + field + "' " + problem, "see docs/capture.md for the plan format");
-  }
-
- private:
-  static std::string Short(double v) {
-    char buffer[32];
-    std::snprintf(buffer, sizeof buffer, "%g", v);
-    return buffer;
-  }
-  const json& object_;
-  std::string source_;
-  std::string prefix_;
+      : JsonFields(object, std::move(source), std::move(prefix), known, "see docs/capture.md for the plan format", "plan") {}
 };
 
 constexpr double kMaxExposure = 3600.0;
@@ -259,12 +200,14 @@ json CapturePlanToJson(const CapturePlan& plan) {
   return out;
 }
 
-std::vector<std::string> PlanPresetNames() { return {"tiny", "demo"}; }
+std::vector<std::string> PlanPresetNames() { return simulate::PresetNames(); }
 
 CapturePlan MakePlanPreset(const std::string& name) {
   const std::vector<std::string> names = PlanPresetNames();
   if (std::find(names.begin(), names.end(), name) == names.end()) {
-    common::ThrowInvalidInput("--plan-preset", "unknown preset '" + name + "'", "use tiny or demo, or write a plan file (--plan)");
+    std::string known;
+    for (const std::string& n : names) known += (known.empty() ? "" : ", ") + n;
+    common::ThrowInvalidInput("--plan-preset", "unknown preset '" + name + "'", "use " + known + ", or write a plan file (--plan)");
   }
   // The simulator's default seed: its material decides the exposures PlanCapture picks.
   const std::unique_ptr<simulate::SimulatedSetup> setup = simulate::MakeSimulatedSetup(simulate::MakePreset(name), 1, 0);
@@ -278,7 +221,7 @@ CapturePlan PlanFromSimulation(const simulate::SimulatedSetup& setup) {
   plan.name = setup.preset.name;
   plan.dot_cols = config.dots.cols;
   plan.dot_rows = config.dots.rows;
-  for (const simulate::Dot& dot : setup.rig->dots()) plan.dots_px.emplace_back(dot.monitor_x, dot.monitor_y);
+  for (const simulate::Dot& dot : setup.rig->dots()) plan.dots_px.emplace_back(dot.drawn_x, dot.drawn_y);
   plan.dot_radius_px = config.dots.radius_px;
   plan.dot_intensity = config.monitor.Luminance(config.dots.level);
   plan.exposures_s = capture.dot_exposures_s;

@@ -29,12 +29,6 @@ std::string Megabytes(uint64_t bytes) {
   return buffer;
 }
 
-bool SamePattern(const Pattern& a, const Pattern& b) {
-  return a.kind == b.kind && a.x_px == b.x_px && a.y_px == b.y_px && a.dot_radius_px == b.dot_radius_px &&
-         a.intensity == b.intensity && a.all_dots_px == b.all_dots_px && a.board_cols == b.board_cols &&
-         a.board_rows == b.board_rows && a.board_square_px == b.board_square_px;
-}
-
 // A plan whose dots the display cannot show would fail late, after the calibration captures.
 void RequireDotsOnDisplay(const CapturePlan& plan, const DisplayInfo& display) {
   if (display.width_px <= 0 || display.height_px <= 0) return;  // size unknown
@@ -121,7 +115,7 @@ class CaptureRun {
       }
       const Frame frame = CaptureWithRetries(capture);
       CheckFrame(capture, frame);
-      session_.AddImage(capture.key, ToImage(frame, camera_id_), frame.exposure_s, frame.gain);
+      session_.AddImage(capture.key, ToImage(frame, camera_id_), frame.exposure_s, frame.gain, presented_s_);
       ++result_.captured;
       if (progress) progress->Advance(1);
     }
@@ -209,10 +203,16 @@ class CaptureRun {
     if (options_.before_capture) options_.before_capture(capture);
     if (reset || !shown_ || !SamePattern(*shown_, capture.pattern)) {
       shown_.reset();
-      display_.Show(capture.pattern);
+      const Presentation presentation = display_.Show(capture.pattern);
       shown_ = capture.pattern;
-      Sleep(plan_.settle_s);  // the monitor's response time, and its glow after a bright pattern
+      presented_s_ = presentation.presented_s;
+      if (presentation.missed_frames > 0) {
+        spdlog::warn("{}: the display presented {} refreshes late", capture.key, presentation.missed_frames);
+      }
     }
+    // Never before the frame carrying the pattern is on screen plus the monitor's response time
+    // (and its glow after a bright pattern), whenever the display says it was presented.
+    Sleep(presented_s_ + plan_.settle_s - Now());
     if (reset || exposure_ != capture.exposure_s) {
       exposure_.reset();
       camera_.SetExposure({capture.exposure_s, plan_.gain});
@@ -220,6 +220,8 @@ class CaptureRun {
     }
     return camera_.Capture();
   }
+
+  double Now() const { return options_.now ? options_.now() : MonotonicSeconds(); }
 
   void Sleep(double seconds) const {
     if (seconds <= 0) return;
@@ -240,6 +242,7 @@ class CaptureRun {
   CameraInfo info_;
   std::string camera_id_;
   std::optional<Pattern> shown_;
+  double presented_s_ = 0.0;  // when the pattern shown now was presented (MonotonicSeconds)
   std::optional<double> exposure_;
   std::optional<std::pair<Scene, int>> scene_;
   bool windowed_ = false;  // the camera crops to a window; board views are whole-sensor

@@ -103,6 +103,8 @@ SdlDisplay::SdlDisplay(int index, SdlDisplayOptions options)
     if (!texture_) ThrowSdl(info_.id, "SDL_CreateTexture");
     SDL_SetTextureBlendMode(texture_, SDL_BLENDMODE_NONE);
     SDL_ShowCursor(SDL_DISABLE);
+    SDL_DisplayMode mode{};
+    if (SDL_GetCurrentDisplayMode(index, &mode) == 0 && mode.refresh_rate > 0) refresh_period_s_ = 1.0 / mode.refresh_rate;
     Show(Pattern{});  // black until told otherwise
   } catch (...) {
     if (texture_) SDL_DestroyTexture(texture_);
@@ -148,7 +150,7 @@ void SdlDisplay::Draw() {
   if (SDL_RenderCopy(renderer_, texture_, nullptr, nullptr) != 0) ThrowSdl(info_.id, "SDL_RenderCopy");
 }
 
-void SdlDisplay::Show(const Pattern& pattern) {
+Presentation SdlDisplay::Show(const Pattern& pattern) {
   last_codes_ = RasterizePattern(pattern, info_.width_px, info_.height_px, options_.gamma);
   PumpEvents();
   Draw();
@@ -166,7 +168,16 @@ void SdlDisplay::Show(const Pattern& pattern) {
                     std::to_string(*brightest),
                 "turn off colour management / night light for this output");
   }
+  const double submitted = MonotonicSeconds();
   SDL_RenderPresent(renderer_);
+  Presentation presentation;
+  presentation.presented_s = MonotonicSeconds();
+  presentation.vsync_aligned = options_.vsync && refresh_period_s_ > 0;
+  if (presentation.vsync_aligned) {
+    presentation.missed_frames = static_cast<int>((presentation.presented_s - submitted) / refresh_period_s_);
+    missed_frames_ += presentation.missed_frames;
+  }
+  return presentation;
 }
 
 bool SdlDisplay::ReadBackLastFrame(std::vector<uint8_t>* codes) {

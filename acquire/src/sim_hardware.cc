@@ -23,13 +23,14 @@ namespace {
 
 SimDisplay::SimDisplay(std::shared_ptr<SimWorld> world, DisplayInfo info) : world_(std::move(world)), info_(std::move(info)) {}
 
-void SimDisplay::Show(const Pattern& pattern) {
+Presentation SimDisplay::Show(const Pattern& pattern) {
   if (!(pattern.intensity >= 0.0 && pattern.intensity <= 1.0) || !std::isfinite(pattern.x_px) ||
       !std::isfinite(pattern.y_px)) {
     common::ThrowInvalidInput(info_.id, "pattern with a non-finite position or an intensity outside [0, 1]");
   }
   world_->pattern = pattern;
   ++world_->patterns_shown;
+  return {MonotonicSeconds(), 0, false};
 }
 
 std::vector<uint8_t> SimDisplay::Raster() const {
@@ -126,7 +127,7 @@ SimCamera::Identified SimCamera::Identify() const {
     bool same = p.all_dots_px.size() == fiducials.size();
     for (size_t k = 0; same && k < fiducials.size(); ++k) {
       const simulate::Dot& dot = rig.dots()[fiducials[k]];
-      same = p.all_dots_px[k] == std::pair<double, double>(dot.monitor_x, dot.monitor_y);
+      same = p.all_dots_px[k] == std::pair<double, double>(dot.drawn_x, dot.drawn_y);
     }
     if (!same) NotSimulated(id_, "a set of lit dots other than the rig's dots or its fiducial dots");
     return known(CaptureKey::Fiducials());
@@ -136,11 +137,13 @@ SimCamera::Identified SimCamera::Identify() const {
   }
   if (world_->scene == Scene::kSample && p.kind == Pattern::Kind::kDot) {
     const simulate::MonitorConfig& m = rig.config().monitor;
+    // (A plan's intensity comes back from the displayed level through the gamma curve, so to
+    // within rounding.)
     const bool rig_like = p.dot_radius_px == rig.config().dots.radius_px &&
-                          p.intensity == m.Luminance(rig.config().dots.level);
+                          std::abs(p.intensity - m.Luminance(rig.config().dots.level)) <= 1e-12;
     for (size_t q = 0; rig_like && q < rig.dots().size(); ++q) {
       const simulate::Dot& dot = rig.dots()[q];
-      if (p.x_px == dot.monitor_x && p.y_px == dot.monitor_y) return known(CaptureKey::Dot(static_cast<int>(q), e));
+      if (p.x_px == dot.drawn_x && p.y_px == dot.drawn_y) return known(CaptureKey::Dot(static_cast<int>(q), e));
     }
     // Any other dot: rendered by the simulator all the same, with a noise stream of its own.
     return {{CaptureKey::Dot(-1, e), settings_.exposure_s},

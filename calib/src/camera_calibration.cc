@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/aruco/charuco.hpp>
 #include <opencv2/calib3d.hpp>
+#include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <regex>
 #include <sstream>
@@ -50,6 +51,7 @@ bool PrincipalPointIsUnobservable(const CalibrationReport& report, const Calibra
 BoardSpec BoardSpec::Parse(const std::string& text, const std::string& argument) {
   static const std::regex chessboard(R"(chessboard:(\d+)x(\d+):([0-9.]+))");
   static const std::regex charuco(R"(charuco:(\d+)x(\d+):([0-9.]+):([0-9.]+)(?::([A-Z0-9_]+))?)");
+  static const std::regex circles(R"((a?circles):(\d+)x(\d+):([0-9.]+))");
   std::smatch m;
   BoardSpec board;
   try {
@@ -65,10 +67,16 @@ BoardSpec BoardSpec::Parse(const std::string& text, const std::string& argument)
       board.square_mm = std::stod(m[3]);
       board.marker_mm = std::stod(m[4]);
       if (m[5].matched) board.dictionary = m[5];
+    } else if (std::regex_match(text, m, circles)) {
+      board.kind = m[1] == "acircles" ? Kind::kAsymmetricCircles : Kind::kSymmetricCircles;
+      board.cols = std::stoi(m[2]);
+      board.rows = std::stoi(m[3]);
+      board.square_mm = std::stod(m[4]);
     } else {
       common::ThrowInvalidInput(argument, "cannot parse board '" + text + "'",
-                        "use chessboard:COLSxROWS:SQUARE_MM (inner corners) or "
-                        "charuco:COLSxROWS:SQUARE_MM:MARKER_MM[:DICT]");
+                        "use chessboard:COLSxROWS:SQUARE_MM (inner corners), "
+                        "charuco:COLSxROWS:SQUARE_MM:MARKER_MM[:DICT], circles:COLSxROWS:SPACING_MM or "
+                        "acircles:COLSxROWS:SPACING_MM");
     }
   } catch (const std::out_of_range&) {
     common::ThrowInvalidInput(argument, "a number in board '" + text + "' is out of range");
@@ -76,7 +84,10 @@ BoardSpec BoardSpec::Parse(const std::string& text, const std::string& argument)
   if (board.cols < 2 || board.rows < 2 || board.cols > 200 || board.rows > 200) {
     common::ThrowInvalidInput(argument, "the board needs 2 to 200 corners or squares per side, got '" + text + "'");
   }
-  if (!(board.square_mm > 0)) common::ThrowInvalidInput(argument, "the square size must be > 0 mm");
+  if (!(board.square_mm > 0)) {
+    common::ThrowInvalidInput(argument, std::string(board.IsCircleGrid() ? "the circle spacing" : "the square size") +
+                                            " must be > 0 mm, got '" + text + "'");
+  }
   if (board.kind == Kind::kCharuco) {
     if (!(board.marker_mm > 0 && board.marker_mm < board.square_mm)) {
       common::ThrowInvalidInput(argument, "the marker must be smaller than the square");
@@ -89,19 +100,34 @@ BoardSpec BoardSpec::Parse(const std::string& text, const std::string& argument)
 }
 
 std::string BoardSpec::ToString() const {
+  static const std::map<Kind, std::string> prefixes = {{Kind::kChessboard, "chessboard:"},
+                                                       {Kind::kCharuco, "charuco:"},
+                                                       {Kind::kSymmetricCircles, "circles:"},
+                                                       {Kind::kAsymmetricCircles, "acircles:"}};
   std::ostringstream out;
-  out << (kind == Kind::kChessboard ? "chessboard:" : "charuco:") << cols << "x" << rows << ":" << square_mm;
+  out << prefixes.at(kind) << cols << "x" << rows << ":" << square_mm;
   if (kind == Kind::kCharuco) out << ":" << marker_mm << ":" << dictionary;
   return out.str();
 }
 
 std::vector<cv::Point3f> BoardSpec::CornerPositions() const {
+  std::vector<cv::Point3f> corners;
+  if (IsCircleGrid()) {
+    // Row by row, as cv::findCirclesGrid reports the centres; an asymmetric grid's odd rows are
+    // shifted by one spacing (OpenCV's calibration sample).
+    for (int y = 0; y < rows; ++y) {
+      for (int x = 0; x < cols; ++x) {
+        const int column = kind == Kind::kAsymmetricCircles ? 2 * x + y % 2 : x;
+        corners.emplace_back(static_cast<float>(column * square_mm), static_cast<float>(y * square_mm), 0.f);
+      }
+    }
+    return corners;
+  }
   // Chessboard: cols x rows inner corners. ChArUco: the (cols-1) x (rows-1) inner chessboard
   // corners, which OpenCV numbers row by row like this.
   const int nx = kind == Kind::kChessboard ? cols : cols - 1;
   const int ny = kind == Kind::kChessboard ? rows : rows - 1;
   const double offset = kind == Kind::kChessboard ? 0.0 : square_mm;
-  std::vector<cv::Point3f> corners;
   for (int y = 0; y < ny; ++y) {
     for (int x = 0; x < nx; ++x) {
       corners.emplace_back(static_cast<float>(offset + x * square_mm), static_cast<float>(offset + y * square_mm), 0.f);
@@ -132,6 +158,24 @@ bool FindChessboardCorners(const cv::Mat& gray, const cv::Size& pattern, std::ve
   return cv::findChessboardCorners(gray, pattern, *corners, kFlags);
 }
 
+// OpenCV's default blob detector (what its calibration sample uses) first. It takes blobs of 25
+// to 5000 px^2, and a grid photographed by a high-resolution camera has larger circles: then a
+// detector whose largest blob is the circles' share of the image. The clustering search last: it
+// copes with strong perspective and distortion where the default ordering fails.
+bool FindCirclesGrid(const cv::Mat& gray, const BoardSpec& board, std::vector<cv::Point2f>* centres) {
+  const int grid = board.kind == BoardSpec::Kind::kAsymmetricCircles ? cv::CALIB_CB_ASYMMETRIC_GRID
+                                                                     : cv::CALIB_CB_SYMMETRIC_GRID;
+  const cv::Size pattern(board.cols, board.rows);
+  cv::SimpleBlobDetector::Params large;
+  large.maxArea = std::max(large.maxArea, static_cast<float>(gray.total()) / static_cast<float>(board.cols * board.rows));
+  for (const cv::SimpleBlobDetector::Params& params : {cv::SimpleBlobDetector::Params(), large}) {
+    const cv::Ptr<cv::FeatureDetector> detector = cv::SimpleBlobDetector::create(params);
+    if (cv::findCirclesGrid(gray, pattern, *centres, grid, detector)) return true;
+  }
+  const cv::Ptr<cv::FeatureDetector> detector = cv::SimpleBlobDetector::create(large);
+  return cv::findCirclesGrid(gray, pattern, *centres, grid | cv::CALIB_CB_CLUSTERING, detector);
+}
+
 }  // namespace
 
 BoardDetection DetectBoard(const cv::Mat& gray, const BoardSpec& board, const std::string& source) {
@@ -153,6 +197,15 @@ BoardDetection DetectBoard(const cv::Mat& gray, const BoardSpec& board, const st
     cv::cornerSubPix(gray, corners, cv::Size(5, 5), cv::Size(-1, -1),
                      cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-4));
     detection.image_points = corners;
+    detection.object_points = positions;
+  } else if (board.IsCircleGrid()) {
+    std::vector<cv::Point2f> centres;
+    if (!FindCirclesGrid(gray, board, &centres)) {
+      detection.failure = board.ToString().substr(0, board.ToString().find(':')) + " grid of " +
+                          std::to_string(board.cols) + "x" + std::to_string(board.rows) + " circles not found";
+      return detection;
+    }
+    detection.image_points = centres;
     detection.object_points = positions;
   } else {
     const auto charuco = MakeCharucoBoard(board);
@@ -191,6 +244,126 @@ int CalibrationReport::used_views() const {
   return static_cast<int>(std::count_if(views.begin(), views.end(), [](const ViewReport& v) { return v.used; }));
 }
 
+namespace {
+
+// The free intrinsics of a fit with OpenCV's `flags`, as a 9 x k matrix whose columns say how each
+// moves the nine (fx, fy, cx, cy, k1, k2, p1, p2, k3) that cv::projectPoints differentiates.
+cv::Mat FreeIntrinsics(int flags, double aspect_ratio) {
+  std::vector<cv::Mat> columns;
+  const auto column = [&columns](std::initializer_list<std::pair<int, double>> entries) {
+    cv::Mat c = cv::Mat::zeros(9, 1, CV_64F);
+    for (const auto& [row, value] : entries) c.at<double>(row) = value;
+    columns.push_back(c);
+  };
+  if (flags & cv::CALIB_FIX_ASPECT_RATIO) {
+    column({{0, aspect_ratio}, {1, 1.0}});  // fx = aspect fy: one parameter
+  } else {
+    column({{0, 1.0}});
+    column({{1, 1.0}});
+  }
+  if (!(flags & cv::CALIB_FIX_PRINCIPAL_POINT)) {
+    column({{2, 1.0}});
+    column({{3, 1.0}});
+  }
+  if (!(flags & cv::CALIB_FIX_K1)) column({{4, 1.0}});
+  if (!(flags & cv::CALIB_FIX_K2)) column({{5, 1.0}});
+  if (!(flags & cv::CALIB_ZERO_TANGENT_DIST)) {
+    column({{6, 1.0}});
+    column({{7, 1.0}});
+  }
+  if (!(flags & cv::CALIB_FIX_K3)) column({{8, 1.0}});
+  cv::Mat selection;
+  cv::hconcat(columns, selection);
+  return selection;
+}
+
+// The data of the final fit that the uncertainty is propagated from.
+struct FittedViews {
+  std::vector<std::vector<cv::Point3f>> object_points;
+  std::vector<std::vector<cv::Point2f>> image_points;
+  std::vector<cv::Mat> rvecs, tvecs;
+  int flags = 0;
+};
+
+// sigma^2 (J^T J)^-1 of the whole fit, its block of the free intrinsics (FreeIntrinsics' order).
+// sigma^2 is estimated as OpenCV does for its stdDeviationsIntrinsics (the squared residuals over
+// the number of points, not of residuals, less the parameters: about twice the unbiased estimate,
+// so conservative by about sqrt(2)), so that the block's diagonal gives back OpenCV's standard
+// deviations, which calibration.json reports beside it.
+cv::Mat IntrinsicsCovariance(const FittedViews& fit, const CameraModel& camera, const cv::Mat& selection) {
+  const int k = selection.cols;
+  const int views = static_cast<int>(fit.object_points.size());
+  cv::Mat normal = cv::Mat::zeros(k + 6 * views, k + 6 * views, CV_64F);
+  double squared_residuals = 0.0;
+  int points = 0;
+  for (int v = 0; v < views; ++v) {
+    std::vector<cv::Point2f> projected;
+    cv::Mat jacobian;  // 2n x 15: rvec, tvec, fx fy, cx cy, five distortion terms
+    cv::projectPoints(fit.object_points[v], fit.rvecs[v], fit.tvecs[v], camera.CameraMatrix(),
+                      camera.DistortionCoefficients(), projected, jacobian);
+    const cv::Mat intrinsics = jacobian.colRange(6, 15) * selection;
+    const cv::Mat pose = jacobian.colRange(0, 6);
+    const cv::Rect pose_block(k + 6 * v, k + 6 * v, 6, 6);
+    normal(cv::Rect(0, 0, k, k)) += intrinsics.t() * intrinsics;
+    normal(cv::Rect(k + 6 * v, 0, 6, k)) += intrinsics.t() * pose;
+    normal(cv::Rect(0, k + 6 * v, k, 6)) += pose.t() * intrinsics;
+    normal(pose_block) += pose.t() * pose;
+    for (size_t p = 0; p < projected.size(); ++p) {
+      const cv::Point2f d = projected[p] - fit.image_points[v][p];
+      squared_residuals += d.dot(d);
+    }
+    points += static_cast<int>(projected.size());
+  }
+  const int dof = std::max(points - normal.rows, 1);
+  const cv::Mat inverse = normal.inv(cv::DECOMP_SVD);
+  return inverse(cv::Rect(0, 0, k, k)) * (squared_residuals / dof);
+}
+
+// The worst-direction standard deviation of pixel `pixel`'s projection (ProjectionUncertainty).
+double ProjectionStdAt(const cv::Point2d& pixel, const CameraModel& camera, const cv::Mat& selection,
+                       const cv::Mat& covariance) {
+  std::vector<cv::Point2d> normalised;
+  cv::undistortPoints(std::vector<cv::Point2d>{pixel}, normalised, camera.CameraMatrix(),
+                      camera.DistortionCoefficients());
+  const std::vector<cv::Point3d> ray = {{normalised[0].x, normalised[0].y, 1.0}};
+  std::vector<cv::Point2d> projected;
+  cv::Mat jacobian;
+  cv::projectPoints(ray, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), camera.CameraMatrix(),
+                    camera.DistortionCoefficients(), projected, jacobian);
+  const cv::Mat along = jacobian.colRange(6, 15) * selection;
+  const cv::Mat projection_covariance = along * covariance * along.t();
+  cv::Mat eigenvalues;
+  cv::eigen(projection_covariance, eigenvalues);
+  return std::sqrt(std::max(eigenvalues.at<double>(0), 0.0));
+}
+
+ProjectionUncertainty EstimateProjectionUncertainty(const FittedViews& fit, const CameraModel& camera) {
+  const cv::Mat selection = FreeIntrinsics(fit.flags, camera.fx / camera.fy);
+  const cv::Mat covariance = IntrinsicsCovariance(fit, camera, selection);
+  const double right = camera.width - 1.0, bottom = camera.height - 1.0;
+  ProjectionUncertainty u;
+  u.centre_px = ProjectionStdAt({right / 2, bottom / 2}, camera, selection, covariance);
+  const std::array<cv::Point2d, 4> corners = {{{0, 0}, {right, 0}, {0, bottom}, {right, bottom}}};
+  for (int c = 0; c < 4; ++c) u.corners_px[c] = ProjectionStdAt(corners[c], camera, selection, covariance);
+  for (int y = 0; y < 7; ++y) {
+    for (int x = 0; x < 9; ++x) {
+      const cv::Point2d pixel(right * x / 8.0, bottom * y / 6.0);
+      u.worst_px = std::max(u.worst_px, ProjectionStdAt(pixel, camera, selection, covariance));
+    }
+  }
+  return u;
+}
+
+int InitialFlags(const CalibrationOptions& options) {
+  int flags = options.fix_k3 ? cv::CALIB_FIX_K3 : 0;
+  if (options.lens_model == CalibrationOptions::LensModel::kCentred) {
+    flags |= cv::CALIB_FIX_ASPECT_RATIO | cv::CALIB_FIX_PRINCIPAL_POINT | cv::CALIB_ZERO_TANGENT_DIST;
+  }
+  return flags;
+}
+
+}  // namespace
+
 CalibrationReport CalibrateCamera(const std::vector<BoardDetection>& detections, cv::Size image_size,
                                   const CalibrationOptions& options) {
   CalibrationReport report;
@@ -205,7 +378,9 @@ CalibrationReport CalibrateCamera(const std::vector<BoardDetection>& detections,
     }
     report.views.push_back(view);
   }
-  int flags = options.fix_k3 ? cv::CALIB_FIX_K3 : 0;
+  const bool centred = options.lens_model == CalibrationOptions::LensModel::kCentred;
+  report.lens_model = centred ? "centred" : "full";
+  int flags = InitialFlags(options);
   for (int round = 0;; ++round) {
     if (static_cast<int>(candidates.size()) < options.min_views) {
       common::ThrowInvalidInput("calibration images",
@@ -213,16 +388,15 @@ CalibrationReport CalibrateCamera(const std::vector<BoardDetection>& detections,
                             std::to_string(options.min_views) + " needed",
                         "add views of the board at varied angles filling the frame");
     }
-    std::vector<std::vector<cv::Point3f>> object_points;
-    std::vector<std::vector<cv::Point2f>> image_points;
+    FittedViews fit;
+    fit.flags = flags;
     for (int k : candidates) {
-      object_points.push_back(detections[k].object_points);
-      image_points.push_back(detections[k].image_points);
+      fit.object_points.push_back(detections[k].object_points);
+      fit.image_points.push_back(detections[k].image_points);
     }
     cv::Mat camera_matrix, distortion, std_intrinsics, std_extrinsics, per_view_errors;
-    std::vector<cv::Mat> rvecs, tvecs;
-    report.rms_px = cv::calibrateCamera(object_points, image_points, image_size, camera_matrix, distortion, rvecs,
-                                        tvecs, std_intrinsics, std_extrinsics, per_view_errors, flags);
+    report.rms_px = cv::calibrateCamera(fit.object_points, fit.image_points, image_size, camera_matrix, distortion,
+                                        fit.rvecs, fit.tvecs, std_intrinsics, std_extrinsics, per_view_errors, flags);
     std::vector<double> errors(per_view_errors.begin<double>(), per_view_errors.end<double>());
     const double threshold = std::max(options.outlier_factor * common::Median(errors), options.outlier_floor_px);
     std::vector<int> kept;
@@ -236,8 +410,8 @@ CalibrationReport CalibrateCamera(const std::vector<BoardDetection>& detections,
         view.used = false;
       } else {
         view.used = true;
-        view.rvec = rvecs[j];
-        view.tvec = tvecs[j];
+        view.rvec = fit.rvecs[j];
+        view.tvec = fit.tvecs[j];
         kept.push_back(candidates[j]);
       }
     }
@@ -254,7 +428,7 @@ CalibrationReport CalibrateCamera(const std::vector<BoardDetection>& detections,
       for (int c = 0; c < 5; ++c) report.distortion_std[c] = std_intrinsics.at<double>(4 + c, 0);
       // With the aspect ratio fixed OpenCV estimates fy alone (fx = fy) and reports no spread for fx.
       if (flags & cv::CALIB_FIX_ASPECT_RATIO) report.intrinsics_std[0] = report.intrinsics_std[1];
-      if (report.narrow_lens_because.empty() && PrincipalPointIsUnobservable(report, options)) {
+      if (!centred && report.narrow_lens_because.empty() && PrincipalPointIsUnobservable(report, options)) {
         std::ostringstream reason;
         reason.precision(3);
         reason << "the full model's principal point is uncertain by (" << report.intrinsics_std[2] << ", "
@@ -264,6 +438,7 @@ CalibrationReport CalibrateCamera(const std::vector<BoardDetection>& detections,
         flags = kNarrowLensFlags;
         continue;  // refit the same views with the narrow-lens model
       }
+      report.projection_uncertainty = EstimateProjectionUncertainty(fit, camera);
       return report;
     }
     candidates = kept;
@@ -293,7 +468,11 @@ nlohmann::json ToJson(const CalibrationReport& report) {
           {"std", {{"fx", report.intrinsics_std[0]}, {"fy", report.intrinsics_std[1]},
                    {"cx", report.intrinsics_std[2]}, {"cy", report.intrinsics_std[3]},
                    {"distortion", report.distortion_std}}},
-          {"lens_model", report.narrow_lens_because.empty() ? "full" : "narrow"},
+          {"projection_uncertainty_px",
+           {{"centre", report.projection_uncertainty.centre_px},
+            {"corners", report.projection_uncertainty.corners_px},
+            {"worst", report.projection_uncertainty.worst_px}}},
+          {"lens_model", report.FittedLensModel()},
           {"lens_model_because", report.narrow_lens_because},
           {"views_used", report.used_views()},
           {"views", views}};

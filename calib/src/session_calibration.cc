@@ -29,7 +29,9 @@ CalibrationReport CameraFromJson(const nlohmann::json& j) {
   c.cy = j.at("cy").get<double>();
   c.distortion = j.at("distortion").get<std::array<double, 5>>();
   report.rms_px = j.at("rms_px").get<double>();
-  if (j.value("lens_model", "full") == "narrow") {
+  const std::string lens_model = j.value("lens_model", "full");
+  if (lens_model == "centred") report.lens_model = lens_model;
+  if (lens_model == "narrow") {
     report.narrow_lens_because = j.value("lens_model_because", "");
     if (report.narrow_lens_because.empty()) report.narrow_lens_because = "calibration.json says lens_model narrow";
   }
@@ -38,6 +40,12 @@ CalibrationReport CameraFromJson(const nlohmann::json& j) {
     report.intrinsics_std = {s.at("fx").get<double>(), s.at("fy").get<double>(), s.at("cx").get<double>(),
                              s.at("cy").get<double>()};
     report.distortion_std = s.at("distortion").get<std::array<double, 5>>();
+  }
+  if (j.contains("projection_uncertainty_px")) {  // optional: files written before it lack it
+    const nlohmann::json& u = j["projection_uncertainty_px"];
+    report.projection_uncertainty.centre_px = u.at("centre").get<double>();
+    report.projection_uncertainty.corners_px = u.at("corners").get<std::array<double, 4>>();
+    report.projection_uncertainty.worst_px = u.at("worst").get<double>();
   }
   for (const nlohmann::json& v : j.value("views", nlohmann::json::array())) {
     ViewReport view;

@@ -5,6 +5,7 @@
 #include <zlib.h>
 
 #include <cerrno>
+#include <cmath>
 #include <chrono>
 #include <cstring>
 #include <ctime>
@@ -174,6 +175,7 @@ void Session::ReadJournal() {
     entry.exposure_s = Field<double>(object, "exposure_s", where);
     entry.gain = Field<double>(object, "gain", where);
     if (object.contains("time")) entry.time = Field<std::string>(object, "time", where);
+    if (object.contains("presented_s")) entry.presented_s = Field<double>(object, "presented_s", where);
     index_.emplace(entry.key, entries_.size());
     entries_.push_back(std::move(entry));
   }
@@ -194,7 +196,8 @@ const SessionEntry& Session::Entry(const std::string& key) const {
   return entries_[it->second];
 }
 
-void Session::AddImage(const std::string& key, const common::CameraImage& image, double exposure_s, double gain) {
+void Session::AddImage(const std::string& key, const common::CameraImage& image, double exposure_s, double gain,
+                       double presented_s) {
   RequireValidKey(key, "capture");
   if (Contains(key)) common::ThrowIoError(key, "is captured already; a capture is never overwritten");
   if (!planned_.count(key)) {
@@ -206,13 +209,14 @@ void Session::AddImage(const std::string& key, const common::CameraImage& image,
   if (error) common::ThrowIoError(file.parent_path().string(), "cannot create: " + error.message());
   // A file without a journal line is left over from a crash mid-capture: replace it.
   common::WriteCameraImage(file, image, /*overwrite=*/true);
-  SessionEntry entry{key, FileForKey(key), fs::file_size(file), FileCrc32(file), exposure_s, gain, UtcNow()};
+  SessionEntry entry{key, FileForKey(key), fs::file_size(file), FileCrc32(file), exposure_s, gain, UtcNow(), presented_s};
   // The writer checks every byte it writes; this is the last line of defence for the journal,
   // which must never vouch for an image that is not there.
   if (entry.bytes == 0) common::ThrowIoError(file.string(), "was written empty; it is not journalled", "is the disk full?");
-  const nlohmann::json line = {{"key", entry.key},   {"file", entry.file},       {"bytes", entry.bytes},
-                               {"crc32", entry.crc32}, {"exposure_s", exposure_s}, {"gain", gain},
-                               {"time", entry.time}};
+  nlohmann::json line = {{"key", entry.key},   {"file", entry.file},       {"bytes", entry.bytes},
+                         {"crc32", entry.crc32}, {"exposure_s", exposure_s}, {"gain", gain},
+                         {"time", entry.time}};
+  if (std::isfinite(presented_s)) line["presented_s"] = presented_s;
   if (!journal_) journal_ = common::DurableLog::Open(folder_ / kJournal, common::IsJsonObjectLine);
   journal_->Append(line.dump());
   index_.emplace(key, entries_.size());

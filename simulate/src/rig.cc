@@ -296,6 +296,10 @@ void Rig::LayOutDots() {
   // The grid covers span_scale times the sample's extent along each of the screen's axes.
   const auto extent = [&](const model::Vec3& axis) { return std::abs(axis.x()) * s.width + std::abs(axis.y()) * s.height(); };
   const model::Vec2 span_px = g.span_scale * model::Vec2(extent(frame.right), extent(frame.down)) / m.pixel_pitch;
+  const bool planned = !g.positions_px.empty();
+  if (planned && g.positions_px.size() != static_cast<size_t>(g.cols) * g.rows) {
+    common::ThrowInvalidInput("dots.positions_px", "must list cols x rows positions");
+  }
   dots_.clear();
   dots_.reserve(static_cast<size_t>(g.cols) * g.rows);
   for (int row = 0; row < g.rows; ++row) {
@@ -303,7 +307,9 @@ void Rig::LayOutDots() {
       // Column along u, row down the screen along v; a 1 x N grid sits on the centre line.
       const double fu = g.cols > 1 ? static_cast<double>(col) / (g.cols - 1) - 0.5 : 0.0;
       const double fv = g.rows > 1 ? static_cast<double>(row) / (g.rows - 1) - 0.5 : 0.0;
-      const model::Vec2 in_monitor = centre_px + model::Vec2(fu * span_px.x(), fv * span_px.y());
+      const model::Vec2 in_monitor =
+          planned ? model::Vec2(g.positions_px[row * g.cols + col].first, g.positions_px[row * g.cols + col].second)
+                  : model::Vec2(centre_px + model::Vec2(fu * span_px.x(), fv * span_px.y()));
       if (in_monitor.x() - g.radius_px < 0.0 || in_monitor.y() - g.radius_px < 0.0 ||
           in_monitor.x() + g.radius_px > frame.width_px || in_monitor.y() + g.radius_px > frame.height_px) {
         const model::Vec3 nominal = frame.PointAt(in_monitor);
@@ -312,9 +318,9 @@ void Rig::LayOutDots() {
                           ") m is off the monitor's active area",
                           "use a larger monitor, move its centre or shrink dots.span_scale");
       }
-      // Dots are drawn centred on a monitor pixel.
-      Dot dot = DotAt(std::floor(in_monitor.x()), std::floor(in_monitor.y()), g.radius_px,
-                      m.Luminance(g.level));
+      // A laid-out grid's dots are drawn centred on a monitor pixel; a plan's where it says.
+      Dot dot = planned ? DotAt(in_monitor.x(), in_monitor.y(), g.radius_px, m.Luminance(g.level))
+                        : DotAt(std::floor(in_monitor.x()), std::floor(in_monitor.y()), g.radius_px, m.Luminance(g.level));
       dot.col = col;
       dot.row = row;
       // The all-dots image (sample removed) must show every dot to locate it.
@@ -338,6 +344,8 @@ Dot Rig::DotAt(double x_px, double y_px, double radius_px, double luminance) con
   dot.col = dot.row = -1;
   dot.monitor_x = static_cast<int>(std::floor(x_px));
   dot.monitor_y = static_cast<int>(std::floor(y_px));
+  dot.drawn_x = x_px;
+  dot.drawn_y = y_px;
   dot.position = monitor_frame_.PointAt(model::Vec2(x_px + 0.5, y_px + 0.5));
   dot.radius = radius_px * m.pixel_pitch;
   dot.intensity = m.white_exitance * luminance * model::kPi * dot.radius * dot.radius;

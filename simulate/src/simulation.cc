@@ -86,6 +86,7 @@ SimulationPreset PresetWithOptions(const SimulationOptions& options) {
     common::ThrowInvalidInput("--truth", "must be model or montecarlo, got '" + options.truth + "'");
   }
   SimulationPreset preset = MakePreset(options.preset);
+  if (options.rig) preset.rig = *options.rig;
   if (!options.noise) {
     preset.rig.sensor.shot_noise = false;
     preset.rig.sensor.read_noise = 0.0;

@@ -363,6 +363,73 @@ TEST_F(AcquireOnSimulatedRig, ACameraOfAnotherFrameSizeCannotResumeTheSession) {
   EXPECT_EQ(session::Session::Open(out).entries().size(), 4u);
 }
 
+// A display whose pipeline puts what it is given on screen `frames` refreshes after Show returns
+// (as a TV's processing or a compositor's extra buffer does), and a camera that notes when it is
+// triggered, on one clock that only waiting advances: the loop must never trigger before the
+// pattern's presentation plus the settle time, and must journal that presentation.
+TEST_F(AcquireOnSimulatedRig, TheCameraWaitsForTheDelayedPresentationPlusTheSettleTime) {
+  struct Clock {
+    double now = 5000.0;
+  } clock;
+  constexpr int kFrames = 4;
+  constexpr double kRefresh = 1.0 / 60.0;
+  class DelayedDisplay : public Display {
+   public:
+    DelayedDisplay(Display& inner, Clock& clock) : inner_(inner), clock_(clock) {}
+    DisplayInfo Info() const override { return inner_.Info(); }
+    Presentation Show(const Pattern& pattern) override {
+      inner_.Show(pattern);
+      returned_s = clock_.now;
+      presented_s = clock_.now + kFrames * kRefresh;
+      return {presented_s, 0, true};
+    }
+    double returned_s = 0.0, presented_s = 0.0;
+
+   private:
+    Display& inner_;
+    Clock& clock_;
+  } display(*display_, clock);
+  class TimedCamera : public Camera {
+   public:
+    TimedCamera(Camera& inner, Clock& clock, const DelayedDisplay& display)
+        : inner_(inner), clock_(clock), display_(display) {}
+    CameraInfo Info() const override { return inner_.Info(); }
+    void SetExposure(const ExposureSettings& settings) override { inner_.SetExposure(settings); }
+    Frame Capture() override {
+      after_presentation_s.push_back(clock_.now - display_.presented_s);
+      after_show_returned_s.push_back(clock_.now - display_.returned_s);
+      presented_s.push_back(display_.presented_s);
+      clock_.now += 0.001;  // the exposure and read-out
+      return inner_.Capture();
+    }
+    std::vector<double> after_presentation_s, after_show_returned_s, presented_s;
+
+   private:
+    Camera& inner_;
+    Clock& clock_;
+    const DelayedDisplay& display_;
+  } camera(*camera_, clock, display);
+  options_.now = [&clock] { return clock.now; };
+  options_.sleep = [&clock](double seconds) { clock.now += seconds; };
+  const fs::path out = root_ / "delayed";
+  const AcquireResult result = Acquire(*plan_, camera, display, *op_, out, options_);
+  ASSERT_TRUE(result.complete());
+  ASSERT_EQ(camera.after_presentation_s.size(), static_cast<size_t>(Planned()));
+  const double settle = plan_->settle_s;
+  for (size_t k = 0; k < camera.after_presentation_s.size(); ++k) {
+    EXPECT_GE(camera.after_presentation_s[k], settle - 1e-9) << "capture " << k;
+    // Waiting only the settle time after Show returned, as the loop did, would trigger
+    // kFrames refreshes early.
+    EXPECT_GE(camera.after_show_returned_s[k], kFrames * kRefresh + settle - 1e-9) << "capture " << k;
+  }
+  // The journal records each capture's presentation, the one the camera waited for.
+  const session::Session session = session::Session::Open(out);
+  for (size_t k = 0; k < session.entries().size(); ++k) {
+    EXPECT_DOUBLE_EQ(session.entries()[k].presented_s, camera.presented_s[k]) << session.entries()[k].key;
+  }
+  ExpectEqualToTheSimulator(out);  // waiting changes no image
+}
+
 TEST(ConsoleOperator, EnterCapturesSSkipsAndEndOfInputSkips) {
   std::istringstream in("\ns\n");
   std::ostringstream out;

@@ -46,9 +46,27 @@ TEST(BoardSpec, ParsesAndRejects) {
   const BoardSpec charuco = BoardSpec::Parse("charuco:8x6:30:22:DICT_4X4_50");
   EXPECT_EQ(charuco.kind, BoardSpec::Kind::kCharuco);
   EXPECT_EQ(charuco.CornerPositions().size(), 35u);
+  const BoardSpec acircles = BoardSpec::Parse("acircles:4x11:20");
+  EXPECT_EQ(acircles.kind, BoardSpec::Kind::kAsymmetricCircles);
+  EXPECT_EQ(acircles.ToString(), "acircles:4x11:20");
+  const std::vector<cv::Point3f> centres = acircles.CornerPositions();
+  ASSERT_EQ(centres.size(), 44u);
+  EXPECT_EQ(centres[4], cv::Point3f(20, 20, 0));  // the second row starts one spacing in
+  EXPECT_EQ(centres[7], cv::Point3f(140, 20, 0));
+  const BoardSpec circles = BoardSpec::Parse("circles:7x5:12.5");
+  EXPECT_EQ(circles.kind, BoardSpec::Kind::kSymmetricCircles);
+  EXPECT_EQ(circles.CornerPositions()[8], cv::Point3f(12.5f, 12.5f, 0));
+  EXPECT_EQ(BoardSpec::Parse(circles.ToString()).kind, circles.kind);
   for (const char* bad : {"chess:9x6:25", "chessboard:9x6", "chessboard:1x6:25", "chessboard:9x6:0",
-                          "charuco:8x6:30:40", "charuco:8x6:30:20:NOPE", "chessboard:99999999999x6:25"}) {
+                          "charuco:8x6:30:40", "charuco:8x6:30:20:NOPE", "chessboard:99999999999x6:25",
+                          "acircles:4x11", "acircles:4x11:0", "circles:4:20", "xcircles:4x11:20"}) {
     EXPECT_THROW(BoardSpec::Parse(bad), common::Error) << bad;
+  }
+  try {
+    BoardSpec::Parse("acircles:4x11:0", "rig.board.spec");
+  } catch (const common::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("rig.board.spec"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("circle spacing"), std::string::npos) << e.what();
   }
 }
 

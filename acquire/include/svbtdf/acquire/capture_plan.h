@@ -93,8 +93,9 @@ CapturePlan ReadCapturePlan(const std::filesystem::path& path);
 // the same plan exactly when these are equal.
 nlohmann::json CapturePlanToJson(const CapturePlan& plan);
 
-// The built-in plans: the captures `svbtdf simulate --preset NAME` makes (same keys, exposures
-// and dots), so that an acquisition with them is calibrated and fitted like a simulation.
+// The built-in plans, one per simulator preset: the captures `svbtdf simulate --preset NAME`
+// makes (same keys, exposures and dots), so that an acquisition with them is calibrated and
+// fitted like a simulation.
 std::vector<std::string> PlanPresetNames();
 CapturePlan MakePlanPreset(const std::string& name);
 CapturePlan PlanFromSimulation(const simulate::SimulatedSetup& setup);

@@ -70,8 +70,10 @@ struct AcquireOptions {
   std::function<void(const PlannedCapture&)> before_capture;
   // Free bytes at a folder (the first existing ancestor of the session); injectable for tests.
   std::function<uint64_t(const std::filesystem::path&)> free_space;
-  // Sleeping (settle time, back-off); injectable so that tests do not wait.
+  // Sleeping (settle time, back-off) and the clock presentation times are on
+  // (MonotonicSeconds); injectable so that tests do not wait.
   std::function<void(double seconds)> sleep;
+  std::function<double()> now;
 };
 
 struct AcquireResult {

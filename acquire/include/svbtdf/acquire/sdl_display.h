@@ -38,7 +38,12 @@ class SdlDisplay : public Display {
   // Rasterises, uploads and draws the pattern, waits for the GPU by reading one pixel back
   // (and checks it), then presents (blocking on vsync where the driver does). Escape or
   // closing the window requests an interrupt, so a capture stops cleanly and can resume.
-  void Show(const Pattern& pattern) override;
+  // SDL2 gives no swap timestamps: with vsync, SDL_RenderPresent returns at the swap, so the time
+  // it returns is the presentation (Psychtoolbox's fallback); a return more than a refresh after
+  // the call counts the refreshes missed. Without vsync the time is only when it returned.
+  Presentation Show(const Pattern& pattern) override;
+  // Refreshes missed since the display opened.
+  int missed_frames() const { return missed_frames_; }
 
   // For tests: draws the last pattern again into the back buffer and reads it back as grey
   // code values (the red channel). Returns false when the renderer cannot read pixels.
@@ -56,6 +61,8 @@ class SdlDisplay : public Display {
   SDL_Renderer* renderer_ = nullptr;
   SDL_Texture* texture_ = nullptr;
   std::vector<uint8_t> last_codes_;
+  double refresh_period_s_ = 0.0;  // 0: the mode does not say
+  int missed_frames_ = 0;
 };
 
 }  // namespace svbtdf::acquire

@@ -46,7 +46,8 @@ class SimDisplay : public Display {
  public:
   SimDisplay(std::shared_ptr<SimWorld> world, DisplayInfo info);
   DisplayInfo Info() const override { return info_; }
-  void Show(const Pattern& pattern) override;
+  // Presented at once (the simulated monitor has no refresh).
+  Presentation Show(const Pattern& pattern) override;
   // The code values a real monitor would show now (pattern_raster.h).
   std::vector<uint8_t> Raster() const;
 

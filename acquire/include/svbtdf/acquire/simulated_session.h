@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <filesystem>
 
+#include "svbtdf/acquire/capture_plan.h"
 #include "svbtdf/simulate/simulation.h"
 
 namespace svbtdf::acquire {
@@ -25,6 +26,15 @@ struct SimulationOutput {
 // OUT is refused (svbtdf::Error(kInvalidInput)). A complete session is never touched again: of
 // the same preset, seed, truth and eta the call returns at once (already_complete), else refuses.
 // Ctrl-C ends it between images with Error(kInterrupted), leaving a resumable session.
-SimulationOutput SimulateSession(const std::filesystem::path& out, const simulate::SimulationOptions& options);
+//
+// With a `plan` (`svbtdf simulate --plan`) the capture is that plan's: its dots replace the
+// rig's grid (positions, radius, intensity), its board views, dark frames, brackets' ratios and
+// repeats are the simulated ones; its shortest dot exposure becomes the simulator's base exposure
+// (seconds of a lab's camera mean nothing to the simulator's radiometric unit) and the
+// calibration captures take the simulator's exposures; the rig notes it leaves out, and the
+// boards (the simulator renders its own), are the simulated rig's, so the session calibrates like
+// any other.
+SimulationOutput SimulateSession(const std::filesystem::path& out, const simulate::SimulationOptions& options,
+                                 const CapturePlan* plan = nullptr);
 
 }  // namespace svbtdf::acquire

@@ -13,22 +13,29 @@
 
 namespace svbtdf::calib {
 
-// A calibration target. Parsed from "chessboard:COLSxROWS:SQUARE_MM" (inner corners) or
-// "charuco:COLSxROWS:SQUARE_MM:MARKER_MM[:DICTIONARY]" (squares; dictionary default DICT_5X5_100).
+// A calibration target, the one vocabulary of board specifications (the CLI's --board, a
+// session's rig.board.spec). Parsed from "chessboard:COLSxROWS:SQUARE_MM" (inner corners),
+// "charuco:COLSxROWS:SQUARE_MM:MARKER_MM[:DICTIONARY]" (squares; dictionary default
+// DICT_5X5_100), "circles:COLSxROWS:SPACING_MM" (OpenCV's symmetric circle grid, circles per row
+// x rows, centres SPACING_MM apart) or "acircles:COLSxROWS:SPACING_MM" (OpenCV's asymmetric circle
+// grid, e.g. its sample pattern acircles:4x11: circle (c, r) at ((2c + r % 2) SPACING_MM,
+// r SPACING_MM), as OpenCV's calibration sample lays it out).
 struct BoardSpec {
-  enum class Kind { kChessboard, kCharuco };
+  enum class Kind { kChessboard, kCharuco, kSymmetricCircles, kAsymmetricCircles };
   Kind kind = Kind::kChessboard;
   int cols = 9;
   int rows = 6;
-  double square_mm = 25.0;
+  double square_mm = 25.0;  // the square's side; for circle grids the spacing
   double marker_mm = 0.0;
   std::string dictionary = "DICT_5X5_100";
 
   // Throws svbtdf::Error(kInvalidInput) naming `argument` when the text is malformed.
   static BoardSpec Parse(const std::string& text, const std::string& argument = "--board");
   std::string ToString() const;
-  // Board-frame coordinates (z = 0, millimetres) of every corner the detector can report, by id.
+  // Board-frame coordinates (z = 0, millimetres) of every corner (circle centre) the detector can
+  // report, by id.
   std::vector<cv::Point3f> CornerPositions() const;
+  bool IsCircleGrid() const { return kind == Kind::kSymmetricCircles || kind == Kind::kAsymmetricCircles; }
 };
 
 // The corners found in one image.
@@ -40,7 +47,8 @@ struct BoardDetection {
   std::vector<cv::Point3f> object_points;
 };
 
-// Detects the board with sub-pixel corner refinement. `gray` is 8-bit single channel.
+// Detects the board with sub-pixel corner refinement (circle grids: blob centroids, by
+// cv::findCirclesGrid). `gray` is 8-bit single channel.
 BoardDetection DetectBoard(const cv::Mat& gray, const BoardSpec& board, const std::string& source);
 
 // Pinhole camera with OpenCV's five-parameter Brown-Conrady distortion (k1 k2 p1 p2 k3).
@@ -60,19 +68,44 @@ struct ViewReport {
   cv::Vec3d rvec, tvec;         // board pose in the camera frame (mm), when used
 };
 
+// How far a pixel's projection is uncertain because the intrinsics are (as mrcal reports it):
+// the pixel is unprojected to its ray with the estimated intrinsics, and the ray projected again
+// through the intrinsics' covariance -- sigma^2 (J^T J)^-1 of the whole fit (intrinsics and every
+// view's pose), its intrinsics block, so the poses are marginalised and the parameters'
+// correlations kept. Each figure is the standard deviation, in pixels, along the worst direction
+// (the square root of the projection covariance's larger eigenvalue). Unlike mrcal's, the ray is
+// held fixed in the camera frame (mrcal lets the camera's frame follow the board poses), so this
+// is an upper bound for uses that do not care about the camera's rotation.
+struct ProjectionUncertainty {
+  double centre_px = 0.0;                       // at the image centre
+  std::array<double, 4> corners_px = {0, 0, 0, 0};  // top-left, top-right, bottom-left, bottom-right
+  double worst_px = 0.0;                        // largest over a 9 x 7 grid spanning the image
+};
+
 struct CalibrationReport {
   CameraModel camera;
   double rms_px = 0.0;  // over all used views
   std::array<double, 4> intrinsics_std = {0, 0, 0, 0};  // fx, fy, cx, cy
   std::array<double, 5> distortion_std = {0, 0, 0, 0, 0};
+  ProjectionUncertainty projection_uncertainty;
   std::vector<ViewReport> views;
-  // Empty when the full lens model was estimated; otherwise why the narrow-lens model was used
-  // instead (see CalibrationOptions::max_principal_point_std_fraction).
+  // The model asked for: "full" or "centred" (CalibrationOptions::LensModel).
+  std::string lens_model = "full";
+  // Empty unless the full lens model was asked for and the narrow-lens model used instead (see
+  // CalibrationOptions::max_principal_point_std_fraction): why.
   std::string narrow_lens_because;
   int used_views() const;
+  // The model fitted: "narrow" when narrow_lens_because says why, else lens_model.
+  std::string FittedLensModel() const { return narrow_lens_because.empty() ? lens_model : "narrow"; }
 };
 
 struct CalibrationOptions {
+  // kFull: fx, fy, cx, cy, k1, k2, p1, p2, k3 (falling back to the narrow-lens model, see
+  // max_principal_point_std_fraction). kCentred: square pixels, the principal point held at the
+  // image centre, no tangential terms, k1 k2 k3 -- what OpenCV's calibration sample fits with
+  // FIX_ASPECT_RATIO | FIX_PRINCIPAL_POINT | ZERO_TANGENT_DIST.
+  enum class LensModel { kFull, kCentred };
+  LensModel lens_model = LensModel::kFull;
   // A view is an outlier when its RMS exceeds max(outlier_factor * median RMS, outlier_floor_px).
   double outlier_factor = 3.0;
   double outlier_floor_px = 0.5;

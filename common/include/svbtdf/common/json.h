@@ -5,8 +5,10 @@
 // copying, comparing or dumping a value recurses, and 150,000 nested [] overflow the stack.
 
 #include <filesystem>
+#include <set>
 #include <string>
 #include <string_view>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -21,5 +23,39 @@ nlohmann::json ParseJson(std::string_view text, const std::string& subject);
 
 // ReadTextFile(path), then ParseJson naming the path.
 nlohmann::json ReadJsonFile(const std::filesystem::path& path);
+
+// Typed, range-checked access to one JSON object of a file a user writes (a capture plan, a rig
+// description); every error is common::Error(kFormat) naming the file and the field, with `hint`
+// (e.g. "see docs/capture.md for the plan format"). Unknown fields are refused, so that a
+// misspelt setting is not silently replaced by its default. `prefix` is the object's path
+// ("dots.") and `what` names the file's kind in messages ("plan": "is not a plan field").
+class JsonFields {
+ public:
+  JsonFields(const nlohmann::json& object, std::string source, std::string prefix, const std::set<std::string>& known,
+             std::string hint, std::string what);
+  bool Has(const std::string& name) const { return object_.contains(name); }
+  const nlohmann::json& Raw(const std::string& name) const;
+  double Number(const std::string& name, double lo, double hi) const;
+  double Number(const std::string& name, double lo, double hi, double fallback) const {
+    return Has(name) ? Number(name, lo, hi) : fallback;
+  }
+  int Integer(const std::string& name, int lo, int hi) const;
+  int Integer(const std::string& name, int lo, int hi, int fallback) const {
+    return Has(name) ? Integer(name, lo, hi) : fallback;
+  }
+  std::string Text(const std::string& name, const std::string& fallback) const;
+  bool Flag(const std::string& name, bool fallback) const;
+  std::pair<double, double> Pair(const std::string& name, double lo, double hi) const;
+  double CheckNumber(const nlohmann::json& value, const std::string& name, double lo, double hi) const;
+  [[noreturn]] void Fail(const std::string& field, const std::string& problem) const;
+  const std::string& prefix() const { return prefix_; }
+
+ private:
+  const nlohmann::json& object_;
+  std::string source_;
+  std::string prefix_;
+  std::string hint_;
+  std::string what_;
+};
 
 }  // namespace svbtdf::common

@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <string>
 #include <unordered_map>
@@ -39,6 +40,9 @@ struct SessionEntry {
   double exposure_s = 0.0;
   double gain = 1.0;
   std::string time;       // UTC, ISO 8601
+  // When the display presented the pattern (steady/monotonic clock seconds of the capturing run;
+  // NaN when not journalled: sessions before it, or images stored without a display).
+  double presented_s = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct SessionVerification {
@@ -76,7 +80,10 @@ class Session {
 
   // Stores a captured image under `key` and journals it. Throws when the key is journalled
   // already or not planned.
-  void AddImage(const std::string& key, const common::CameraImage& image, double exposure_s, double gain);
+  // `presented_s`: when the display presented the pattern the image was taken of (monotonic
+  // seconds, journalled as `presented_s`); NaN: not known.
+  void AddImage(const std::string& key, const common::CameraImage& image, double exposure_s, double gain,
+                double presented_s = std::numeric_limits<double>::quiet_NaN());
   // Reads a journalled image, checking its size (and CRC when `check_crc`), and its bit depth,
   // channels and size against the rig's camera (a kFormat error naming the file otherwise).
   common::CameraImage ReadImage(const std::string& key, bool check_crc = false) const;

@@ -148,6 +148,9 @@ struct DotGridConfig {
   // screen), dot q = r * cols + c, as a lab lays dots out on its monitor.
   double radius_px = 2.0;       // dot radius in monitor pixels
   double level = 1.0;           // displayed level of a dot
+  // A capture plan's dots (`svbtdf simulate --plan`), row-major over cols x rows, in the plan's
+  // monitor pixel coordinates; empty: laid out by span_scale and shift.
+  std::vector<std::pair<double, double>> positions_px;
 };
 
 struct SampleConfig {
@@ -227,6 +230,9 @@ struct Dot {
   model::Vec3 position;        // on the screen, at a monitor pixel centre
   int monitor_x = 0;    // monitor pixel coordinates of its centre
   int monitor_y = 0;
+  // The monitor coordinates it was drawn at, as a capture plan names them (monitor_x, monitor_y
+  // for a laid-out grid; a plan's may lie between pixels).
+  double drawn_x = 0.0, drawn_y = 0.0;
   double intensity = 0; // L_q: radiant intensity along the monitor normal (P(0) = 1)
   double radius = 0;    // m
 };

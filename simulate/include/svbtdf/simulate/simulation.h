@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "svbtdf/simulate/capture_render.h"
@@ -27,6 +28,10 @@ struct SimulationOptions {
   double monitor_orientation_deg = std::numeric_limits<double>::quiet_NaN();
   double monitor_tilt_deg = std::numeric_limits<double>::quiet_NaN();
   bool mirror_monitor = false;  // a mirrored display, which calibration must refuse (tests)
+  // A lab's own rig (`svbtdf simulate --rig`, simulate/rig_file.h) instead of the preset's; the
+  // preset still gives the material. `rig_source` names it in the session's notes.
+  std::optional<RigConfig> rig;
+  std::string rig_source;
 };
 
 // The preset named by `options` with its overrides applied; svbtdf::Error(kInvalidInput) naming
