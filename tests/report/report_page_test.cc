@@ -44,6 +44,11 @@ class ReportPage : public ::testing::Test {
     for (auto it = std::sregex_iterator(html.begin(), html.end(), image); it != std::sregex_iterator(); ++it) {
       figures.insert((*it)[1]);
     }
+    // The page's scripts and stylesheet count as files it names (the interactive parts, docs/report.md).
+    const std::regex script("<(?:script src|link rel=\"stylesheet\" href)=\"([^\"]+)\"");
+    for (auto it = std::sregex_iterator(html.begin(), html.end(), script); it != std::sregex_iterator(); ++it) {
+      figures.insert((*it)[1]);
+    }
     return figures;
   }
 
@@ -64,7 +69,8 @@ class ReportPage : public ::testing::Test {
 
 TEST_F(ReportPage, NamesTheMaterialsFiguresAndWritesThem) {
   const std::set<std::string> figures = Report(SmallMaterial());
-  for (const char* file : {"alpha.png", "shadowing.png", "k_s.png", "rho_d.png", "residual.png", "ndf_0.png"}) {
+  for (const char* file : {"alpha.png", "shadowing.png", "k_s.png", "rho_d.png", "residual.png", "cluster.png", "ndf_0.png",
+                           "three-bundle.js", "report.js", "report.css", "report-data.js", "report-texels.js", "report-lobes.js"}) {
     EXPECT_TRUE(figures.count(file)) << file;
   }
   EXPECT_FALSE(figures.count("alpha_truth.png"));
