@@ -66,6 +66,7 @@ TEST(PageData, CalibrationSummaryReportsDroppedViewsAndLostDots) {
   EXPECT_NE(doubts[0].find("1 of 2 board views"), std::string::npos) << doubts[0];
   EXPECT_NE(doubts[1].find("1 of 2 dots"), std::string::npos) << doubts[1];
 
+  std::filesystem::create_directories(folder / "other");
   common::WriteTextAtomically(folder / "other" / "calibration.json", "{\"format\": 1}", false);
   try {
     CalibrationSummary(folder / "other", &doubts);
