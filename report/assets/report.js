@@ -439,20 +439,22 @@
         g.drawImage(image, 0, 0);
         const truth = g.getImageData(0, 0, w, h).data;
         const linear = (v) => { v /= 255; return v <= 0.04045 ? v / 12.92 : Math.pow((v + 0.055) / 1.055, 2.4); };
-        let error = 0, norm = 0, pixels = 0;
+        let error = 0, norm = 0, pixels = 0, live_sum = 0, render_sum = 0;
         for (let y = 0; y < h; ++y) {
           for (let x = 0; x < w; ++x) {
             const gl = ((h - 1 - y) * w + x) * 4, im = (y * w + x) * 4;  // readPixels rows run bottom-up
             if (mask[gl] < 128) continue;
             ++pixels;
-            for (let c = 0; c < 3; ++c) { const a = linear(live[gl + c]), b = linear(truth[im + c]); error += (a - b) * (a - b); norm += b * b; }
+            for (let c = 0; c < 3; ++c) { const a = linear(live[gl + c]), b = linear(truth[im + c]); error += (a - b) * (a - b); norm += b * b; live_sum += a; render_sum += b; }
           }
         }
         const rmse = norm > 0 ? Math.sqrt(error / norm) : NaN;
         state.sgDifference = {
-          relative_rmse: rmse, pixels, view: [fitted.camera.theta_deg, fitted.camera.phi_deg], against: fitted.shown_png,
+          relative_rmse: rmse, pixels, mean_ratio: live_sum / render_sum, view: [fitted.camera.theta_deg, fitted.camera.phi_deg], against: fitted.shown_png,
           text: `Against svbtdf render of the fitted material at (${format(fitted.camera.theta_deg)}, ${format(fitted.camera.phi_deg)}) ` +
-                `degrees: relative RMSE ${(100 * rmse).toPrecision(3)}% over the ${pixels} pixels of the sample.`,
+                `degrees: relative RMSE ${(100 * rmse).toPrecision(3)}% over the ${pixels} pixels of the sample (mean brightness ` +
+                `${(live_sum / render_sum).toPrecision(3)} times the render's; the render's own Monte Carlo noise, ` +
+                `${fitted.samples_per_pixel} samples per pixel, is part of the figure).`,
         };
         document.getElementById('sg-difference') && (document.getElementById('sg-difference').textContent = state.sgDifference.text);
         renderer.setSize(512, 512, false);
