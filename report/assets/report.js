@@ -10,13 +10,13 @@
   const state = window.SVBTDF_PAGE = { ready: false, inspected: null, mode: null, sgDifference: null, errors: [] };
 
   // --- helpers -------------------------------------------------------------------------------
-  function float32(base64) {
-    if (!base64) return new Float32Array(0);
-    const text = atob(base64);
-    const bytes = new Uint8Array(text.length);
-    for (let k = 0; k < text.length; ++k) bytes[k] = text.charCodeAt(k);
-    return new Float32Array(bytes.buffer);
+  function bytes(base64) {
+    const text = atob(base64 || '');
+    const out = new Uint8Array(text.length);
+    for (let k = 0; k < text.length; ++k) out[k] = text.charCodeAt(k);
+    return out;
   }
+  function float32(base64) { return new Float32Array(bytes(base64).buffer); }
   // The same five-stop viridis ramp as the maps (report/src/picture.cc); white for NaN.
   const STOPS = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
   function ramp(t) {
@@ -60,8 +60,8 @@
 
   // --- section 2: the texel inspector --------------------------------------------------------
   const inspection = TEXELS && {
-    measured: float32(TEXELS.measured), fitted: float32(TEXELS.fitted), ndf: float32(TEXELS.ndf),
-    trueNdf: float32(TEXELS.true_ndf), residual: float32(TEXELS.residual), heldOut: new Set(TEXELS.held_out),
+    measured: float32(TEXELS.measured), fitted: float32(TEXELS.fitted), ndf: bytes(TEXELS.ndf),
+    trueNdf: bytes(TEXELS.true_ndf), residual: float32(TEXELS.residual), heldOut: new Set(TEXELS.held_out),
   };
 
   function nearest(list, value) {
@@ -131,10 +131,9 @@
     g.textAlign = 'center';
     g.fillText(title, 75, 12);
     if (values.length < (k + 1) * cells) { g.fillText('(no truth)', 75, 80); return; }
-    let peak = -Infinity;
-    for (let c = 0; c < cells; ++c) if (isFinite(values[k * cells + c])) peak = Math.max(peak, values[k * cells + c]);
     for (let c = 0; c < cells; ++c) {
-      g.fillStyle = ramp((values[k * cells + c] - peak + 8) / 8);
+      const v = values[k * cells + c];  // the top 8 units of ln D as 0 .. 254; 255 outside the disc
+      g.fillStyle = ramp(v === 255 ? NaN : v / 254);
       g.fillRect(11 + (c % side) * scale, 18 + Math.floor(c / side) * scale, scale, scale);
     }
     g.fillStyle = '#000';

@@ -97,7 +97,9 @@ std::string FormatPercent(double fraction) {
 
 std::string FormatNumber(double value, const std::string& unit) {
   if (!std::isfinite(value)) return "n/a";
-  return Significant(value, 3) + (unit.empty() ? "" : " " + unit);
+  // Counts and large values in full (1000, not 1e+03); the rest to 3 significant digits.
+  const bool whole = std::abs(value) >= 1000 || (value == std::round(value) && std::abs(value) < 1e15);
+  return (whole ? Significant(std::round(value), 15) : Significant(value, 3)) + (unit.empty() ? "" : " " + unit);
 }
 
 std::vector<ReadableMetric> ReadableMetrics(const nlohmann::json& compare) {

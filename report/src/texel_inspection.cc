@@ -115,16 +115,25 @@ nlohmann::json InspectionData(const fit::Material& material, const fit::SliceSto
   const int cells = kInspectionNdfSide * kInspectionNdfSide;
   const size_t texels = static_cast<size_t>(grid.cols) * grid.rows;
   std::vector<float> measured(texels * dots, NAN), fitted(texels * dots, NAN);
-  std::vector<float> ndf(texels * cells, NAN), true_ndf(truth_parameters ? texels * cells : 0, NAN);
+  std::vector<uint8_t> ndf(texels * cells, kNdfOutside), true_ndf(truth_parameters ? texels * cells : 0, kNdfOutside);
   std::vector<float> residual(texels);
   const fit::MaterialEvaluator evaluator(material);
-  const auto ln_d_picture = [&](const model::Ndf& d, float* out) {
+  // ln D over the disc of h seen from above, as bytes: 0 .. 254 for the top 8 units of ln D (a
+  // byte is as fine as the colour ramp; float32 made the page 4 times larger at 600x600).
+  const auto ln_d_picture = [&](const model::Ndf& d, uint8_t* out) {
+    std::vector<double> ln_d(cells, NAN);
+    double peak = -1e300;
     for (int py = 0; py < kInspectionNdfSide; ++py) {
       for (int px = 0; px < kInspectionNdfSide; ++px) {
         const double u = (px + 0.5) / kInspectionNdfSide * 2 - 1, v = 1 - (py + 0.5) / kInspectionNdfSide * 2;
         if (u * u + v * v >= 1) continue;
-        out[py * kInspectionNdfSide + px] = static_cast<float>(std::log(std::max(d.D(Vec3(u, v, std::sqrt(1 - u * u - v * v))), 1e-30)));
+        ln_d[py * kInspectionNdfSide + px] = std::log(std::max(d.D(Vec3(u, v, std::sqrt(1 - u * u - v * v))), 1e-30));
+        peak = std::max(peak, ln_d[py * kInspectionNdfSide + px]);
       }
+    }
+    for (int c = 0; c < cells; ++c) {
+      if (std::isnan(ln_d[c])) continue;
+      out[c] = static_cast<uint8_t>(std::lround(std::clamp((ln_d[c] - peak + 8) / 8, 0.0, 1.0) * (kNdfOutside - 1)));
     }
   };
   common::ParallelFor(static_cast<int64_t>(texels), threads, 4, [&](int64_t begin, int64_t end) {
@@ -159,8 +168,8 @@ nlohmann::json InspectionData(const fit::Material& material, const fit::SliceSto
   return {{"cols", grid.cols}, {"rows", grid.rows}, {"x", grid.x}, {"y", grid.y}, {"dots", dots},
           {"held_out", held_out}, {"dot_positions", dot_positions}, {"texel_centres", texel_centres},
           {"measured", Float32Base64(measured)}, {"fitted", Float32Base64(fitted)},
-          {"residual", Float32Base64(residual)}, {"ndf_side", kInspectionNdfSide}, {"ndf", Float32Base64(ndf)},
-          {"true_ndf", truth_parameters ? Float32Base64(true_ndf) : ""}};
+          {"residual", Float32Base64(residual)}, {"ndf_side", kInspectionNdfSide}, {"ndf", Base64(std::string(ndf.begin(), ndf.end()))},
+          {"true_ndf", Base64(std::string(true_ndf.begin(), true_ndf.end()))}};
 }
 
 nlohmann::json LobeData(const fit::Material& material, const TexelGrid& grid, int threads) {

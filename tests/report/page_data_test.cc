@@ -26,6 +26,9 @@ TEST(PageData, FormatsNumbersForPeople) {
   EXPECT_EQ(FormatPercent(0.9615), "96.2%");
   EXPECT_EQ(FormatNumber(1.41592, "px"), "1.42 px");
   EXPECT_EQ(FormatNumber(NAN), "n/a");
+  EXPECT_EQ(FormatNumber(1000), "1000");  // counts in full, not 1e+03
+  EXPECT_EQ(FormatNumber(1234.6, "px"), "1235 px");
+  EXPECT_EQ(FormatNumber(0.000123456), "0.000123");
 }
 
 TEST(PageData, JudgesCompareFiguresAgainstTheirTargets) {

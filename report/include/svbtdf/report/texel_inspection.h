@@ -33,8 +33,9 @@ TexelGrid MakeTexelGrid(int width, int height, int max_side);
 // stays within `sample_budget` (the page's size grows with both).
 int InspectionGridSide(int width, int height, int dots, int max_side, int64_t sample_budget);
 
-// The NDF picture's side (pixels) in the inspection data.
+// The NDF picture's side (pixels) in the inspection data, and its byte outside the disc.
 inline constexpr int kInspectionNdfSide = 16;
+inline constexpr uint8_t kNdfOutside = 255;
 
 // The five views at which every lobe is fitted: head-on, then 30 degrees from the normal toward
 // +x, +y, -x and -y. The shader blends the lobes of the views nearest its own.
