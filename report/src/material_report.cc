@@ -248,7 +248,8 @@ void AddLiveSection(Page& page, const nlohmann::json& renders, bool has_gltf) {
   page.Raw("<section id=\"live\">");
   page.Heading("1. The material, live");
   if (!has_gltf) page.Paragraph("No glTF export was given (<code>--gltf</code>): the glTF view is off.");
-  page.Raw("<div class=\"live\"><div class=\"viewer\"><div class=\"tabs\"><button data-mode=\"gltf\">glTF export (three.js)</button>"
+  page.Raw(std::string("<div class=\"live\"><div class=\"viewer\"><div class=\"tabs\">") +
+           (has_gltf ? "<button data-mode=\"gltf\">glTF export (three.js)</button>" : "") +
            "<button data-mode=\"sg\">full material (spherical Gaussians)</button> <label>light: <select id=\"light\">"
            "<option value=\"checker\">checkerboard behind</option><option value=\"room\">room environment</option>"
            "</select></label></div><canvas id=\"viewer\" width=\"512\" height=\"512\"></canvas>"

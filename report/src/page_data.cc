@@ -68,6 +68,13 @@ double SaturatedFraction(const common::CameraImage& image, double saturation_dn)
   return image.pixels.empty() ? 0.0 : static_cast<double>(saturated) / image.pixels.size();
 }
 
+// "eB", the folder of exposure bracket B in a session's dot images (docs/session-format.md).
+std::string BracketName(size_t bracket) {
+  std::string name(1, 'e');
+  name.append(std::to_string(bracket));
+  return name;
+}
+
 std::string MimeType(const fs::path& file) {
   const std::string ext = file.extension().string();
   if (ext == ".png") return "image/png";
@@ -214,7 +221,7 @@ nlohmann::json CaptureSummary(const fs::path& session, const fs::path& out, doub
     int counted = 0;
     const size_t stride = std::max<size_t>(1, dot_folders.size() / std::max(1, max_dot_images));
     for (size_t q = 0; q < dot_folders.size(); q += stride) {
-      const fs::path file = dot_folders[q] / ("e" + std::to_string(e)) / "r0.png";
+      const fs::path file = dot_folders[q] / BracketName(e) / "r0.png";
       if (!fs::is_regular_file(file)) continue;
       saturated += SaturatedFraction(common::ReadCameraImage(file), saturation_dn);
       ++counted;
@@ -225,12 +232,16 @@ nlohmann::json CaptureSummary(const fs::path& session, const fs::path& out, doub
   if (!dot_folders.empty()) {
     for (const size_t q : {size_t{0}, dot_folders.size() / 2, dot_folders.size() - 1}) {
       const std::string dot = dot_folders[q].filename().string();
-      for (size_t e = 0; e < exposures.size(); ++e) thumbnail("dot/" + dot + "/e" + std::to_string(e) + "/r0", "dot " + dot + ", bracket " + std::to_string(e));
+      for (size_t e = 0; e < exposures.size(); ++e) {
+        thumbnail("dot/" + dot + "/" + BracketName(e) + "/r0", "dot " + dot + ", bracket " + std::to_string(e));
+      }
     }
   }
-  if (brackets.size() > 0 && brackets.back()["saturated_fraction"].get<double>() > 0.05) {
-    warnings->push_back("the longest bracket saturates " + FormatPercent(brackets.back()["saturated_fraction"].get<double>()) +
-                        " of the dot images' pixels");
+  // Longer brackets saturate by design (the HDR merge takes the shorter ones there); pixels
+  // saturated in the shortest bracket have no valid measurement at all.
+  if (!brackets.empty() && brackets.front()["saturated_fraction"].get<double>() > 0.001) {
+    warnings->push_back("the shortest bracket saturates " + FormatPercent(brackets.front()["saturated_fraction"].get<double>()) +
+                        " of the dot images' pixels: those samples are lost (shorten the exposures)");
   }
   return {{"session", session.string()}, {"preset", plan.value("name", "")}, {"dots", plan.value("dots", nlohmann::json::object()).value("positions_px", nlohmann::json::array()).size()},
           {"brackets", brackets}, {"thumbnails", thumbnails}};
