@@ -222,7 +222,7 @@
   const SG_SHADER = `
     precision highp float;
     precision highp sampler2D;
-    uniform sampler2D lobes;       // per lobe texel: ceil(stride / 4) RGBA float texels in a row
+    uniform sampler2D lobes;       // per lobe texel: its record, padded to ceil(stride / 4) RGBA texels
     uniform ivec2 grid;            // lobe texels (cols, rows)
     uniform vec2 sampleSize;       // metres
     uniform vec3 eye;
@@ -232,10 +232,11 @@
     in vec2 ndc;
     out vec4 colour;
     const float PI = 3.141592653589793;
+    // Number k of the record starting at float base (records are padded to whole RGBA texels).
     float fetch(int base, int k) {
-      int t = base + k / 4;
-      vec4 v = texelFetch(lobes, ivec2(t % textureSize(lobes, 0).x, t / textureSize(lobes, 0).x), 0);
-      int c = k % 4;
+      int f = base + k, t = f / 4, width = textureSize(lobes, 0).x;
+      vec4 v = texelFetch(lobes, ivec2(t % width, t / width), 0);
+      int c = f % 4;
       return c == 0 ? v.x : c == 1 ? v.y : c == 2 ? v.z : v.w;
     }
     // svbtdf render's checkerboard: squares of 0.9 and 0.1, a tile centred behind the sample.
@@ -261,8 +262,8 @@
       } else {
         int col = clamp(int((p.x + 0.5 * sampleSize.x) / sampleSize.x * float(grid.x)), 0, grid.x - 1);
         int row = clamp(int((0.5 * sampleSize.y - p.y) / sampleSize.y * float(grid.y)), 0, grid.y - 1);
-        int stride = ${LOBES ? LOBES.stride : 38};
-        int base = (row * grid.x + col) * ${LOBES ? Math.ceil(LOBES.stride / 4) : 10};
+        int perView = ${LOBES ? LOBES.per_view : 11};
+        int base = (row * grid.x + col) * ${LOBES ? Math.ceil(LOBES.stride / 4) * 4 : 60};
         vec3 o = -dir;
         // Blend the five views' lobes: head-on, and 30 degrees toward +x, +y, -x, -y.
         float s = 0.5;
@@ -271,27 +272,32 @@
         float sum = w[1] + w[2] + w[3] + w[4];
         if (sum > 1.0) { for (int v = 1; v < 5; ++v) w[v] /= sum; sum = 1.0; }
         w[0] = 1.0 - sum;
-        vec3 shift = vec3(0.0), amplitude = vec3(0.0);
-        float sharpness = 0.0;
+        vec3 shift = vec3(0.0), major = vec3(0.0), energy = vec3(0.0);
+        vec2 sharpness = vec2(0.0);
+        vec3 major0 = vec3(fetch(base, 3), fetch(base, 4), fetch(base, 5));
         for (int v = 0; v < 5; ++v) {
-          int k = v * 7;
+          int k = v * perView;
           shift += w[v] * vec3(fetch(base, k), fetch(base, k + 1), fetch(base, k + 2));
-          sharpness += w[v] * fetch(base, k + 3);
-          amplitude += w[v] * vec3(fetch(base, k + 4), fetch(base, k + 5), fetch(base, k + 6));
+          vec3 m = vec3(fetch(base, k + 3), fetch(base, k + 4), fetch(base, k + 5));
+          major += w[v] * (dot(m, major0) < 0.0 ? -m : m);  // an axis: m and -m are the same
+          sharpness += w[v] * vec2(fetch(base, k + 6), fetch(base, k + 7));
+          energy += w[v] * vec3(fetch(base, k + 8), fetch(base, k + 9), fetch(base, k + 10));
         }
-        vec3 rhoD = vec3(fetch(base, 35), fetch(base, 36), fetch(base, 37));
+        int after = 5 * perView;
+        vec3 rhoD = vec3(fetch(base, after), fetch(base, after + 1), fetch(base, after + 2));
         vec3 axis = normalize(-o + shift);
-        vec3 t1 = normalize(cross(axis, abs(axis.x) < 0.9 ? vec3(1, 0, 0) : vec3(0, 1, 0)));
-        vec3 t2 = cross(axis, t1);
-        float lambda = max(sharpness, 1e-3), mass = 2.0 * PI / lambda * (1.0 - exp(-2.0 * lambda));
-        // The lobe integrated against the background by 48 draws from the spherical Gaussian.
+        major = major - dot(major, axis) * axis;
+        major = length(major) > 1e-6 ? normalize(major) : normalize(cross(axis, abs(axis.x) < 0.9 ? vec3(1, 0, 0) : vec3(0, 1, 0)));
+        vec3 minor = cross(axis, major);
+        vec2 spread = 1.0 / sqrt(max(sharpness, vec2(1e-3)));
+        // The anisotropic lobe integrated against the background: 48 draws of a Gaussian across
+        // its axis (the spherical Gaussian's small-angle form), weighted by the lobe's energy.
         float sum_l = 0.0;
         const int N = 48;
         for (int k = 0; k < N; ++k) {
           vec2 u = sequence(k);
-          float c = clamp(1.0 + log(1.0 - u.x * (1.0 - exp(-2.0 * lambda))) / lambda, -1.0, 1.0);
-          float sn = sqrt(max(0.0, 1.0 - c * c)), phi = 2.0 * PI * u.y;
-          sum_l += checker(p, sn * cos(phi) * t1 + sn * sin(phi) * t2 + c * axis);
+          float r = sqrt(-2.0 * log(max(1.0 - u.x, 1e-6))), phi = 2.0 * PI * u.y;
+          sum_l += checker(p, normalize(axis + r * cos(phi) * spread.x * major + r * sin(phi) * spread.y * minor));
         }
         // The diffuse part: rho_d times the cosine-weighted background below.
         float diffuse = 0.0;
@@ -300,7 +306,7 @@
           float r = sqrt(u.x), phi = 2.0 * PI * u.y;
           diffuse += checker(p, vec3(r * cos(phi), r * sin(phi), -sqrt(max(0.0, 1.0 - u.x))));
         }
-        radiance = amplitude * mass * sum_l / float(N) + rhoD * PI * diffuse / 16.0;
+        radiance = energy * sum_l / float(N) + rhoD * PI * diffuse / 16.0;
       }
       radiance *= exposure;
       colour = vec4(srgb(radiance.r), srgb(radiance.g), srgb(radiance.b), 1.0);
@@ -325,7 +331,7 @@
         backgroundDistance: { value: 0.03 }, checkerSize: { value: 0.005 }, exposure: { value: 1 }, maskOnly: { value: 0 },
       },
       vertexShader: 'in vec3 position; out vec2 ndc; void main() { ndc = position.xy; gl_Position = vec4(position.xy, 0.0, 1.0); }',
-      fragmentShader: SG_SHADER.replace('uniform ivec2 grid;', 'uniform ivec2 grid;'),
+      fragmentShader: SG_SHADER,
       depthTest: false, depthWrite: false,
     });
   }
@@ -400,7 +406,7 @@
       state.mode = mode;
       document.querySelectorAll('.tabs button').forEach((b) => b.classList.toggle('active', b.dataset.mode === mode));
       status.textContent = mode === 'sg'
-        ? `The full fitted material: every texel's transmission lobe as spherical Gaussians at five views (${LOBES.cols} x ` +
+        ? `The full fitted material: every texel's transmission lobe as an anisotropic spherical Gaussian at five views (${LOBES.cols} x ` +
           `${LOBES.rows} texels), integrated against the checkerboard ${format(1000 * background.background_distance_m)} mm ` +
           'behind; drag to orbit.'
         : 'The glTF export (per-texel GGX lobes, KHR_materials_transmission), as three.js draws it; drag to orbit.';

@@ -32,13 +32,14 @@ void TangentFrame(const Vec3& axis, Vec3* t1, Vec3* t2) {
 struct LobeSamples {
   std::vector<Vec3> directions;
   std::vector<double> values, weights;
+  std::vector<std::array<double, 3>> specular_rgb;  // per direction, k_s rho |i.z| in RGB
   std::array<double, 3> rgb_sum{};
   double luminance_sum = 0;
   void Add(const fit::TexelBtdf& texel, const Vec3& o, const Vec3& i, double solid_angle) {
     if (!(i.z() < -1e-3)) return;
     const model::Rgb r = texel.Evaluate(i, o);
     const model::Rgb& rho_d = texel.params().rho_d;
-    std::array<double, 3> specular{};
+    std::array<double, 3>& specular = specular_rgb.emplace_back();
     for (int c = 0; c < 3; ++c) specular[c] = std::max(0.0, r[c] - rho_d[c]) * -i.z();
     const double luminance = (specular[0] + specular[1] + specular[2]) / 3;
     directions.push_back(i);
@@ -87,24 +88,52 @@ std::vector<Vec3> LobeViews() {
 }
 
 TexelLobe FitTexelLobe(const fit::TexelBtdf& texel, const Vec3& o) {
-  // Pass 1: 75 degrees around the straight-through direction -o, coarse; pass 2: three widths of
-  // that lobe around its axis, fine enough for glossy lobes a coarse grid would miss.
+  constexpr size_t kMinSamples = 16;  // fewer: the lobe lies beyond the horizon, nothing to fit
   const LobeSamples coarse = SamplesAround(texel, o, -o, std::tan(75 * model::kPi / 180), 32);
   TexelLobe result;
-  if (!(coarse.luminance_sum > 0)) return result;
+  if (!(coarse.luminance_sum > 0) || coarse.directions.size() < kMinSamples) return result;
   model::SphericalGaussianFit fit = model::FitSphericalGaussian(coarse.directions, coarse.values, coarse.weights);
   const double extent = std::clamp(3 / std::sqrt(std::max(fit.lobe.sharpness, 1e-3)), 0.02, 1.5);
-  const LobeSamples fine = SamplesAround(texel, o, fit.lobe.axis, extent, 24);
-  if (fine.luminance_sum > 0) fit = model::FitSphericalGaussian(fine.directions, fine.values, fine.weights);
+  LobeSamples fine = SamplesAround(texel, o, fit.lobe.axis, extent, 24);
+  const bool refined = fine.luminance_sum > 0 && fine.directions.size() >= kMinSamples;
+  if (refined) fit = model::FitSphericalGaussian(fine.directions, fine.values, fine.weights);
+  const LobeSamples& shape = refined ? fine : coarse;
   result.lobe = fit.lobe;
   result.relative_l2 = fit.relative_l2;
-  // The amplitude keeps the lobe's energy: a least-squares Gaussian misses the heavy tails of a
-  // microfacet lobe (13% of the light on the tiny preset), which the picture would lose.
-  double unit_mass = 0;
-  for (size_t k = 0; k < coarse.directions.size(); ++k) {
-    unit_mass += std::exp(fit.lobe.sharpness * (fit.lobe.axis.dot(coarse.directions[k]) - 1)) * coarse.weights[k];
+  // Anisotropy: the second moments of the lobe across its axis (gnomonic coordinates).
+  Vec3 t1, t2;
+  TangentFrame(fit.lobe.axis, &t1, &t2);
+  // The energy, not the fitted amplitude: a least-squares Gaussian misses the heavy tails of a
+  // microfacet lobe (13% of the light on the tiny preset), which the picture would lose. The fine
+  // grid integrates the lobe's core (the coarse one misses glossy lobes between its points), the
+  // coarse one what lies beyond the fine window.
+  result.energy_rgb = refined ? fine.rgb_sum : coarse.rgb_sum;
+  if (refined) {
+    for (size_t k = 0; k < coarse.directions.size(); ++k) {
+      const Vec3& d = coarse.directions[k];
+      const double along = d.dot(fit.lobe.axis);
+      const Vec3 p = along > 0 ? Vec3(d / along - fit.lobe.axis) : Vec3::Zero();
+      if (along > 0 && std::abs(p.dot(t1)) <= extent && std::abs(p.dot(t2)) <= extent) continue;  // inside the fine window
+      for (int c = 0; c < 3; ++c) result.energy_rgb[c] += coarse.specular_rgb[k][c] * coarse.weights[k];
+    }
   }
-  for (int c = 0; c < 3; ++c) result.amplitude_rgb[c] = unit_mass > 0 ? coarse.rgb_sum[c] / unit_mass : 0.0;
+  double uu = 0, uv = 0, vv = 0, mass = 0;
+  for (size_t k = 0; k < shape.directions.size(); ++k) {
+    const Vec3& d = shape.directions[k];
+    const double along = d.dot(fit.lobe.axis);
+    if (along <= 0.05) continue;
+    const Vec3 p = d / along - fit.lobe.axis;
+    const double u = p.dot(t1), v = p.dot(t2), w = shape.values[k] * shape.weights[k];
+    uu += w * u * u, uv += w * u * v, vv += w * v * v, mass += w;
+  }
+  if (!(mass > 0)) return result;
+  const double mean = 0.5 * (uu + vv), half_gap = std::hypot(0.5 * (uu - vv), uv);
+  const double wide = mean + half_gap, narrow = std::max(mean - half_gap, 1e-12);
+  const double angle = 0.5 * std::atan2(2 * uv, uu - vv);
+  const double aspect = std::clamp(std::sqrt(wide / narrow), 1.0, 10.0);  // ratio of the widths
+  result.major = std::cos(angle) * t1 + std::sin(angle) * t2;
+  result.sharpness_major = fit.lobe.sharpness / aspect;
+  result.sharpness_minor = fit.lobe.sharpness * aspect;
   return result;
 }
 
@@ -174,7 +203,7 @@ nlohmann::json InspectionData(const fit::Material& material, const fit::SliceSto
 
 nlohmann::json LobeData(const fit::Material& material, const TexelGrid& grid, int threads) {
   const std::vector<Vec3> views = LobeViews();
-  constexpr int kPerView = 7;
+  constexpr int kPerView = 11;
   const size_t stride = views.size() * kPerView + 3;
   const size_t texels = static_cast<size_t>(grid.cols) * grid.rows;
   std::vector<float> data(texels * stride, 0.0f);
@@ -188,8 +217,9 @@ nlohmann::json LobeData(const fit::Material& material, const TexelGrid& grid, in
       for (size_t v = 0; v < views.size(); ++v) {
         const TexelLobe lobe = FitTexelLobe(texel, views[v]);
         const Vec3 shift = lobe.lobe.axis + views[v];  // axis - (-o)
-        const double values[kPerView] = {shift.x(), shift.y(), shift.z(), lobe.lobe.sharpness,
-                                         lobe.amplitude_rgb[0], lobe.amplitude_rgb[1], lobe.amplitude_rgb[2]};
+        const double values[kPerView] = {shift.x(), shift.y(), shift.z(), lobe.major.x(), lobe.major.y(), lobe.major.z(),
+                                         lobe.sharpness_major, lobe.sharpness_minor,
+                                         lobe.energy_rgb[0], lobe.energy_rgb[1], lobe.energy_rgb[2]};
         for (int j = 0; j < kPerView; ++j) out[v * kPerView + j] = static_cast<float>(values[j]);
         error[k] += lobe.relative_l2 / views.size();
       }

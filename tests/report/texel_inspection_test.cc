@@ -37,9 +37,35 @@ TEST(TexelInspection, AHeadOnLobeLiesStraightThroughAndNarrowsWithRoughness) {
     EXPECT_LT(lobe.lobe.sharpness, previous_sharpness) << roughness;
     previous_sharpness = lobe.lobe.sharpness;
     EXPECT_LT(lobe.relative_l2, 0.35) << roughness;
-    // The colour follows k_s (grey here).
-    EXPECT_NEAR(lobe.amplitude_rgb[0], lobe.amplitude_rgb[2], 1e-9 + 1e-6 * lobe.amplitude_rgb[0]);
+    // Round: the sharpnesses along and across differ little; grey like k_s; energy below 1.
+    EXPECT_GT(lobe.sharpness_major / lobe.sharpness_minor, 0.8) << roughness;
+    EXPECT_NEAR(lobe.energy_rgb[0], lobe.energy_rgb[2], 1e-9 + 1e-6 * lobe.energy_rgb[0]);
+    EXPECT_GT(lobe.energy_rgb[0], 0.1) << roughness;
+    EXPECT_LT(lobe.energy_rgb[0], 1.0) << roughness;
   }
+}
+
+TEST(TexelInspection, AnAnisotropicLobeIsWidestAlongItsRougherAxis) {
+  for (const bool along_x : {true, false}) {
+    fit::Material m = SmallMaterial();
+    model::TabulatedNdf ndf(model::Hemicube(16), along_x ? model::GgxNdf(0.4, 0.12) : model::GgxNdf(0.12, 0.4));
+    ndf.Normalize();
+    m.representative_ln_d = {ndf.ln_d()};
+    const fit::MaterialEvaluator evaluator(m);
+    const TexelLobe lobe = FitTexelLobe(evaluator.Texel(1, 1), model::Vec3::UnitZ());
+    EXPECT_GT(std::abs(along_x ? lobe.major.x() : lobe.major.y()), 0.95) << along_x;
+    EXPECT_LT(lobe.sharpness_major, 0.5 * lobe.sharpness_minor) << along_x;
+    EXPECT_NEAR(lobe.sharpness_major * lobe.sharpness_minor, lobe.lobe.sharpness * lobe.lobe.sharpness,
+                1e-9 * lobe.lobe.sharpness * lobe.lobe.sharpness);
+  }
+}
+
+TEST(TexelInspection, ALobeBeyondTheHorizonIsLeftEmptyNotAnError) {
+  const fit::Material m = SmallMaterial();
+  const fit::MaterialEvaluator evaluator(m);
+  // A view grazing the sample: its lobe lies almost wholly above the horizon.
+  const TexelLobe lobe = FitTexelLobe(evaluator.Texel(0, 0), model::Vec3(0.9999, 0, 0.0141).normalized());
+  EXPECT_GE(lobe.energy_rgb[0], 0.0);
 }
 
 TEST(TexelInspection, ASlantedViewShiftsTheLobe) {
@@ -58,9 +84,9 @@ TEST(TexelInspection, LobeDataHoldsEveryGridTexelsRecords) {
   const nlohmann::json lobes = LobeData(m, MakeTexelGrid(4, 3, 2), 1);
   EXPECT_EQ(lobes["cols"], 2);
   EXPECT_EQ(lobes["rows"], 2);
-  EXPECT_EQ(lobes["stride"], 38);
-  // base64 of 4 texels x 38 float32.
-  EXPECT_EQ(lobes["data"].get<std::string>().size(), (4 * 38 * 4 + 2) / 3 * 4);
+  EXPECT_EQ(lobes["stride"], 58);  // 5 views x 11 + rho_d
+  // base64 of 4 texels x 58 float32.
+  EXPECT_EQ(lobes["data"].get<std::string>().size(), (4 * 58 * 4 + 2) / 3 * 4);
 }
 
 }  // namespace

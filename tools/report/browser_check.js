@@ -56,7 +56,13 @@ async function main() {
     page.on('requestfailed', (r) => result.failed_requests.push(r.url()));
     const load_started = Date.now();
     await page.goto('file://' + page_file, { waitUntil: 'load', timeout: 120000 });
-    await page.waitForFunction(() => window.SVBTDF_PAGE && window.SVBTDF_PAGE.ready, { timeout: 120000 });
+    try {
+      await page.waitForFunction(() => window.SVBTDF_PAGE && window.SVBTDF_PAGE.ready, { timeout: 120000 });
+    } catch (error) {
+      // Say why: what the page logged before it failed to get ready.
+      throw new Error(`the page never got ready: ${error}; console errors: ${JSON.stringify(result.console_errors)}; ` +
+                      `page errors: ${JSON.stringify(result.page_errors)}`);
+    }
     result.load_seconds = (Date.now() - load_started) / 1000;
     result.page_state_errors = await page.evaluate(() => window.SVBTDF_PAGE.errors);
     result.images = await page.evaluate(() => Array.from(document.images).map((i) => ({

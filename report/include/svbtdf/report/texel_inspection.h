@@ -42,12 +42,16 @@ inline constexpr uint8_t kNdfOutside = 255;
 std::vector<model::Vec3> LobeViews();
 
 // A texel's specular transmission at view `o` (toward the camera), k_s rho(i, o) |i.z| over the
-// light directions i (z < 0), fitted by one spherical Gaussian on luminance, in two passes (the
-// whole hemisphere, then around the first lobe); `amplitude_rgb` carries the colour.
+// light directions i (z < 0): one spherical Gaussian fitted on luminance (model/sg_lobe.h), in two
+// passes (75 degrees around the straight-through direction, then three lobe widths around the
+// first fit), stretched into an anisotropic one by the lobe's second moments across its axis
+// (the sharpnesses' product stays the fitted one's square), with the lobe's energy per channel.
 struct TexelLobe {
-  model::SphericalGaussian lobe;
-  std::array<double, 3> amplitude_rgb{};
-  double relative_l2 = 0;
+  model::SphericalGaussian lobe;               // the isotropic fit (axis, sharpness, amplitude)
+  model::Vec3 major = model::Vec3::UnitX();    // across the axis, where the lobe is widest
+  double sharpness_major = 1, sharpness_minor = 1;  // along `major` and across it
+  std::array<double, 3> energy_rgb{};          // integral of k_s rho |i.z| over the light directions
+  double relative_l2 = 0;                      // the isotropic fit's
 };
 TexelLobe FitTexelLobe(const fit::TexelBtdf& texel, const model::Vec3& o);
 
@@ -57,8 +61,9 @@ nlohmann::json InspectionData(const fit::Material& material, const fit::SliceSto
                               const simulate::MaterialTruth* truth_parameters, const std::vector<int>& held_out,
                               const TexelGrid& grid, int threads);
 
-// Every texel of `grid`'s lobes at LobeViews(): Float32 records of 7 numbers per view (axis minus
-// the straight-through direction -o: 3, sharpness, amplitude RGB) and rho_d (3), base64 in "data".
+// Every texel of `grid`'s lobes at LobeViews(): Float32 records of 11 numbers per view (axis minus
+// the straight-through direction -o: 3, major: 3, sharpness along and across it: 2, energy RGB: 3)
+// and rho_d (3), base64 in "data".
 nlohmann::json LobeData(const fit::Material& material, const TexelGrid& grid, int threads);
 
 }  // namespace svbtdf::report
