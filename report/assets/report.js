@@ -37,7 +37,7 @@
     return g;
   }
   // Axes of a plot area (x0, y0, w, h) with labels and a few ticks.
-  function axes(g, box, xRange, yRange, xLabel, yLabel, tickFormat) {
+  function axes(g, box, xRange, yRange, xLabel, yLabel, tickFormat, yTickFormat = tickFormat) {
     const [x0, y0, w, h] = box;
     g.strokeStyle = '#444';
     g.strokeRect(x0, y0, w, h);
@@ -47,7 +47,7 @@
       const xv = xRange[0] + (xRange[1] - xRange[0]) * k / 4, yv = yRange[0] + (yRange[1] - yRange[0]) * k / 4;
       g.fillText(tickFormat(xv), x0 + w * k / 4, y0 + h + 13);
       g.textAlign = 'right';
-      g.fillText(tickFormat(yv), x0 - 3, y0 + h - h * k / 4 + 4);
+      g.fillText(yTickFormat(yv), x0 - 3, y0 + h - h * k / 4 + 4);
       g.textAlign = 'center';
     }
     g.fillText(xLabel, x0 + w / 2, y0 + h + 27);
@@ -186,7 +186,7 @@
     if (g) {
       const views = c.views, box = [50, 24, 355, 196];
       const top = Math.max(0.1, ...views.map((v) => v.rms_px)) * 1.1;
-      axes(g, box, [0, views.length], [0, top], 'board view', 'reprojection RMS (px)', (v) => v.toFixed(2));
+      axes(g, box, [0, views.length], [0, top], 'board view', 'reprojection RMS (px)', (v) => v.toFixed(0), (v) => v.toFixed(2));
       g.fillText('reprojection error per board view (red: dropped)', 225, 14);
       views.forEach((v, k) => {
         g.fillStyle = v.used ? '#248' : '#c00';
