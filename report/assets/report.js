@@ -99,8 +99,16 @@
       }
       g.fillStyle = ramp((Math.log10(Math.max(v, lo)) - Math.log10(lo)) / (Math.log10(hi) - Math.log10(lo)));
       g.beginPath(); g.arc(px, py, 4, 0, 2 * Math.PI); g.fill();
-      if (inspection.heldOut.has(q)) { g.strokeStyle = '#e00'; g.lineWidth = 2; g.stroke(); g.lineWidth = 1; }
     }
+    // The held-out dots' rings last, so that no neighbour covers them.
+    g.strokeStyle = '#e00';
+    g.lineWidth = 2;
+    for (const q of inspection.heldOut) {
+      if (q >= dots) continue;
+      const [x, y] = lightDirection(k, q);
+      g.beginPath(); g.arc(cx + x * radius, cy - y * radius, 5, 0, 2 * Math.PI); g.stroke();
+    }
+    g.lineWidth = 1;
     g.fillStyle = '#000';
   }
 
@@ -137,7 +145,7 @@
       g.fillRect(11 + (c % side) * scale, 18 + Math.floor(c / side) * scale, scale, scale);
     }
     g.fillStyle = '#000';
-    g.fillText('ln D (top 8 units), from above', 75, 162);
+    g.fillText('ln D, top 8 units', 75, 162);
   }
 
   function inspect(x, y) {
