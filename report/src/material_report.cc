@@ -110,6 +110,20 @@ void AddSlabMaterials(Page& page, const simulate::MonteCarloTruth& truth) {
 
 std::string Short(double value) { return FormatNumber(value); }
 
+// |sum of channels - true sum| / true sum per texel (NaN where the truth is 0): one map of an RGB
+// quantity's error.
+common::FloatImage RelativeError(const common::FloatImage& fitted, const common::FloatImage& truth) {
+  common::FloatImage error(fitted.width, fitted.height, 1);
+  for (int y = 0; y < fitted.height; ++y) {
+    for (int x = 0; x < fitted.width; ++x) {
+      double f = 0, t = 0;
+      for (int c = 0; c < fitted.channels; ++c) f += fitted.at(x, y, c), t += truth.at(x, y, c);
+      error.at(x, y) = static_cast<float>(t > 0 ? std::abs(f - t) / t : std::nan(""));
+    }
+  }
+  return error;
+}
+
 void AddMaps(Page& page, const fit::Material& material, const simulate::Truth* truth, const std::string& lobe_error_file) {
   const simulate::MaterialTruth* parameters = truth ? truth->parameters() : nullptr;
   const int w = material.width, h = material.height;
@@ -138,20 +152,17 @@ void AddMaps(Page& page, const fit::Material& material, const simulate::Truth* t
       "shadowing roughness (Smith GGX alpha; 0 = no shadowing)", 0, shadowing_max, "GGX alpha");
   const double k_s_max = std::max(1e-3, MaxOf(material.k_s));
   map("k_s.png", ColourMap(material.k_s, k_s_max), "k_s, the specular scale per colour channel", 0, k_s_max, "unitless, RGB", true);
+  if (parameters) {
+    map("k_s_error.png", ScalarMap(RelativeError(material.k_s, parameters->k_s), 0, 0, 0.1),
+        "relative error of k_s against the truth (0.1 = 10%)", 0, 0.1, "relative");
+  }
   const std::optional<common::FloatImage> true_rho_d = truth ? std::optional(truth->RhoDMap()) : std::nullopt;
   const double rho_d_max = std::max({1e-4, MaxOf(material.rho_d), true_rho_d ? MaxOf(*true_rho_d) : 0.0});
   map("rho_d.png", ColourMap(material.rho_d, rho_d_max), "rho_d, the diffuse transmission", 0, rho_d_max, "1/sr, RGB", true);
   if (true_rho_d) {
     map("rho_d_truth.png", ColourMap(*true_rho_d, rho_d_max), "true rho_d (same scale)", 0, rho_d_max, "1/sr, RGB", true);
-    common::FloatImage error(w, h, 1);
-    for (int y = 0; y < h; ++y) {
-      for (int x = 0; x < w; ++x) {
-        double fitted = 0, real = 0;
-        for (int c = 0; c < 3; ++c) fitted += material.rho_d.at(x, y, c), real += true_rho_d->at(x, y, c);
-        error.at(x, y) = static_cast<float>(real > 0 ? std::abs(fitted - real) / real : std::nan(""));
-      }
-    }
-    map("rho_d_error.png", ScalarMap(error, 0, 0, 0.1), "relative error of rho_d against the truth (0.1 = 10%)", 0, 0.1, "relative");
+    map("rho_d_error.png", ScalarMap(RelativeError(material.rho_d, *true_rho_d), 0, 0, 0.1),
+        "relative error of rho_d against the truth (0.1 = 10%)", 0, 0.1, "relative");
   }
   if (truth && truth->montecarlo()) AddSlabMaterials(page, *truth->montecarlo());
   common::FloatImage residual = material.residual;

@@ -87,7 +87,8 @@ TEST_F(ReportPage, NamesTheMaterialsFiguresAndWritesThem) {
 TEST_F(ReportPage, ShowsAnAnalyticTruthsMapsAndNdfsAndRefusesATruthOfAnotherSize) {
   const fs::path truth_folder = SimulatedTruths::TruthFolder("model");
   const std::set<std::string> figures = Report(MaterialFromTruth(*simulate::ReadTruth(truth_folder).parameters()), truth_folder);
-  for (const char* file : {"alpha_truth.png", "alpha_error.png", "rho_d_truth.png", "ndf_0_truth.png", "ndf_11.png"}) {
+  for (const char* file : {"alpha_truth.png", "alpha_error.png", "rho_d_truth.png", "rho_d_error.png", "k_s_error.png",
+                           "ndf_0_truth.png", "ndf_11.png"}) {
     EXPECT_TRUE(figures.count(file)) << file;
   }
   EXPECT_FALSE(figures.count("slab_material_truth.png"));
