@@ -392,6 +392,12 @@ std::vector<fit::QualityWarning> WriteMaterialReport(const MaterialReportOptions
     RequireSameSize(material, options.material_folder, *truth);
   }
   const nlohmann::json compare = options.compare_file.empty() ? nlohmann::json() : ReadCompare(options.compare_file);
+  if (!options.renders_folder.empty() && !fs::is_directory(options.renders_folder)) {
+    common::ThrowInvalidInput(options.renders_folder, "is not a folder", "give --renders the folder of svbtdf render --json summaries");
+  }
+  if (!options.gltf_file.empty() && !fs::is_regular_file(options.gltf_file)) {
+    common::ThrowInvalidInput(options.gltf_file, "is not a file", "give --gltf the .gltf that svbtdf export wrote");
+  }
   std::error_code error;
   fs::create_directories(options.out, error);
   if (error) common::ThrowIoError(options.out.string(), "cannot create: " + error.message());

@@ -123,6 +123,23 @@ TEST_F(ReportPage, ShowsAMonteCarloTruthsRhoDAndSlabMaterials) {
   EXPECT_NE(html.find("frosted"), std::string::npos);  // the slab materials are listed
 }
 
+TEST_F(ReportPage, RefusesMissingRendersOrGltfNamingThemBeforeWritingAnything) {
+  fit::WriteMaterial(dir_ / "material", SmallMaterial());
+  for (const bool renders : {true, false}) {
+    MaterialReportOptions options;
+    options.material_folder = (dir_ / "material").string();
+    options.out = dir_ / "report";
+    (renders ? options.renders_folder : options.gltf_file) = (dir_ / "missing").string();
+    try {
+      WriteMaterialReport(options);
+      ADD_FAILURE() << "a missing " << (renders ? "--renders" : "--gltf") << " was accepted";
+    } catch (const common::Error& e) {
+      EXPECT_EQ(e.subject(), (dir_ / "missing").string());
+    }
+    EXPECT_FALSE(fs::exists(dir_ / "report"));
+  }
+}
+
 TEST_F(ReportPage, RefusesAFolderThatHoldsSomething) {
   Report(SmallMaterial());
   MaterialReportOptions options;
