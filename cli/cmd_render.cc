@@ -104,7 +104,21 @@ void RunRender(RenderCommandOptions options) {
   std::printf("rendered the %s %s (%.4g x %.4g m) in %dx%d at %d spp: %.1f s, %.2f M samples/s -> %s\n",
               surface.description().c_str(), options.material.c_str(), surface.width_m(), surface.height_m(), image.width, image.height, options.render.samples_per_pixel, seconds,
               samples / seconds * 1e-6, options.out.c_str());
-  nlohmann::json metrics = {{"image", options.out}, {"seconds", seconds}, {"samples_per_pixel", options.render.samples_per_pixel}};
+  // What was rendered and how, so that a report can show the image and redraw the same view
+  // (docs/render.md, "The JSON summary").
+  const render::CameraOptions& view = options.render.camera;
+  nlohmann::json metrics = {
+      {"format", "svbtdf-render"}, {"version", 1}, {"image", options.out}, {"png", options.png},
+      {"material", options.material}, {"surface", surface.description()}, {"parametric", options.parametric},
+      {"seconds", seconds}, {"samples_per_pixel", options.render.samples_per_pixel}, {"exposure", options.exposure},
+      {"camera", {{"theta_deg", view.theta_deg}, {"phi_deg", view.phi_deg}, {"distance_m", view.distance_m},
+                  {"fov_deg", view.fov_deg}, {"width", view.width}, {"height", view.height}}},
+      {"scene", {{"scene", options.scene_options.scene}, {"background", options.scene_options.background.string()},
+                 {"environment", options.scene_options.environment.string()},
+                 {"background_distance_m", options.scene_options.background_distance_m},
+                 {"background_width_m", options.scene_options.background_width_m},
+                 {"checker_size_m", options.scene_options.checker_size_m}}},
+      {"sample", {{"width_m", surface.width_m()}, {"height_m", surface.height_m()}}}};
   if (reference) {
     try {
       metrics["relative_rmse"] = render::RelativeRmse(image, *reference);

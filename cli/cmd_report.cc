@@ -35,6 +35,18 @@ void AddReportCommand(CLI::App& app) {
   report->add_option("--truth", options->truth_folder,
                      "ground truth written by 'svbtdf simulate' (OUT/truth, model or montecarlo), shown alongside");
   report->add_option("--compare", options->compare_file, "metrics written by 'svbtdf compare --json', shown as a table");
+  report->add_option("--session", options->session_folder,
+                     "capture session (calibration and images); default: the material's provenance");
+  report->add_option("--store", options->store_folder, "slice store (measured slices); default: the material's provenance");
+  report->add_option("--renders", options->renders_folder, "folder of 'svbtdf render --json' summaries and their PNGs");
+  report->add_option("--gltf", options->gltf_file, "the .gltf of 'svbtdf export', shown live with three.js");
+  report->add_option("--validation", options->validation_page, "the index.html of 'svbtdf validate-model --plots', linked");
+  report->add_option("--inspect-grid", options->inspect_grid, "at most this many clickable texels per side")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
+  report->add_option("--lobe-grid", options->lobe_grid, "the live view's spherical-Gaussian lobes per side")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
   report->add_option("--ndfs", options->max_ndfs, "number of representatives' NDFs to show")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();

@@ -15,6 +15,7 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   blender   # tests/export's Blender check and the demo's Blender picture (docs/export.md)
+  chromium  # tests/report's browser test drives it headless (docs/report.md); WebGL through SwiftShader
   pybind11-dev python3-dev python3-numpy python3-pytest
   clang-14 libclang-rt-14-dev   # scripts/sanitize.sh: AddressSanitizer, UBSan and libFuzzer (docs/testing.md)
 )
@@ -40,13 +41,20 @@ else
   install_packages "${missing[@]}"
 fi
 
-# The Khronos glTF-Validator (tests/export), pinned in tools/gltf/package-lock.json: node from
-# Debian when this machine has none, then `npm ci`, again only when the lock changed.
+# The pinned npm tools, each folder's versions in its package-lock.json: node from Debian when
+# this machine has none, then `npm ci` (and the folder's bundle step, if it has one), again only
+# when the lock changed. tools/gltf: the Khronos glTF-Validator (tests/export). tools/report:
+# three.js bundled into one classic script for the report page, and puppeteer-core for its
+# browser test (never a browser download: it drives Debian's chromium).
 if ! command -v node >/dev/null || ! command -v npm >/dev/null; then install_packages nodejs npm; fi
-GLTF_TOOLS="$(cd "$(dirname "$0")/.." && pwd)/tools/gltf"
-STAMP="$GLTF_TOOLS/node_modules/.svbtdf-package-lock.json"  # the lock that was installed
-if ! cmp -s "$GLTF_TOOLS/package-lock.json" "$STAMP" 2>/dev/null; then
-  echo "svbtdf: installing the pinned glTF-Validator (npm ci in tools/gltf)"
-  (cd "$GLTF_TOOLS" && npm ci --no-audit --no-fund --loglevel=error)
-  cp "$GLTF_TOOLS/package-lock.json" "$STAMP"
-fi
+install_npm_tools() {
+  local folder="$(cd "$(dirname "$0")/.." && pwd)/tools/$1"
+  local stamp="$folder/node_modules/.svbtdf-package-lock.json"  # the lock that was installed
+  if cmp -s "$folder/package-lock.json" "$stamp" 2>/dev/null && { [ -z "${2:-}" ] || [ -e "$folder/$2" ]; }; then return; fi
+  echo "svbtdf: installing the pinned npm tools of tools/$1 (npm ci)"
+  (cd "$folder" && PUPPETEER_SKIP_DOWNLOAD=1 npm ci --no-audit --no-fund --loglevel=error)
+  if [ -n "${2:-}" ]; then (cd "$folder" && npm run --silent bundle >/dev/null); fi
+  cp "$folder/package-lock.json" "$stamp"
+}
+install_npm_tools gltf
+install_npm_tools report dist/three-bundle.js

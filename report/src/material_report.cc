@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cmath>
 #include <optional>
 #include <sstream>
@@ -11,7 +12,10 @@
 #include "svbtdf/common/json.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/fit/material.h"
+#include "svbtdf/fit/slice_store.h"
 #include "svbtdf/report/compare.h"
+#include "svbtdf/report/page_data.h"
+#include "svbtdf/report/texel_inspection.h"
 #include "svbtdf/report/picture.h"
 #include "svbtdf/simulate/truth.h"
 
@@ -39,6 +43,12 @@ std::string EscapeHtml(const std::string& text) {
   return out;
 }
 
+// A map's colour bar: the ramp (or, for RGB maps, black to white) from lo to hi.
+struct ColourBar {
+  std::string lo, hi, unit;
+  bool rgb = false;
+};
+
 // The page being written: HTML accumulated in order, figures written at once beside it.
 class Page {
  public:
@@ -49,16 +59,32 @@ class Page {
     picture.Enlarged(256).WritePng(folder_ / file);
     html_ << "<figure><img src=\"" << file << "\"><figcaption>" << caption << "</figcaption></figure>\n";
   }
+  // A map of the material: clickable (the page shows the slice of the texel under the pointer)
+  // and with its colour bar, from `bar.lo` to `bar.hi` in `bar.unit`.
+  void Map(const std::string& file, const Picture& picture, const std::string& caption, const ColourBar& bar,
+           int texels_x, int texels_y) {
+    picture.Enlarged(256).WritePng(folder_ / file);
+    html_ << "<figure class=\"map\" data-texels=\"" << texels_x << " " << texels_y << "\"><img src=\"" << file
+          << "\"><div class=\"bar " << (bar.rgb ? "bar-rgb" : "bar-ramp") << "\"></div><div class=\"bar-labels\"><span>"
+          << bar.lo << "</span><span>" << bar.unit << "</span><span>" << bar.hi << "</span></div><figcaption>" << caption
+          << "</figcaption></figure>\n";
+  }
   void Raw(const std::string& text) { html_ << text; }
-  void Write(const std::string& title) const {
+  // The page, its stylesheet and scripts named in `scripts` (classic scripts, in order: a file://
+  // page may not import modules or fetch files).
+  void Write(const std::string& title, const std::vector<std::string>& scripts = {}) const {
     std::ostringstream page;
-    page << "<!doctype html><html><head><meta charset=\"utf-8\"><title>" << title << "</title><style>"
+    page << "<!doctype html><html><head><meta charset=\"utf-8\"><title>" << title << "</title>"
+         << (scripts.empty() ? "" : "<link rel=\"stylesheet\" href=\"report.css\">") << "<style>"
          << "body{font-family:sans-serif;max-width:1200px;margin:2em auto}figure{display:inline-block;margin:6px;"
          << "text-align:center}img{image-rendering:pixelated;border:1px solid #ccc}td,th{padding:2px 10px;text-align:left}"
          << "</style></head><body><h1>" << title << "</h1>\n"
-         << html_.str() << "</body></html>\n";
+         << html_.str();
+    for (const std::string& script : scripts) page << "<script src=\"" << script << "\"></script>\n";
+    page << "</body></html>\n";
     common::WriteTextAtomically(folder_ / "index.html", page.str(), /*overwrite=*/false);
   }
+  const fs::path& folder() const { return folder_; }
 
  private:
   fs::path folder_;
@@ -82,35 +108,79 @@ void AddSlabMaterials(Page& page, const simulate::MonteCarloTruth& truth) {
   page.Paragraph(list);
 }
 
-void AddMaps(Page& page, const fit::Material& material, const simulate::Truth* truth) {
+std::string Short(double value) { return FormatNumber(value); }
+
+// |sum of channels - true sum| / true sum per texel (NaN where the truth is 0): one map of an RGB
+// quantity's error.
+common::FloatImage RelativeError(const common::FloatImage& fitted, const common::FloatImage& truth) {
+  common::FloatImage error(fitted.width, fitted.height, 1);
+  for (int y = 0; y < fitted.height; ++y) {
+    for (int x = 0; x < fitted.width; ++x) {
+      double f = 0, t = 0;
+      for (int c = 0; c < fitted.channels; ++c) f += fitted.at(x, y, c), t += truth.at(x, y, c);
+      error.at(x, y) = static_cast<float>(t > 0 ? std::abs(f - t) / t : std::nan(""));
+    }
+  }
+  return error;
+}
+
+void AddMaps(Page& page, const fit::Material& material, const simulate::Truth* truth, const std::string& lobe_error_file) {
   const simulate::MaterialTruth* parameters = truth ? truth->parameters() : nullptr;
-  page.Heading("Maps");
-  page.Paragraph("Colour ramp: dark purple = low, yellow = high; white = not fitted. Ranges in the captions.");
+  const int w = material.width, h = material.height;
+  const auto map = [&](const std::string& file, const Picture& picture, const std::string& caption, double lo, double hi,
+                       const std::string& unit, bool rgb = false) {
+    page.Map(file, picture, caption, {Short(lo), Short(hi), unit, rgb}, w, h);
+  };
+  page.Raw("<section id=\"maps\">");
+  page.Heading("3. Maps");
+  page.Paragraph("Each map with its colour bar (dark purple = low, yellow = high; white = not fitted). Click a texel "
+                 "on any map to see its slice and NDF in section 2.");
   if (truth && !parameters) {
     page.Paragraph("The Monte Carlo truth has no alpha and no NDF; its rho_d and its slab materials are shown.");
   }
-  page.Figure("alpha.png", ScalarMap(material.alpha, 0, 0, 1), "alpha (0 .. 1)");
+  map("alpha.png", ScalarMap(material.alpha, 0, 0, 1), "alpha, the blend between rough entry (1) and rough exit (0)", 0, 1, "unitless");
   if (parameters) {
-    page.Figure("alpha_truth.png", ScalarMap(parameters->alpha, 0, 0, 1), "true alpha (0 .. 1)");
+    map("alpha_truth.png", ScalarMap(parameters->alpha, 0, 0, 1), "true alpha", 0, 1, "unitless");
     common::FloatImage error = material.alpha;
     for (int y = 0; y < error.height; ++y) {
       for (int x = 0; x < error.width; ++x) error.at(x, y) = std::abs(material.alpha.at(x, y) - parameters->alpha.at(x, y));
     }
-    page.Figure("alpha_error.png", ScalarMap(error, 0, 0, 0.1), "|alpha - true alpha| (0 .. 0.1)");
+    map("alpha_error.png", ScalarMap(error, 0, 0, 0.1), "error of alpha against the truth, |alpha - true alpha|", 0, 0.1, "unitless");
   }
   const double shadowing_max = std::max(1e-3, MaxOf(material.shadowing_roughness));
-  page.Figure("shadowing.png", ScalarMap(material.shadowing_roughness, 0, 0, shadowing_max),
-              "shadowing roughness (0 .. " + std::to_string(shadowing_max).substr(0, 5) + ")");
+  map("shadowing.png", ScalarMap(material.shadowing_roughness, 0, 0, shadowing_max),
+      "shadowing roughness (Smith GGX alpha; 0 = no shadowing)", 0, shadowing_max, "GGX alpha");
   const double k_s_max = std::max(1e-3, MaxOf(material.k_s));
-  page.Figure("k_s.png", ColourMap(material.k_s, k_s_max), "k_s (RGB, white = " + std::to_string(k_s_max).substr(0, 5) + ")");
+  map("k_s.png", ColourMap(material.k_s, k_s_max), "k_s, the specular scale per colour channel", 0, k_s_max, "unitless, RGB", true);
+  if (parameters) {
+    map("k_s_error.png", ScalarMap(RelativeError(material.k_s, parameters->k_s), 0, 0, 0.1),
+        "relative error of k_s against the truth (0.1 = 10%)", 0, 0.1, "relative");
+  }
   const std::optional<common::FloatImage> true_rho_d = truth ? std::optional(truth->RhoDMap()) : std::nullopt;
   const double rho_d_max = std::max({1e-4, MaxOf(material.rho_d), true_rho_d ? MaxOf(*true_rho_d) : 0.0});
-  page.Figure("rho_d.png", ColourMap(material.rho_d, rho_d_max), "rho_d (RGB, white = " + std::to_string(rho_d_max).substr(0, 6) + ")");
-  if (true_rho_d) page.Figure("rho_d_truth.png", ColourMap(*true_rho_d, rho_d_max), "true rho_d (same scale)");
+  map("rho_d.png", ColourMap(material.rho_d, rho_d_max), "rho_d, the diffuse transmission", 0, rho_d_max, "1/sr, RGB", true);
+  if (true_rho_d) {
+    map("rho_d_truth.png", ColourMap(*true_rho_d, rho_d_max), "true rho_d (same scale)", 0, rho_d_max, "1/sr, RGB", true);
+    map("rho_d_error.png", ScalarMap(RelativeError(material.rho_d, *true_rho_d), 0, 0, 0.1),
+        "relative error of rho_d against the truth (0.1 = 10%)", 0, 0.1, "relative");
+  }
   if (truth && truth->montecarlo()) AddSlabMaterials(page, *truth->montecarlo());
   common::FloatImage residual = material.residual;
   for (float& r : residual.pixels) r = r < 0 ? std::nanf("") : r;
-  page.Figure("residual.png", ScalarMap(residual, 0, 0, 0.2), "representatives' fit residual, relative RMSE (0 .. 0.2)");
+  map("residual.png", ScalarMap(residual, 0, 0, 0.2), "fit residual: relative RMSE of the texel's own samples (0.2 = 20%)", 0, 0.2, "relative");
+  const double clusters = std::max(1.0, MaxOf(material.cluster));
+  map("cluster.png", ScalarMap(material.cluster, 0, 0, clusters), "cluster: the representative each texel belongs to", 0, clusters, "index");
+  if (!lobe_error_file.empty()) {
+    const common::FloatImage lobe_error = common::ReadFloatImage(lobe_error_file);
+    if (lobe_error.width != w || lobe_error.height != h) {
+      common::ThrowInvalidInput(lobe_error_file, "is " + std::to_string(lobe_error.width) + "x" + std::to_string(lobe_error.height) +
+                                                     " texels, the material " + std::to_string(w) + "x" + std::to_string(h),
+                                "give --gltf the export of this material");
+    }
+    map("lobe_error.png", ScalarMap(lobe_error, 0, 0, 0.5),
+        "the glTF export's parametric loss: relative L2 between each texel's NDF and its GGX lobe (0.5 = 50%)", 0, 0.5, "relative");
+  }
+  page.Raw("</section>\n");
 }
 
 void AddNdfs(Page& page, const fit::Material& material, const simulate::MaterialTruth* parameters, int max_ndfs) {
@@ -157,23 +227,163 @@ std::vector<fit::QualityWarning> AddQuality(Page& page, const fit::Material& mat
   return warnings;
 }
 
-void AddCompare(Page& page, const std::string& compare_file) {
+nlohmann::json ReadCompare(const std::string& compare_file) {
   const nlohmann::json metrics = common::ReadJsonFile(compare_file);
   if (!metrics.is_object() || !metrics.contains("texels_compared") || !metrics.contains("heldout_rel_rmse")) {
     common::ThrowFormatError(compare_file, "is not the output of 'svbtdf compare --json'",
                              "give --compare the file written by svbtdf compare MATERIAL TRUTH --json FILE");
   }
-  page.Heading("Against the ground truth");
-  std::string table = "<table>";
-  for (const auto& [key, value] : metrics.items()) table += "<tr><th>" + key + "</th><td>" + value.dump() + "</td></tr>";
+  return metrics;
+}
+
+void AddNumbers(Page& page, const nlohmann::json& compare, const nlohmann::json& lobes) {
+  page.Raw("<section id=\"numbers\">");
+  page.Heading("4. Numbers");
+  std::string table = "<table class=\"metrics\"><tr><th>what</th><th>value</th><th>target</th><th>met</th></tr>";
+  const auto row = [&](const std::string& name, const std::string& text, const std::string& target, int met) {
+    const char* verdict = met == 1 ? "<td class=\"met\">yes</td>" : met == 0 ? "<td class=\"missed\">no</td>" : "<td></td>";
+    table += "<tr><td>" + EscapeHtml(name) + "</td><td>" + text + "</td><td>" + EscapeHtml(target) + "</td>" + verdict + "</tr>";
+  };
+  for (const ReadableMetric& m : ReadableMetrics(compare)) row(m.name, m.text, m.target, m.met);
+  if (!lobes.is_null()) {
+    row("the live view's spherical Gaussians against the fitted lobes (median relative L2)",
+        FormatPercent(lobes["fit_relative_l2_median"].get<double>()), "", -1);
+  }
   page.Raw(table + "</table>\n");
+  if (compare.is_null()) page.Paragraph("No comparison with a truth was given (<code>--compare</code>).");
+  page.Raw("</section>\n");
+}
+
+// The first page section: the live views (filled by report.js) and the renders beside them.
+void AddLiveSection(Page& page, const nlohmann::json& renders, bool has_gltf) {
+  page.Raw("<section id=\"live\">");
+  page.Heading("1. The material, live");
+  if (!has_gltf) page.Paragraph("No glTF export was given (<code>--gltf</code>): the glTF view is off.");
+  page.Raw(std::string("<div class=\"live\"><div class=\"viewer\"><div class=\"tabs\">") +
+           (has_gltf ? "<button data-mode=\"gltf\">glTF export (three.js)</button>" : "") +
+           "<button data-mode=\"sg\">full material (spherical Gaussians)</button> <label>light: <select id=\"light\">"
+           "<option value=\"checker\">checkerboard behind</option><option value=\"room\">room environment</option>"
+           "</select></label></div><canvas id=\"viewer\" width=\"512\" height=\"512\"></canvas>"
+           "<p id=\"viewer-status\"></p><p id=\"sg-difference\"></p></div>\n<div class=\"renders\">");
+  if (renders.empty()) page.Paragraph("No renders were given (<code>--renders</code>).");
+  std::string table = "<table class=\"renders\"><tr><th>view (theta, phi)</th><th>what</th><th>image</th><th>error against its reference</th></tr>";
+  for (const auto& r : renders) {
+    const nlohmann::json& camera = r["camera"];
+    const std::string view = FormatNumber(camera.value("theta_deg", 0.0)) + "&deg;, " + FormatNumber(camera.value("phi_deg", 0.0)) + "&deg;";
+    std::string error = "(the reference)";
+    if (r.contains("relative_rmse")) {
+      error = "relative RMSE " + FormatPercent(r["relative_rmse"].get<double>()) + ", SSIM " + FormatNumber(r["ssim"].get<double>()) +
+              "<br><small>against " + EscapeHtml(fs::path(r.value("reference", "")).filename().string()) + "</small>";
+    }
+    const std::string image = r.contains("shown_png") ? "<img src=\"" + r["shown_png"].get<std::string>() + "\">" : "(no PNG)";
+    table += "<tr><td>" + view + "</td><td>" + EscapeHtml(r.value("surface", "")) + (r.value("parametric", false) ? " (GGX lobes)" : "") +
+             "<br><small>" + EscapeHtml(r.value("material", "")) + ", " + std::to_string(r.value("samples_per_pixel", 0)) +
+             " spp</small></td><td>" + image + "</td><td>" + error + "</td></tr>";
+  }
+  if (!renders.empty()) page.Raw(table + "</table>");
+  page.Raw("</div></div></section>\n");
+}
+
+void AddInspector(Page& page, bool has_store) {
+  page.Raw("<section id=\"inspect\">");
+  page.Heading("2. Measured against fitted at a texel");
+  page.Paragraph(std::string("Click a texel on any map below. Left: the texel's samples over the light directions (where each "
+                             "dot's light came from, seen from above), measured and fitted on one colour scale; held-out dots "
+                             "ringed. Middle: fitted against measured, one point per dot. Right: the texel's NDF, fitted and true.") +
+                 (has_store ? "" : " <b>The slice store was not found: only the fitted side is shown.</b>"));
+  page.Raw("<div id=\"inspector\"><p id=\"inspect-title\">No texel chosen yet.</p>"
+           "<canvas id=\"slice-measured\" width=\"260\" height=\"290\"></canvas>"
+           "<canvas id=\"slice-fitted\" width=\"260\" height=\"290\"></canvas>"
+           "<canvas id=\"slice-scatter\" width=\"290\" height=\"290\"></canvas>"
+           "<canvas id=\"ndf-fitted\" width=\"150\" height=\"170\"></canvas>"
+           "<canvas id=\"ndf-truth\" width=\"150\" height=\"170\"></canvas></div></section>\n");
+}
+
+void AddCalibration(Page& page, const nlohmann::json& calibration, const nlohmann::json& capture) {
+  page.Raw("<section id=\"calibration\">");
+  page.Heading("5. The calibration and the capture");
+  if (calibration.is_null()) {
+    page.Paragraph("The capture session was not found (<code>--session</code>, or the material's provenance): no calibration shown.");
+    page.Raw("</section>\n");
+    return;
+  }
+  const nlohmann::json& camera = calibration["camera"];
+  const nlohmann::json& centre = calibration["sample_plane"]["camera_centre_m"];
+  std::string centre_text = "n/a";
+  if (centre.size() == 3) {
+    centre_text = "(" + FormatNumber(1000 * centre[0].get<double>()) + ", " + FormatNumber(1000 * centre[1].get<double>()) + ", " +
+                  FormatNumber(1000 * centre[2].get<double>()) + ") mm";
+  }
+  std::string table = "<table class=\"metrics\">";
+  const auto row = [&](const std::string& what, const std::string& value) { table += "<tr><td>" + what + "</td><td>" + value + "</td></tr>"; };
+  row("lens model", EscapeHtml(camera["lens_model"].get<std::string>()) + ": " + EscapeHtml(camera["lens_model_because"].get<std::string>()));
+  row("focal length", FormatNumber(camera["fx"].get<double>(), "px") + " x " + FormatNumber(camera["fy"].get<double>(), "px"));
+  row("principal point", "(" + FormatNumber(camera["cx"].get<double>()) + ", " + FormatNumber(camera["cy"].get<double>()) + ") px");
+  row("reprojection error over the used board views (RMS)", FormatNumber(camera["rms_px"].get<double>(), "px"));
+  row("reprojection error of the board in the sample holder (RMS)", FormatNumber(calibration["sample_plane"]["rms_px"].get<double>(), "px"));
+  row("camera centre in the sample frame", centre_text);
+  row("dots' residuals on the monitor plane", "RMS " + FormatNumber(calibration["monitor"]["residual_rms_mm"].get<double>(), "mm") +
+                                                  ", worst " + FormatNumber(calibration["monitor"]["residual_max_mm"].get<double>(), "mm") +
+                                                  " (target: worst below 0.2 mm)");
+  row("monitor orientation", FormatNumber(calibration["monitor"]["orientation_deg"].get<double>(), "degrees"));
+  page.Raw(table + "</table>\n");
+  page.Raw("<div class=\"plots\"><canvas id=\"plot-views\" width=\"420\" height=\"260\"></canvas>"
+           "<canvas id=\"plot-dots\" width=\"420\" height=\"260\"></canvas></div>\n");
+  if (!capture.is_null()) {
+    std::string brackets = "<table class=\"metrics\"><tr><th>exposure bracket</th><th>exposure</th><th>dot images checked</th><th>saturated pixels</th></tr>";
+    int e = 0;
+    for (const auto& b : capture["brackets"]) {
+      brackets += "<tr><td>" + std::to_string(e++) + "</td><td>" + FormatNumber(b["exposure_s"].get<double>(), "s") + "</td><td>" +
+                  std::to_string(b["images_checked"].get<int>()) + "</td><td>" + FormatPercent(b["saturated_fraction"].get<double>()) + "</td></tr>";
+    }
+    page.Raw(brackets + "</table>\n<p class=\"thumbnails\">");
+    for (const auto& t : capture["thumbnails"]) {
+      page.Raw("<figure><img src=\"" + t["file"].get<std::string>() + "\"><figcaption>" + EscapeHtml(t["caption"].get<std::string>()) +
+               "<br>saturated: " + FormatPercent(t["saturated_fraction"].get<double>()) + "</figcaption></figure>");
+    }
+    page.Raw("</p>\n");
+  }
+  page.Raw("</section>\n");
+}
+
+void AddDoubts(Page& page, const std::vector<std::string>& doubts) {
+  if (doubts.empty()) return;
+  std::string html = "<div class=\"doubts\"><h2>Doubtful in this capture (" + std::to_string(doubts.size()) + ")</h2><ul>";
+  for (const std::string& d : doubts) html += "<li>" + EscapeHtml(d) + "</li>";
+  page.Raw(html + "</ul></div>\n");
+}
+
+// A generated data script: `window.NAME = VALUE;` (the page reads no file itself).
+void WriteDataScript(const fs::path& file, const std::string& name, const std::string& value) {
+  common::WriteTextAtomically(file, "window." + name + " = " + value + ";\n", /*overwrite=*/false);
+}
+
+fs::path FromProvenance(const fit::Material& material, const std::string& given, const char* key) {
+  if (!given.empty()) return given;
+  if (material.provenance.contains(key) && material.provenance[key].is_string()) return material.provenance[key].get<std::string>();
+  return {};
 }
 
 }  // namespace
 
+std::vector<fs::path> ReportAssetFiles(const fs::path& assets) {
+  if (!assets.empty()) return {assets / "three-bundle.js", assets / "report.js", assets / "report.css"};
+  if (const char* folder = std::getenv("SVBTDF_REPORT_ASSETS")) return ReportAssetFiles(fs::path(folder));
+  const fs::path source(SVBTDF_SOURCE_DIR);
+  return {source / "tools" / "report" / "dist" / "three-bundle.js", source / "report" / "assets" / "report.js",
+          source / "report" / "assets" / "report.css"};
+}
+
 std::vector<fit::QualityWarning> WriteMaterialReport(const MaterialReportOptions& options) {
   if (fs::exists(options.out) && !fs::is_empty(options.out)) {
     common::ThrowInvalidInput(options.out.string(), "is not empty", "report writes into a new folder; choose another --out");
+  }
+  const std::vector<fs::path> assets = ReportAssetFiles(options.assets);
+  for (const fs::path& asset : assets) {
+    if (!fs::is_regular_file(asset)) {
+      common::ThrowIoError(asset.string(), "is missing: the report page needs it",
+                           "run scripts/install-deps.sh (it bundles three.js into tools/report/dist), or set SVBTDF_REPORT_ASSETS");
+    }
   }
   const fit::Material material = fit::ReadMaterial(options.material_folder);
   std::optional<simulate::Truth> truth;
@@ -181,21 +391,105 @@ std::vector<fit::QualityWarning> WriteMaterialReport(const MaterialReportOptions
     truth.emplace(simulate::ReadTruth(options.truth_folder));
     RequireSameSize(material, options.material_folder, *truth);
   }
+  const nlohmann::json compare = options.compare_file.empty() ? nlohmann::json() : ReadCompare(options.compare_file);
+  if (!options.renders_folder.empty() && !fs::is_directory(options.renders_folder)) {
+    common::ThrowInvalidInput(options.renders_folder, "is not a folder", "give --renders the folder of svbtdf render --json summaries");
+  }
+  if (!options.gltf_file.empty() && !fs::is_regular_file(options.gltf_file)) {
+    common::ThrowInvalidInput(options.gltf_file, "is not a file", "give --gltf the .gltf that svbtdf export wrote");
+  }
   std::error_code error;
   fs::create_directories(options.out, error);
   if (error) common::ThrowIoError(options.out.string(), "cannot create: " + error.message());
+  for (const fs::path& asset : assets) fs::copy_file(asset, options.out / asset.filename());
   Page page(options.out);
   const std::vector<fit::QualityWarning> warnings = AddQuality(page, material, options.material_folder);
+
+  // What the capture says (section 5), first, so that its doubts head the page.
+  std::vector<std::string> doubts;
+  const fs::path session = FromProvenance(material, options.session_folder, "session");
+  nlohmann::json calibration, capture;
+  if (!session.empty() && fs::is_regular_file(session / "calibration.json")) {
+    calibration = CalibrationSummary(session, &doubts);
+    capture = CaptureSummary(session, options.out, calibration["saturation_dn"].get<double>(), &doubts);
+  } else if (!options.session_folder.empty()) {
+    common::ThrowInvalidInput(options.session_folder, "has no calibration.json", "give --session a calibrated capture session");
+  }
+  const fs::path store_folder = FromProvenance(material, options.store_folder, "processed");
+  std::optional<fit::SliceStore> store;
+  if (!store_folder.empty() && fs::is_regular_file(store_folder / "processed.json")) {
+    store.emplace(fit::SliceStore::Open(store_folder));
+    if (store->geometry().texels_x != material.width || store->geometry().texels_y != material.height) {
+      common::ThrowInvalidInput(store_folder.string(), "is not the slice store of this material (another texel grid)");
+    }
+  } else if (!options.store_folder.empty()) {
+    common::ThrowInvalidInput(options.store_folder, "is not a slice store (no processed.json)");
+  }
+  const int masked = [&] {
+    int n = 0;
+    for (float r : material.residual.pixels) n += r < 0;
+    return n;
+  }();
+  if (masked > 0) doubts.push_back(std::to_string(masked) + " texels were not fitted (masked: too few valid samples)");
+  AddDoubts(page, doubts);
   page.Paragraph("Material <code>" + options.material_folder + "</code>: " + std::to_string(material.width) + " x " +
-                 std::to_string(material.height) + " texels, eta " + std::to_string(material.eta).substr(0, 5) + ", " +
+                 std::to_string(material.height) + " texels, eta " + FormatNumber(material.eta) + ", " +
                  std::to_string(material.representative_texels.size()) + " representatives, NDF hemicube " +
                  std::to_string(material.ndf_resolution) + ".");
-  if (!options.compare_file.empty()) AddCompare(page, options.compare_file);
+
+  // Section 1: the live views and the renders.
+  const nlohmann::json renders = options.renders_folder.empty() ? nlohmann::json::array()
+                                                                 : RenderSummaries(options.renders_folder, options.out);
+  std::string lobe_error_file;
+  if (!options.gltf_file.empty()) {
+    WriteDataScript(options.out / "report-gltf.js", "SVBTDF_GLTF", nlohmann::json(EmbeddedGltf(options.gltf_file)).dump());
+    const fs::path gltf(options.gltf_file);
+    const fs::path lobe_error = gltf.parent_path() / (gltf.stem().string() + "_lobe_error.exr");
+    if (fs::is_regular_file(lobe_error)) lobe_error_file = lobe_error.string();
+  }
+  AddLiveSection(page, renders, !options.gltf_file.empty());
+  const nlohmann::json lobes = LobeData(material, MakeTexelGrid(material.width, material.height, options.lobe_grid), options.threads);
+
+  // Section 2: the inspector, whose data covers a grid of texels.
+  AddInspector(page, store.has_value());
+  const simulate::MaterialTruth* parameters = truth ? truth->parameters() : nullptr;
+  const int dots = store ? static_cast<int>(store->geometry().dots.size()) : 0;
+  const int side = InspectionGridSide(material.width, material.height, dots, options.inspect_grid, options.inspect_budget);
+  std::vector<int> held_out;
+  if (material.provenance.contains("holdout")) held_out = material.provenance["holdout"].value("dots", std::vector<int>{});
+  const nlohmann::json inspection = InspectionData(material, store ? &*store : nullptr, parameters, held_out,
+                                                   MakeTexelGrid(material.width, material.height, side), options.threads);
+
   const simulate::Truth* shown_truth = truth ? &*truth : nullptr;
-  AddMaps(page, material, shown_truth);
+  AddMaps(page, material, shown_truth, lobe_error_file);
+  AddNumbers(page, compare, lobes);
+  AddCalibration(page, calibration, capture);
   AddNdfs(page, material, shown_truth ? shown_truth->parameters() : nullptr, options.max_ndfs);
-  page.Raw("<h2>Provenance</h2><pre>" + material.provenance.dump(2) + "</pre>\n");
-  page.Write("svbtdf material report");
+  page.Raw("<section id=\"validation\">");
+  page.Heading("6. The model against Monte Carlo");
+  if (options.validation_page.empty()) {
+    page.Paragraph("Not given (<code>--validation</code>, the page of <code>svbtdf validate-model --plots DIR</code>).");
+  } else {
+    const fs::path link = fs::relative(fs::absolute(options.validation_page), fs::absolute(options.out));
+    page.Paragraph("The dual-microfacet model against a Monte Carlo slab, with plane-of-incidence plots: <a href=\"" +
+                   EscapeHtml(link.string()) + "\">" + EscapeHtml(link.string()) + "</a> (docs/validation.md explains the cases).");
+  }
+  page.Raw("</section>\n");
+  page.Raw("<h2>Provenance</h2><pre>" + EscapeHtml(material.provenance.dump(2)) + "</pre>\n");
+
+  const nlohmann::json data = {{"format", "svbtdf-report-data"}, {"version", 1},
+                               {"material", {{"folder", options.material_folder}, {"width", material.width}, {"height", material.height},
+                                             {"width_m", material.width_m}, {"height_m", material.height_m}, {"eta", material.eta}}},
+                               {"metrics", ToJson(ReadableMetrics(compare.is_null() ? nlohmann::json::object() : compare))},
+                               {"renders", renders}, {"calibration", calibration}, {"capture", capture},
+                               {"doubts", doubts}, {"has_gltf", !options.gltf_file.empty()}};
+  WriteDataScript(options.out / "report-data.js", "SVBTDF_REPORT", data.dump());
+  WriteDataScript(options.out / "report-texels.js", "SVBTDF_TEXELS", inspection.dump());
+  WriteDataScript(options.out / "report-lobes.js", "SVBTDF_LOBES", lobes.dump());
+  std::vector<std::string> scripts = {"three-bundle.js", "report-data.js", "report-texels.js", "report-lobes.js"};
+  if (!options.gltf_file.empty()) scripts.push_back("report-gltf.js");
+  scripts.push_back("report.js");
+  page.Write("svbtdf material report", scripts);
   return warnings;
 }
 

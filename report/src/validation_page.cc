@@ -151,7 +151,10 @@ void WriteHtml(const std::vector<simulate::ValidationCase>& cases, const Validat
        << "<style>body{font-family:sans-serif;max-width:1400px;margin:auto}"
        << "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}"
        << ".swatch{display:inline-block;width:24px;height:4px;vertical-align:middle;margin-right:6px}"
-       << "figure{display:inline-block;margin:6px}</style></head><body>\n"
+       << "figure{display:inline-block;margin:6px}"
+       << ".plot{display:inline-grid;grid-template-columns:22px auto}.plot .y{writing-mode:vertical-rl;"
+       << "transform:rotate(180deg);text-align:center;font-size:13px}.plot .x,.plot figcaption{grid-column:2;"
+       << "text-align:center;font-size:13px}</style></head><body>\n"
        << "<h1>Dual-microfacet model vs Monte Carlo slab</h1>\n<p>NDF " << settings.ndf << ", roughness "
        << settings.roughness << ", eta " << settings.eta << ", " << settings.samples << " paths per case, seed "
        << settings.seed << ", hemicube resolution " << settings.resolution
@@ -174,7 +177,10 @@ void WriteHtml(const std::vector<simulate::ValidationCase>& cases, const Validat
   }
   html << "<span class=\"swatch\" style=\"background:#000\"></span>Monte Carlo &plusmn; 2 standard errors</p>\n";
   for (const simulate::ValidationCase& c : cases) {
-    html << "<figure><img src=\"" << PlotName(c) << "\" width=\"480\"><figcaption>" << ToString(c.rough_sides)
+    // The raster carries only digits: the axes' names are the page's.
+    html << "<figure class=\"plot\"><div class=\"y\">rho, averaged beside the plane (1/sr)</div><img src=\""
+         << PlotName(c) << "\" width=\"480\"><div class=\"x\">signed angle of the light from -z (degrees)</div><figcaption>"
+         << ToString(c.rough_sides)
          << " rough, " << c.incidence_deg << "&deg;, best alpha " << Fixed(c.best_alpha, 2)
          << "</figcaption></figure>\n";
   }

@@ -44,6 +44,11 @@ class ReportPage : public ::testing::Test {
     for (auto it = std::sregex_iterator(html.begin(), html.end(), image); it != std::sregex_iterator(); ++it) {
       figures.insert((*it)[1]);
     }
+    // The page's scripts and stylesheet count as files it names (the interactive parts, docs/report.md).
+    const std::regex script("<(?:script src|link rel=\"stylesheet\" href)=\"([^\"]+)\"");
+    for (auto it = std::sregex_iterator(html.begin(), html.end(), script); it != std::sregex_iterator(); ++it) {
+      figures.insert((*it)[1]);
+    }
     return figures;
   }
 
@@ -64,7 +69,8 @@ class ReportPage : public ::testing::Test {
 
 TEST_F(ReportPage, NamesTheMaterialsFiguresAndWritesThem) {
   const std::set<std::string> figures = Report(SmallMaterial());
-  for (const char* file : {"alpha.png", "shadowing.png", "k_s.png", "rho_d.png", "residual.png", "ndf_0.png"}) {
+  for (const char* file : {"alpha.png", "shadowing.png", "k_s.png", "rho_d.png", "residual.png", "cluster.png", "ndf_0.png",
+                           "three-bundle.js", "report.js", "report.css", "report-data.js", "report-texels.js", "report-lobes.js"}) {
     EXPECT_TRUE(figures.count(file)) << file;
   }
   EXPECT_FALSE(figures.count("alpha_truth.png"));
@@ -81,7 +87,8 @@ TEST_F(ReportPage, NamesTheMaterialsFiguresAndWritesThem) {
 TEST_F(ReportPage, ShowsAnAnalyticTruthsMapsAndNdfsAndRefusesATruthOfAnotherSize) {
   const fs::path truth_folder = SimulatedTruths::TruthFolder("model");
   const std::set<std::string> figures = Report(MaterialFromTruth(*simulate::ReadTruth(truth_folder).parameters()), truth_folder);
-  for (const char* file : {"alpha_truth.png", "alpha_error.png", "rho_d_truth.png", "ndf_0_truth.png", "ndf_11.png"}) {
+  for (const char* file : {"alpha_truth.png", "alpha_error.png", "rho_d_truth.png", "rho_d_error.png", "k_s_error.png",
+                           "ndf_0_truth.png", "ndf_11.png"}) {
     EXPECT_TRUE(figures.count(file)) << file;
   }
   EXPECT_FALSE(figures.count("slab_material_truth.png"));
@@ -114,6 +121,23 @@ TEST_F(ReportPage, ShowsAMonteCarloTruthsRhoDAndSlabMaterials) {
   const std::string html = common::ReadTextFile(dir_ / "report" / "index.html");
   EXPECT_NE(html.find("Monte Carlo truth has no alpha"), std::string::npos);
   EXPECT_NE(html.find("frosted"), std::string::npos);  // the slab materials are listed
+}
+
+TEST_F(ReportPage, RefusesMissingRendersOrGltfNamingThemBeforeWritingAnything) {
+  fit::WriteMaterial(dir_ / "material", SmallMaterial());
+  for (const bool renders : {true, false}) {
+    MaterialReportOptions options;
+    options.material_folder = (dir_ / "material").string();
+    options.out = dir_ / "report";
+    (renders ? options.renders_folder : options.gltf_file) = (dir_ / "missing").string();
+    try {
+      WriteMaterialReport(options);
+      ADD_FAILURE() << "a missing " << (renders ? "--renders" : "--gltf") << " was accepted";
+    } catch (const common::Error& e) {
+      EXPECT_EQ(e.subject(), (dir_ / "missing").string());
+    }
+    EXPECT_FALSE(fs::exists(dir_ / "report"));
+  }
 }
 
 TEST_F(ReportPage, RefusesAFolderThatHoldsSomething) {
