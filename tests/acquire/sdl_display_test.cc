@@ -96,7 +96,19 @@ class XvfbServer {
     }
     return std::nullopt;
   }
+  // Xvfb can fail to start ("Cannot write display number to fd N" was seen once in CI, with
+  // other tests starting beside it): a few attempts, each a fresh server.
   XvfbServer(const std::string& binary, int width, int height) {
+    for (int attempt = 0; attempt < 3 && display_.empty(); ++attempt) {
+      Stop();
+      Start(binary, width, height);
+    }
+  }
+  ~XvfbServer() { Stop(); }
+  const std::string& display() const { return display_; }
+
+ private:
+  void Start(const std::string& binary, int width, int height) {
     int fds[2];
     if (::pipe(fds) != 0) return;
     pid_ = ::fork();
@@ -116,15 +128,14 @@ class XvfbServer {
     }
     ::close(fds[0]);
   }
-  ~XvfbServer() {
+  void Stop() {
     if (pid_ > 0) {
       ::kill(pid_, SIGTERM);
       ::waitpid(pid_, nullptr, 0);
     }
+    pid_ = -1;
   }
-  const std::string& display() const { return display_; }
 
- private:
   pid_t pid_ = -1;
   std::string display_;
 };
