@@ -157,12 +157,8 @@ Pattern DotPattern(const CapturePlan& plan, size_t q) {
 }  // namespace
 
 CapturePlan ParseCapturePlan(const std::string& text, const std::string& source) {
-  const json root = common::ParseJson(text, source);
-  try {
-    return ParsePlanJson(root, source);
-  } catch (const json::exception& e) {  // a value of an unexpected type deep inside
-    common::ThrowFormatError(source, std::string("is malformed: ") + e.what(), "see docs/capture.md for the plan format");
-  }
+  return common::ParseJsonWith(text, source, "see docs/capture.md for the plan format",
+                               [&](const json& root) { return ParsePlanJson(root, source); });
 }
 
 CapturePlan ReadCapturePlan(const std::filesystem::path& path) {

@@ -18,7 +18,21 @@ namespace {
                            : hint);
 }
 
+// SDL probes its drivers in turn, and its Wayland probe makes libwayland print "XDG_RUNTIME_DIR
+// is invalid or not set" on stderr wherever there is no Wayland session (a console, ssh, CI).
+// Where no Wayland socket can be found, ask for the drivers that can work instead; the user's
+// SDL_VIDEODRIVER, an environment variable, outranks this default-priority hint.
+void SkipWaylandWithoutASession() {
+  const char* wayland_display = SDL_getenv("WAYLAND_DISPLAY");
+  const bool absolute_socket = wayland_display && wayland_display[0] == '/';
+  const char* runtime_dir = SDL_getenv("XDG_RUNTIME_DIR");
+  if (absolute_socket || (runtime_dir && runtime_dir[0] != '\0')) return;
+  const char* x11_display = SDL_getenv("DISPLAY");
+  SDL_SetHintWithPriority(SDL_HINT_VIDEODRIVER, x11_display && x11_display[0] ? "x11" : "kmsdrm", SDL_HINT_DEFAULT);
+}
+
 void InitVideo(const std::string& subject) {
+  SkipWaylandWithoutASession();
   if (SDL_InitSubSystem(SDL_INIT_VIDEO) != 0) {
     ThrowSdl(subject, "SDL_InitSubSystem(video)",
              "no display server or DRM device; run inside X11/Wayland, on a console with "

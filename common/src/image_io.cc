@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 namespace {
 
 std::unique_ptr<OIIO::ImageInput> OpenForReading(const fs::path& path) {
-  if (!fs::exists(path)) ThrowIoError(path.string(), "does not exist");
+  RequireExistingFile(path);
   auto input = OIIO::ImageInput::open(path.string());
   if (!input) {
     ThrowFormatError(path.string(), "cannot be decoded as an image: " + OIIO::geterror(),

@@ -106,6 +106,13 @@ bool ReadPixels(const PngReadState& state, PngErrorState* errors, png_uint_32 he
 
 }  // namespace
 
+void RequireExistingFile(const std::filesystem::path& path) {
+  std::error_code error;
+  const bool exists = std::filesystem::exists(path, error);
+  if (error) ThrowIoError(path.string(), "cannot be read: " + error.message());
+  if (!exists) ThrowIoError(path.string(), "does not exist");
+}
+
 void RequireSaneImageSize(const std::filesystem::path& path, int64_t width, int64_t height, int channels) {
   // A header is a claim, not a fact: a few damaged bytes can claim 60000 x 60000 pixels, which
   // would end in "out of memory" without naming the file.
@@ -118,8 +125,7 @@ void RequireSaneImageSize(const std::filesystem::path& path, int64_t width, int6
 }
 
 CameraImage ReadPngCameraImage(const std::filesystem::path& path) {
-  std::error_code error;
-  if (!std::filesystem::exists(path, error)) ThrowIoError(path.string(), "does not exist");
+  RequireExistingFile(path);
   std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "rb"));
   if (!file) ThrowIoError(path.string(), std::string("cannot be opened: ") + std::strerror(errno));
   unsigned char signature[8] = {};

@@ -12,6 +12,10 @@ namespace svbtdf::common {
 // Throws svbtdf::Error (kIo, kFormat) naming the file; values as ReadCameraImage documents.
 CameraImage ReadPngCameraImage(const std::filesystem::path& path);
 
+// The one check that an image file is there, for every image reader: "does not exist", or what
+// stat said (a symlink loop, a folder without search permission), naming the file.
+void RequireExistingFile(const std::filesystem::path& path);
+
 // The one bound on what a header may claim (2^30 samples), for every image reader.
 void RequireSaneImageSize(const std::filesystem::path& path, int64_t width, int64_t height, int channels);
 

@@ -130,12 +130,8 @@ RigFile RigFileOfPreset(const std::string& preset) {
 }
 
 RigFile ParseRigFile(const std::string& text, const std::string& source) {
-  const json root = common::ParseJson(text, source);
-  try {
-    return ParseRigJson(root, source);
-  } catch (const json::exception& e) {  // a value of an unexpected type deep inside
-    common::ThrowFormatError(source, std::string("is malformed: ") + e.what(), "see docs/capture.md for the rig file");
-  }
+  return common::ParseJsonWith(text, source, "see docs/capture.md for the rig file",
+                               [&](const json& root) { return ParseRigJson(root, source); });
 }
 
 RigFile ReadRigFile(const std::filesystem::path& path) { return ParseRigFile(common::ReadTextFile(path), path.string()); }

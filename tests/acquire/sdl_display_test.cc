@@ -96,8 +96,8 @@ class XvfbServer {
     }
     return std::nullopt;
   }
-  // Xvfb can fail to start ("Cannot write display number to fd N" was seen once in CI, with
-  // other tests starting beside it): a few attempts, each a fresh server.
+  // A server that does not start (a display number taken between Xvfb's check and its bind)
+  // gets a few attempts, each a fresh server.
   XvfbServer(const std::string& binary, int width, int height) {
     for (int attempt = 0; attempt < 3 && display_.empty(); ++attempt) {
       Stop();
@@ -121,11 +121,15 @@ class XvfbServer {
       ::_exit(127);
     }
     ::close(fds[1]);
+    // Xvfb writes the number and then, separately, a newline, and dies ("Cannot write display
+    // number to fd N") if the pipe is closed in between: read up to the newline before closing.
+    std::string number;
     pollfd ready{fds[0], POLLIN, 0};
-    char number[16] = {};
-    if (::poll(&ready, 1, 15000) == 1 && ::read(fds[0], number, sizeof number - 1) > 0) {
-      display_ = ":" + std::to_string(std::atoi(number));
+    char c = 0;
+    while (number.size() < 16 && ::poll(&ready, 1, 15000) == 1 && ::read(fds[0], &c, 1) == 1 && c != '\n') {
+      number += c;
     }
+    if (c == '\n' && !number.empty()) display_ = ":" + number;
     ::close(fds[0]);
   }
   void Stop() {

@@ -84,6 +84,22 @@ TEST_F(ImageIo, BrokenFilesGetErrorsNamingThem) {
   ExpectErrorNaming([&] { ReadCameraImage(dir_ / "map.exr"); }, dir_ / "map.exr");
 }
 
+// A symlink loop in place of an image: stat fails with ELOOP, which must be said as what it is
+// (and not thrown as std::filesystem_error, an "internal error" naming nothing), by both readers.
+TEST_F(ImageIo, ASymlinkLoopIsReportedAsOneLineNamingIt) {
+  for (const char* name : {"loop.png", "loop.exr"}) {
+    const fs::path loop = dir_ / name;
+    fs::create_symlink(loop, loop);
+    const auto read = [&] { std::string(name).ends_with(".png") ? (void)ReadCameraImage(loop) : (void)ReadFloatImage(loop); };
+    ExpectErrorNaming(read, loop);
+    try {
+      read();
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("symbolic links"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST_F(ImageIo, EightBitPngsReadWithoutRescaling) {
   std::vector<uint8_t> rgb;
   for (int k = 0; k < 5 * 4 * 3; ++k) rgb.push_back(static_cast<uint8_t>(k * 13));

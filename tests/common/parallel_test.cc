@@ -45,7 +45,11 @@ TEST(ThreadCount, RefusesAbsurdRequestsNamingTheOption) {
 class ParallelForCoverage : public ::testing::TestWithParam<std::tuple<int64_t, int, int64_t>> {};
 
 TEST_P(ParallelForCoverage, VisitsEveryIndexExactlyOnceInChunksOfAtMostChunk) {
-  const auto [n, threads, chunk] = GetParam();
+  // Named copies, not a structured binding: Clang 14 (the checked build) cannot capture
+  // structured bindings in a lambda.
+  const int64_t n = std::get<0>(GetParam());
+  const int threads = std::get<1>(GetParam());
+  const int64_t chunk = std::get<2>(GetParam());
   std::vector<std::atomic<int>> visits(static_cast<size_t>(std::max<int64_t>(n, 0)));
   std::mutex mutex;
   std::set<std::thread::id> workers;

@@ -12,6 +12,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "svbtdf/common/error.h"
+
 namespace svbtdf::common {
 
 // Deeper than any svbtdf format needs (the deepest, a capture plan, nests 5 levels).
@@ -23,6 +25,21 @@ nlohmann::json ParseJson(std::string_view text, const std::string& subject);
 
 // ReadTextFile(path), then ParseJson naming the path.
 nlohmann::json ReadJsonFile(const std::filesystem::path& path);
+
+// ParseJson(text, subject), then `read(document)`. A value of an unexpected type deep inside
+// (nlohmann's type_error or out_of_range, thrown by a reader's `get` or `at`) becomes one
+// common::Error(kFormat) naming `subject`, "SUBJECT: is malformed: ...", with `hint`; the
+// reader's own common::Errors pass through unchanged.
+template <class Reader>
+auto ParseJsonWith(std::string_view text, const std::string& subject, const std::string& hint, Reader&& read)
+    -> decltype(read(std::declval<const nlohmann::json&>())) {
+  const nlohmann::json document = ParseJson(text, subject);
+  try {
+    return read(document);
+  } catch (const nlohmann::json::exception& e) {
+    ThrowFormatError(subject, std::string("is malformed: ") + e.what(), hint);
+  }
+}
 
 // Typed, range-checked access to one JSON object of a file a user writes (a capture plan, a rig
 // description); every error is common::Error(kFormat) naming the file and the field, with `hint`
