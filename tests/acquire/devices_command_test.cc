@@ -42,4 +42,16 @@ TEST(DevicesCommandTest, ListsTheDummyDisplayWhenAskedFor) {
   EXPECT_NE(output.find("sdl:0"), std::string::npos) << output;
 }
 
+// On a console, over ssh or in CI there is no Wayland session: SDL's Wayland probe made libwayland
+// print "XDG_RUNTIME_DIR is invalid or not set in the environment" above svbtdf's own listing.
+TEST(DevicesCommandTest, PrintsNothingButItsListingWithoutADisplayServer) {
+  int status = -1;
+  const std::string output = RunCommand(std::string("env -u XDG_RUNTIME_DIR -u WAYLAND_DISPLAY -u DISPLAY -u SDL_VIDEODRIVER ") +
+                                            SVBTDF_CLI_PATH + " devices 2>&1",
+                                        &status);
+  ASSERT_EQ(status, 0) << output;
+  EXPECT_EQ(output.find("XDG_RUNTIME_DIR"), std::string::npos) << output;
+  EXPECT_NE(output.find("sdl (displays)"), std::string::npos) << output;
+}
+
 }  // namespace
