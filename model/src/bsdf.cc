@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "svbtdf/common/error.h"
+#include "svbtdf/model/internal_reflection.h"
+
 namespace svbtdf::model {
 namespace {
 
@@ -10,6 +13,9 @@ namespace {
 // Sample and Pdf alike: visible-normal samplers that work by rejection (the tabulated NDF) slow
 // down without bound there, and the other two strategies still cover every direction.
 constexpr double kMinRoughExitCosine = 1e-2;
+
+// The least share of Sample's draws the cosine gets when a texel has the internal-reflection term.
+constexpr double kInternalReflectionCosineShare = 0.2;
 
 bool OppositeSides(const Vec3& wi, const Vec3& wo) { return wi.z() * wo.z() < 0; }
 
@@ -63,6 +69,8 @@ DualMicrofacetBsdf::LobeWeights DualMicrofacetBsdf::lobe_weights(bool viewer_bel
   const double alpha = viewer_below ? 1.0 - params_.alpha : params_.alpha;
   LobeWeights w;
   w.diffuse = DiffuseProbability(params_.k_s, params_.rho_d);
+  // The internal-reflection halo is broad and covered by the cosine alone: give it a fifth.
+  if (params_.internal_reflection) w.diffuse = std::max(w.diffuse, kInternalReflectionCosineShare);
   // Both configurations keep a tenth of the specular samples: for 0 < alpha < 1 the blend lives
   // where both are non-zero, and each sampler covers its own configuration's support.
   w.rough_entry = (1.0 - w.diffuse) * std::clamp(alpha, 0.1, 0.9);
@@ -71,7 +79,8 @@ DualMicrofacetBsdf::LobeWeights DualMicrofacetBsdf::lobe_weights(bool viewer_bel
 }
 
 Rgb DualMicrofacetBsdf::EvalAbove(const Vec3& i, const Vec3& o, double alpha) const {
-  const double rho = model_.Rho(ndf_, alpha, i, o);
+  double rho = model_.Rho(ndf_, alpha, i, o);
+  if (params_.internal_reflection) rho += InternalReflection(params_.eta).Blend(ndf_, alpha, i, o);
   const Rgb& k = params_.k_s;
   const Rgb& d = params_.rho_d;
   return {k[0] * rho + d[0], k[1] * rho + d[1], k[2] * rho + d[2]};
@@ -235,6 +244,62 @@ std::optional<BsdfSample> WalterBsdf::Sample(const Vec3& wo, double u_lobe, cons
   }
   const Vec3 wi = FromLobe(*i);
   return Finish(*this, below ? FlipZ(wi) : wi, wo);
+}
+
+// ---------------------------------------------------------------------------------------------
+// SlabLobeBsdf
+
+namespace {
+
+SlabLobeParams TurnedOver(SlabLobeParams p) {
+  std::swap(p.kappa_entry, p.kappa_exit);
+  return p;
+}
+
+// A direction of the vMF lobe about `mean` (Jakob 2012's stable inversion of the polar cosine).
+Vec3 SampleVmf(const Vec3& mean, double kappa, const Vec2& u) {
+  const double w = 1.0 + std::log(u.x() + (1.0 - u.x()) * std::exp(-2.0 * kappa)) / kappa;
+  const double r = std::sqrt(std::max(0.0, 1.0 - w * w));
+  Vec3 t, b;
+  OrthonormalBasis(mean, &t, &b);
+  return (w * mean + r * (std::cos(kTwoPi * u.y()) * t + std::sin(kTwoPi * u.y()) * b)).normalized();
+}
+
+}  // namespace
+
+SlabLobeBsdf::SlabLobeBsdf(const SlabLobeParams& lobe, const Rgb& k_s, const Rgb& rho_d)
+    : above_(lobe), below_(TurnedOver(lobe)), k_s_(k_s), rho_d_(rho_d),
+      diffuse_probability_(DiffuseProbability(k_s, rho_d)) {
+  if (!std::isfinite(lobe.kappa_entry) && !std::isfinite(lobe.kappa_exit)) {
+    common::ThrowInvalidInput("kappa", "a slab lobe needs at least one rough interface (a smooth slab is a delta)");
+  }
+}
+
+Rgb SlabLobeBsdf::Eval(const Vec3& wi, const Vec3& wo) const {
+  if (!OppositeSides(wi, wo)) return {0, 0, 0};
+  const double rho = wo.z() > 0 ? above_.Rho(wi, wo) : below_.Rho(FlipZ(wi), FlipZ(wo));
+  return {k_s_[0] * rho + rho_d_[0], k_s_[1] * rho + rho_d_[1], k_s_[2] * rho + rho_d_[2]};
+}
+
+double SlabLobeBsdf::Pdf(const Vec3& wi, const Vec3& wo) const {
+  if (!OppositeSides(wi, wo)) return 0.0;
+  const SlabLobeModel& lobe = wo.z() > 0 ? above_ : below_;
+  const Vec3 o = wo.z() > 0 ? wo : FlipZ(wo);
+  const double kappa = lobe.LightConcentration(o);
+  return diffuse_probability_ * std::abs(wi.z()) * kInvPi + (1.0 - diffuse_probability_) * VmfDensity(kappa, -wi.dot(wo));
+}
+
+std::optional<BsdfSample> SlabLobeBsdf::Sample(const Vec3& wo, double u_lobe, const Vec2& u) const {
+  if (wo.z() == 0) return std::nullopt;
+  Vec3 wi;
+  if (u_lobe < diffuse_probability_) {
+    wi = SampleCosineTransmission(wo, u);
+  } else {
+    const SlabLobeModel& lobe = wo.z() > 0 ? above_ : below_;
+    wi = SampleVmf(-wo, lobe.LightConcentration(wo.z() > 0 ? wo : FlipZ(wo)), u);
+    if (!OppositeSides(wi, wo)) return std::nullopt;  // the lobe's mass beyond the horizon
+  }
+  return Finish(*this, wi, wo);
 }
 
 // ---------------------------------------------------------------------------------------------

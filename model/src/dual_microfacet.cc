@@ -5,6 +5,7 @@
 
 #include "svbtdf/common/error.h"
 #include "svbtdf/model/fresnel.h"
+#include "svbtdf/model/internal_reflection.h"
 
 namespace svbtdf::model {
 namespace {
@@ -109,9 +110,15 @@ double WalterBtdf(const Ndf& ndf, const Vec3& i, const Vec3& o, double eta_i, do
          (denom * denom);
 }
 
+double SpecularRho(const Ndf& ndf, const DualMicrofacetParams& params, const Vec3& i, const Vec3& o) {
+  double rho = DualMicrofacetModel(params.eta, params.shadowing).Rho(ndf, params.alpha, i, o);
+  if (params.internal_reflection) rho += InternalReflection(params.eta).Blend(ndf, params.alpha, i, o);
+  return rho;
+}
+
 Rgb EvaluateMaterial(const Ndf& ndf, const DualMicrofacetParams& params, const Vec3& i,
                      const Vec3& o) {
-  const double rho = DualMicrofacetModel(params.eta, params.shadowing).Rho(ndf, params.alpha, i, o);
+  const double rho = SpecularRho(ndf, params, i, o);
   return {params.k_s[0] * rho + params.rho_d[0], params.k_s[1] * rho + params.rho_d[1],
           params.k_s[2] * rho + params.rho_d[2]};
 }

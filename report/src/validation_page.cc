@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <sstream>
 #include <utility>
 
@@ -32,6 +33,12 @@ const ModelColumn kColumns[] = {
      &simulate::ValidationCase::single_fitted, &simulate::ModelErrors::single_fitted},
     {"blend_fitted", "blend, fitted alpha and roughness", {23, 190, 207}, &simulate::ValidationCase::blend_fitted,
      &simulate::ModelErrors::blend_fitted},
+    {"slab_lobe", "slab lobe (seed 000, vMF)", {140, 86, 75}, &simulate::ValidationCase::slab_lobe,
+     &simulate::ModelErrors::slab_lobe},
+    {"blend_internal", "blend + internal reflection", {227, 119, 194}, &simulate::ValidationCase::blend_internal,
+     &simulate::ModelErrors::blend_internal},
+    {"blend_internal_fitted", "blend + internal reflection, fitted", {188, 189, 34},
+     &simulate::ValidationCase::blend_internal_fitted, &simulate::ModelErrors::blend_internal_fitted},
 };
 
 nlohmann::json ErrorsToJson(const simulate::ModelErrors& errors) {
@@ -50,6 +57,10 @@ nlohmann::json CaseToJson(const simulate::ValidationCase& c) {
       {"scale_free_error", ErrorsToJson(c.scale_free_errors)},
       {"fitted_roughness", c.fitted_roughness},
       {"blend_fitted", {{"alpha", c.blend_fitted_alpha}, {"roughness", c.blend_fitted_roughness}}},
+      {"slab_lobe", {{"ndf_kappa", c.slab_lobe_ndf_kappa}, {"light_kappa", c.slab_lobe_light_kappa}}},
+      {"blend_internal", {{"alpha", c.best_alpha_internal}}},
+      {"blend_internal_fitted",
+       {{"alpha", c.blend_internal_fitted_alpha}, {"roughness", c.blend_internal_fitted_roughness}}},
       {"view_direction", {c.o.x(), c.o.y(), c.o.z()}},
       {"monte_carlo",
        {{"paths", c.mc.paths},
@@ -108,6 +119,7 @@ std::string PlotName(const simulate::ValidationCase& c) {
 void WritePlot(const simulate::ValidationCase& c, const CrossSection& section, const fs::path& path) {
   LinePlot plot;
   for (const ModelColumn& column : kColumns) {
+    if ((c.*column.values).empty()) continue;  // a column that was not computed
     PlotSeries series;
     series.name = column.label;
     series.color = column.color;
@@ -201,11 +213,12 @@ void AppendFormatted(std::string& out, const char* format, Args... args) {
 std::string ValidationTable(const std::vector<simulate::ValidationCase>& cases) {
   std::string table;
   AppendFormatted(table, "%-6s %5s %6s", "config", "angle", "alpha");
-  for (const ModelColumn& column : kColumns) AppendFormatted(table, " %15s", column.key);
+  const auto width = [](const ModelColumn& column) { return std::max(8, static_cast<int>(std::strlen(column.key))); };
+  for (const ModelColumn& column : kColumns) AppendFormatted(table, " %*s", width(column), column.key);
   AppendFormatted(table, " %8s %9s\n", "MC noise", "paths");
   for (const simulate::ValidationCase& c : cases) {
     AppendFormatted(table, "%-6s %5.0f %6.3f", ToString(c.rough_sides), c.incidence_deg, c.best_alpha);
-    for (const ModelColumn& column : kColumns) AppendFormatted(table, " %15.4f", c.errors.*column.error);
+    for (const ModelColumn& column : kColumns) AppendFormatted(table, " %*.4f", width(column), c.errors.*column.error);
     AppendFormatted(table, " %8.4f %9lld\n", c.mc_noise, static_cast<long long>(c.mc.paths));
   }
   return table;

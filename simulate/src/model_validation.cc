@@ -10,6 +10,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/shadowing.h"
+#include "svbtdf/model/slab_lobe.h"
 
 namespace svbtdf::simulate {
 namespace {
@@ -28,6 +29,16 @@ model::Vec3 ScaledSlabDirection(double tx, double ty, double eta) {
 
 // The model with its own shadowing term off: G is applied from the NDF instead.
 model::DualMicrofacetModel UnshadowedModel(double eta) { return model::DualMicrofacetModel(eta, model::SmithShadowing::None()); }
+
+// The alpha in [0, 1] minimising the error of blend_for(alpha) against MC; `scan_points` alphas
+// are scanned before the golden-section refinement. *blend receives the best blend.
+double BestAlpha(const std::function<std::vector<double>(double)>& blend_for, const std::vector<double>& mc,
+                 const std::vector<double>& solid_angles, int scan_points, std::vector<double>* blend) {
+  const double alpha = MinimiseOnInterval(
+      [&](double a) { return RelativeL2Error(blend_for(a), mc, solid_angles); }, 0.0, 1.0, scan_points);
+  *blend = blend_for(alpha);
+  return alpha;
+}
 
 // The blend weight alpha minimising the blend's error against MC, given rho_T and rho_B at the
 // averager's points; `scan_points` alphas are scanned before the golden-section refinement.
@@ -55,6 +66,37 @@ void EvaluateTerms(const model::Ndf& ndf, double eta, const std::vector<model::V
     (*rho_T)[p] = RhoTWithNdfShadowing(ndf, eta, points[p], o);
     (*rho_B)[p] = RhoBWithNdfShadowing(ndf, eta, points[p], o);
   }
+}
+
+// The internal-reflection terms of both configurations at the given light directions.
+struct InternalTerms {
+  std::vector<double> rough_entry, rough_exit;
+};
+
+InternalTerms EvaluateInternal(const model::Ndf& ndf, const model::InternalReflection& internal,
+                               const std::vector<model::Vec3>& points, const model::Vec3& o) {
+  InternalTerms terms;
+  terms.rough_entry.resize(points.size());
+  terms.rough_exit.resize(points.size());
+  for (size_t p = 0; p < points.size(); ++p) {
+    terms.rough_entry[p] = internal.RoughEntry(ndf, points[p], o);
+    terms.rough_exit[p] = internal.RoughExit(ndf, points[p], o);
+  }
+  return terms;
+}
+
+// Cell averages of LogBlend(rho_T, rho_B, alpha) + LogBlend(IR_T, IR_B, alpha): the direct terms
+// on `averager`'s points, the internal ones on `halo_averager`'s.
+std::vector<double> BlendWithInternal(const std::vector<double>& rho_T_points, const std::vector<double>& rho_B_points,
+                                      const CellAverager& averager, const InternalTerms& internal,
+                                      const CellAverager& halo_averager, double alpha) {
+  std::vector<double> direct(rho_T_points.size()), halo(internal.rough_entry.size());
+  for (size_t p = 0; p < direct.size(); ++p) direct[p] = model::LogBlend(rho_T_points[p], rho_B_points[p], alpha);
+  for (size_t p = 0; p < halo.size(); ++p) halo[p] = model::LogBlend(internal.rough_entry[p], internal.rough_exit[p], alpha);
+  std::vector<double> cells = averager.Average(direct);
+  const std::vector<double> halo_cells = halo_averager.Average(halo);
+  for (size_t c = 0; c < cells.size(); ++c) cells[c] += halo_cells[c];
+  return cells;
 }
 
 }  // namespace
@@ -179,7 +221,52 @@ struct ValidationContext {
   const model::Ndf& ndf;
   const CellAverager& averager;
   std::vector<double> solid_angles;
+  const CellAverager* halo_averager = nullptr;  // the internal-reflection term's points
+  const CellAverager* centre_averager = nullptr;  // one point per cell, inside the roughness search
+  double ndf_kappa = 0.0;                        // the vMF concentration matched to the NDF
 };
+
+// Seed 000's slab lobe with a vMF of the NDF's mean cosine on each rough side.
+void SlabLobeColumn(const ValidationContext& context, ValidationCase* result) {
+  model::SlabLobeParams params;
+  params.eta = context.options.eta;
+  if (result->rough_sides != RoughSides::kExit) params.kappa_entry = context.ndf_kappa;
+  if (result->rough_sides != RoughSides::kEntry) params.kappa_exit = context.ndf_kappa;
+  const model::SlabLobeModel lobe(params);
+  result->slab_lobe_ndf_kappa = context.ndf_kappa;
+  result->slab_lobe_light_kappa = lobe.LightConcentration(result->o);
+  result->slab_lobe = context.averager.Average([&](const model::Vec3& i) { return lobe.Rho(i, result->o); });
+}
+
+// The blend plus the internal-reflection term, alpha and the NDF roughness fitted together. Inside
+// the search the term is evaluated at cell centres with a coarse quadrature (it is smooth); the
+// result is evaluated as blend_internal is.
+void FitBlendInternalRoughness(const ValidationContext& context, ValidationCase* result) {
+  const ValidationOptions& options = context.options;
+  const std::vector<model::Vec3>& points = context.averager.light_directions();
+  const model::InternalReflection coarse(options.eta, {12, 16});
+  const model::InternalReflection fine(options.eta, options.internal_quadrature);
+  const auto fitted_blend = [&](double log_roughness, bool final_quality, std::vector<double>* blend) {
+    const std::unique_ptr<model::Ndf> trial = options.make_ndf(std::exp(log_roughness));
+    std::vector<double> trial_T, trial_B;
+    EvaluateTerms(*trial, options.eta, points, result->o, &trial_T, &trial_B);
+    const CellAverager& halo_averager = final_quality ? *context.halo_averager : *context.centre_averager;
+    const InternalTerms internal =
+        EvaluateInternal(*trial, final_quality ? fine : coarse, halo_averager.light_directions(), result->o);
+    return BestAlpha(
+        [&](double a) { return BlendWithInternal(trial_T, trial_B, context.averager, internal, halo_averager, a); },
+        result->mc.rho, context.solid_angles, final_quality ? 101 : 21, blend);
+  };
+  const double log_roughness = MinimiseOnInterval(
+      [&](double x) {
+        std::vector<double> blend;
+        fitted_blend(x, false, &blend);
+        return RelativeL2Error(blend, result->mc.rho, context.solid_angles);
+      },
+      std::log(options.min_fitted_roughness), std::log(options.max_fitted_roughness), 21, 1e-3);
+  result->blend_internal_fitted_roughness = std::exp(log_roughness);
+  result->blend_internal_fitted_alpha = fitted_blend(log_roughness, true, &result->blend_internal_fitted);
+}
 
 double RelativeNoise(const BtdfSlice& mc, const std::vector<double>& solid_angles) {
   double noise = 0.0;
@@ -244,6 +331,9 @@ void ComputeErrors(const std::vector<double>& solid_angles, ValidationCase* resu
   both(result->single_same_ndf, &e.single_same_ndf, &f.single_same_ndf);
   both(result->single_fitted, &e.single_fitted, &f.single_fitted);
   both(result->blend_fitted, &e.blend_fitted, &f.blend_fitted);
+  both(result->slab_lobe, &e.slab_lobe, &f.slab_lobe);
+  both(result->blend_internal, &e.blend_internal, &f.blend_internal);
+  both(result->blend_internal_fitted, &e.blend_internal_fitted, &f.blend_internal_fitted);
 }
 
 ValidationCase RunCase(const ValidationContext& context, const SlabTracer& tracer, RoughSides sides,
@@ -269,6 +359,18 @@ ValidationCase RunCase(const ValidationContext& context, const SlabTracer& trace
       [&](const model::Vec3& i) { return SingleInterfaceBtdf(context.ndf, options.eta, i, result.o); });
   FitSingleInterface(context, &result);
   if (options.fit_blend_roughness) FitBlendRoughness(context, &result);
+  if (options.slab_lobe) SlabLobeColumn(context, &result);
+  if (options.internal_reflection) {
+    const model::InternalReflection internal(options.eta, options.internal_quadrature);
+    const InternalTerms halo =
+        EvaluateInternal(context.ndf, internal, context.halo_averager->light_directions(), result.o);
+    result.best_alpha_internal = BestAlpha(
+        [&](double a) {
+          return BlendWithInternal(rho_T_points, rho_B_points, context.averager, halo, *context.halo_averager, a);
+        },
+        result.mc.rho, context.solid_angles, 101, &result.blend_internal);
+    if (options.fit_blend_roughness) FitBlendInternalRoughness(context, &result);
+  }
   ComputeErrors(context.solid_angles, &result);
   return result;
 }
@@ -288,7 +390,12 @@ std::vector<ValidationCase> ValidateModel(const ValidationOptions& options, cons
   }
   const std::unique_ptr<model::Ndf> ndf = options.make_ndf(options.roughness);
   const CellAverager averager(grid, options.cell_subdivisions);
+  if (options.internal_subdivisions < 1) common::ThrowInvalidInput("internal subdivisions", "must be >= 1");
+  const CellAverager halo_averager(grid, options.internal_subdivisions), centre_averager(grid, 1);
   ValidationContext context{options, *ndf, averager, std::vector<double>(grid.num_cells())};
+  context.halo_averager = &halo_averager;
+  context.centre_averager = &centre_averager;
+  if (options.slab_lobe) context.ndf_kappa = model::MatchedVmfConcentration(*ndf);
   for (int c = 0; c < grid.num_cells(); ++c) context.solid_angles[c] = grid.CellSolidAngle(c);
 
   std::vector<ValidationCase> cases;

@@ -5,10 +5,12 @@
 
 #include <cmath>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "svbtdf/common/error.h"
 #include "svbtdf/model/fresnel.h"
+#include "svbtdf/model/internal_reflection.h"
 #include "svbtdf/simulate/model_validation.h"
 #include "svbtdf/simulate/slab_tracer.h"
 #include "test_ndfs.h"
@@ -165,6 +167,46 @@ TEST(SlabTracer, RoughExitOnlyMatchesRhoB) {
     ExpectAgreement(mc, model, grid, "rough exit, theta " + std::to_string(theta));
   }
 }
+
+// A cap of four interface hits adds exactly the paths reflected once by each interface inside
+// the slab (T R R T; three hits leave back toward the light). With one side flat, the direct
+// configuration plus the internal-reflection term must then agree with the tracer to MC noise.
+// The term is smooth, so it is averaged on fewer points per cell than the direct lobe.
+void ExpectDirectPlusInternalReflectionAgree(bool rough_exit) {
+  const std::unique_ptr<model::Ndf> ndf = SkewedNdf();
+  Slab slab;
+  slab.eta = 1.5;
+  (rough_exit ? slab.exit : slab.entry) = SlabInterface::Rough(*ndf);
+  const SlabTracer tracer(slab);
+  const model::Hemicube grid(32);
+  const CellAverager direct_averager(grid, 6), halo_averager(grid, 2);
+  const model::InternalReflection internal(slab.eta);
+  for (double theta : {30.0, 60.0}) {
+    const model::Vec3 o = ViewDirection(theta, 20.0);
+    SliceOptions options;
+    options.paths = 2000000;
+    options.max_interactions = 4;
+    const BtdfSlice mc = tracer.SliceForView(o, grid, options);
+    std::vector<double> model = direct_averager.Average([&](const model::Vec3& i) {
+      return rough_exit ? RhoBWithNdfShadowing(*ndf, slab.eta, i, o) : RhoTWithNdfShadowing(*ndf, slab.eta, i, o);
+    });
+    const std::vector<double> halo = halo_averager.Average([&](const model::Vec3& i) {
+      return rough_exit ? internal.RoughExit(*ndf, i, o) : internal.RoughEntry(*ndf, i, o);
+    });
+    double halo_energy = 0.0;
+    for (int c = 0; c < grid.num_cells(); ++c) {
+      model[c] += halo[c];
+      halo_energy += halo[c] * grid.CellSolidAngle(c);
+    }
+    EXPECT_GT(halo_energy, 0.0);
+    ExpectAgreement(mc, model, grid,
+                    std::string(rough_exit ? "rough exit" : "rough entry") + " + T R R T, theta " + std::to_string(theta));
+  }
+}
+
+TEST(SlabTracer, RoughEntryWithFourHitsMatchesRhoTPlusInternalReflection) { ExpectDirectPlusInternalReflectionAgree(false); }
+
+TEST(SlabTracer, RoughExitWithFourHitsMatchesRhoBPlusInternalReflection) { ExpectDirectPlusInternalReflectionAgree(true); }
 
 TEST(SlabTracer, SameSeedGivesTheSameSliceOnAnyNumberOfThreads) {
   Slab slab;

@@ -15,6 +15,7 @@
 
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/ndf.h"
+#include "svbtdf/model/slab_lobe.h"
 #include "svbtdf/model/vec.h"
 
 namespace svbtdf::model {
@@ -103,6 +104,25 @@ class WalterBsdf final : public Bsdf {
   double eta_i_, eta_o_;
   Rgb k_s_, rho_d_;
   double cos_azimuth_, sin_azimuth_;
+  double diffuse_probability_;
+};
+
+// The analytic slab lobe of seed 000 (slab_lobe.h), R = k_s rho + rho_d, with Lambertian
+// transmission as the diffuse part. Sample draws the lobe's vMF about -wo exactly (draws beyond
+// the horizon carry no light) or the cosine. Seen from below, the slab is turned over: the two
+// interfaces' concentrations swap.
+class SlabLobeBsdf final : public Bsdf {
+ public:
+  // Throws svbtdf::common::Error(kInvalidInput) for bad params or a slab with no rough side.
+  SlabLobeBsdf(const SlabLobeParams& lobe, const Rgb& k_s, const Rgb& rho_d);
+
+  Rgb Eval(const Vec3& wi, const Vec3& wo) const override;
+  std::optional<BsdfSample> Sample(const Vec3& wo, double u_lobe, const Vec2& u) const override;
+  double Pdf(const Vec3& wi, const Vec3& wo) const override;
+
+ private:
+  SlabLobeModel above_, below_;  // the viewer above, and below (turned over)
+  Rgb k_s_, rho_d_;
   double diffuse_probability_;
 };
 

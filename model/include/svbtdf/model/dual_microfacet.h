@@ -77,7 +77,14 @@ struct DualMicrofacetParams {
   SmithShadowing shadowing = SmithShadowing::None();
   Rgb k_s = {1.0, 1.0, 1.0};
   Rgb rho_d = {0.0, 0.0, 0.0};
+  // Adds the light reflected once by each interface inside the slab (T R R T paths,
+  // internal_reflection.h) to rho, blended with the same alpha: rho + LogBlend(IR_T, IR_B, alpha).
+  bool internal_reflection = false;
 };
+
+// rho(i, o) of the texel's specular part: the blend, plus the internal-reflection term when the
+// params ask for it.
+double SpecularRho(const Ndf& ndf, const DualMicrofacetParams& params, const Vec3& i, const Vec3& o);
 
 Rgb EvaluateMaterial(const Ndf& ndf, const DualMicrofacetParams& params, const Vec3& i,
                      const Vec3& o);

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "svbtdf/model/internal_reflection.h"
 #include "svbtdf/model/ndf.h"
 #include "svbtdf/model/vec.h"
 #include "svbtdf/simulate/slab_tracer.h"
@@ -72,6 +73,13 @@ struct ModelErrors {
   // Not in the paper: the blend with its NDF roughness fitted as well (alongside alpha), the fair
   // counterpart of single_fitted.
   double blend_fitted = 0.0;
+  // Seed 000's analytic slab lobe (model/slab_lobe.h) with each rough interface's NDF matched by a
+  // vMF of the same mean cosine (MatchedVmfConcentration).
+  double slab_lobe = 0.0;
+  // The best-alpha blend plus the internal-reflection term (T R R T paths, same NDF, blended with
+  // the same alpha), alpha refitted; and the same with the NDF roughness fitted too.
+  double blend_internal = 0.0;
+  double blend_internal_fitted = 0.0;
 };
 
 // Relative L2 error of s * model after the best scale s > 0: what remains once the overall
@@ -87,6 +95,11 @@ struct ValidationCase {
   double fitted_roughness = 0.0;  // single-interface roughness minimising its error
   double blend_fitted_alpha = 0.5;      // alpha and NDF roughness of the fitted blend
   double blend_fitted_roughness = 0.0;
+  double slab_lobe_ndf_kappa = 0.0;    // the vMF concentration matched to the NDF
+  double slab_lobe_light_kappa = 0.0;  // the lobe's concentration over the light directions
+  double best_alpha_internal = 0.5;    // blend weight of blend_internal
+  double blend_internal_fitted_alpha = 0.5;
+  double blend_internal_fitted_roughness = 0.0;
   ModelErrors errors;             // relative L2 against MC
   ModelErrors scale_free_errors;  // the same after each model's best overall scale
   // The relative L2 distance that MC noise alone would produce: sqrt(sum Omega se^2 / sum Omega mc^2).
@@ -94,6 +107,7 @@ struct ValidationCase {
   BtdfSlice mc;
   // Cell averages of each model over the slice (hemicube cell order).
   std::vector<double> rho_T, rho_B, blend, single_same_ndf, single_fitted, blend_fitted;
+  std::vector<double> slab_lobe, blend_internal, blend_internal_fitted;  // empty when not computed
 };
 
 struct ValidationOptions {
@@ -110,6 +124,15 @@ struct ValidationOptions {
   SliceOptions slice;
   // Also fit the blend's NDF roughness (the blend_fitted column; the slowest part, off in tests).
   bool fit_blend_roughness = true;
+  // The slab-lobe column, and the internal-reflection columns (blend_internal, and
+  // blend_internal_fitted when fit_blend_roughness is set too).
+  bool slab_lobe = true;
+  bool internal_reflection = true;
+  // The internal-reflection term is smooth: it is averaged on k x k points per cell, with this
+  // quadrature (a coarser one, on cell centres, inside the roughness search; the final fitted
+  // column is evaluated with this one).
+  int internal_subdivisions = 2;
+  model::InternalReflection::Quadrature internal_quadrature;
   // Fitted roughnesses (single interface, fitted blend) are searched in [min, max] (log scale).
   double min_fitted_roughness = 0.01;
   double max_fitted_roughness = 1.5;
