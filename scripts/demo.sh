@@ -52,7 +52,7 @@ if command -v blender >/dev/null; then
     echo "warning: demo: Blender could not render the export (see $OUT/gltf/blender.log)" >&2
 fi
 
-echo "== 6/7 validating the dual-microfacet model against a Monte Carlo slab (about a minute)"
+echo "== 6/7 validating the dual-microfacet model against a Monte Carlo slab (about two minutes)"
 "$SVBTDF" validate-model --json "$OUT/validation.json" --plots "$OUT/validation"
 
 echo "== 7/7 the report: the material live, its slices, maps, numbers, calibration and capture (docs/report.md)"
