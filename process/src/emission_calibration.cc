@@ -59,7 +59,11 @@ std::vector<calib::EmissionObservation> EmissionObservations(const fit::SliceSto
 EmissionCalibration CalibrateEmission(const fs::path& session_folder, const fs::path& work,
                                       const EmissionCalibrationOptions& options) {
   const fs::path calibration_path = session_folder / "calibration.json";
-  if (!fs::exists(calibration_path)) CalibrateAndCheck(session_folder, {});
+  if (!fs::exists(calibration_path)) {
+    calib::CalibrateSessionOptions calibrate;
+    calibrate.progress = options.progress;
+    CalibrateAndCheck(session_folder, calibrate);
+  }
   const session::Session session = session::Session::Open(session_folder);
   const calib::SessionCalibration calibration = calib::ReadSessionCalibration(calibration_path);
   ProcessOptions process;

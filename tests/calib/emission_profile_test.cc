@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <numbers>
 
 #include "expect_error.h"
@@ -79,7 +80,7 @@ TEST(EmissionProfile, CalibrationJsonRoundTripAndVersionOne) {
   json["monitor"].erase("emission_profile");
   EXPECT_NEAR(SessionCalibrationFromJson(json, "old.json").monitor.Emission(Cos(60)), 1.0 / 16, 1e-12);
   json["version"] = 3;
-  testing::ExpectError(common::ErrorKind::kFormat, "old.json has calibration format version 3",
+  testing::ExpectError(common::ErrorKind::kFormat, "old.json: has calibration format version 3",
                        [&] { SessionCalibrationFromJson(json, "old.json"); });
 }
 
@@ -90,7 +91,7 @@ TEST(EmissionProfile, ReadersRefuseValuesOutsideTheirPhysicalRanges) {
     edit(monitor);
     testing::ExpectError(common::ErrorKind::kFormat, text, [&] { EmissionProfileFromJson(monitor, "c.json"); });
   };
-  refused([](nlohmann::json& m) { m["emission"] = "oled"; }, "c.json has an unknown monitor.emission 'oled'");
+  refused([](nlohmann::json& m) { m["emission"] = "oled"; }, "c.json: has an unknown monitor.emission 'oled'");
   refused([](nlohmann::json& m) { m["emission_exponent"] = -1; }, "emission_exponent");
   refused([](nlohmann::json& m) { m["emission_profile"]["step_deg"] = 0; }, "step_deg");
   refused([](nlohmann::json& m) { m["emission_profile"]["table"][3] = 0.0; }, "table[3]");
@@ -113,7 +114,7 @@ TEST(EmissionProfile, ProfileFileRoundTripAndRefusals) {
   EXPECT_EQ(back.exponent, 3.0);
 
   common::WriteTextAtomically(path, R"({"format": "svbtdf-calibration", "version": 2})");
-  testing::ExpectError(common::ErrorKind::kFormat, path.string() + " is not an svbtdf emission profile",
+  testing::ExpectError(common::ErrorKind::kFormat, path.string() + ": is not an svbtdf emission profile",
                        [&] { ReadEmissionProfileFile(path); });
   common::WriteTextAtomically(path, R"({"format": "svbtdf-emission-profile", "version": 1,
                                         "monitor": {"emission": "lcd", "emission_exponent": 2}})");

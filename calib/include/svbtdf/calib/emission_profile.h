@@ -14,6 +14,7 @@
 // profile, so a profile scaled by any constant gives the same BTDF. Measured tables are normalised
 // to P(0) = 1.
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>

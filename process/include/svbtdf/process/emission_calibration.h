@@ -8,10 +8,12 @@
 // that texel at that dot's emission angle, and calib::FitEmissionProfile fits the profile.
 
 #include <filesystem>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "svbtdf/calib/emission_fit.h"
+#include "svbtdf/fit/slice_store.h"
 #include "svbtdf/process/process_session.h"
 
 namespace svbtdf::process {
