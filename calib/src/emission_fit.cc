@@ -141,12 +141,30 @@ EmissionFit FitEmissionProfile(const std::vector<EmissionObservation>& all, cons
       for (int b = 0; b < 3; ++b) normal(index[a], index[b]) += lambda * d[a] * d[b];
     }
   }
-  // The scale: ln P(0) = 0, so node 0 leaves the unknowns.
+  // The scale is free: it is fixed at the node with the most data (so that the standard errors
+  // below are those of the shape, not of an extrapolated P(0)), then moved to P(0) = 1.
+  std::vector<double> node_weight(nodes, 0.0);
+  for (size_t j = 0; j < obs.size(); ++j) {
+    const Hat h = HatAt(obs[j].theta_deg, step, nodes);
+    node_weight[h.k] += obs[j].weight * (1.0 - h.f);
+    node_weight[h.k + 1] += obs[j].weight * h.f;
+  }
+  const int anchor = static_cast<int>(std::max_element(node_weight.begin(), node_weight.end()) - node_weight.begin());
   const int free = nodes - 1;
-  const Eigen::MatrixXd reduced = normal.bottomRightCorner(free, free);
+  std::vector<int> unknown;  // node of each unknown
+  for (int k = 0; k < nodes; ++k) {
+    if (k != anchor) unknown.push_back(k);
+  }
+  Eigen::MatrixXd reduced(free, free);
+  Eigen::VectorXd reduced_rhs(free);
+  for (int a = 0; a < free; ++a) {
+    reduced_rhs(a) = rhs(unknown[a]);
+    for (int b = 0; b < free; ++b) reduced(a, b) = normal(unknown[a], unknown[b]);
+  }
   const Eigen::LDLT<Eigen::MatrixXd> solver(reduced);
+  const Eigen::VectorXd solution = solver.solve(reduced_rhs);
   Eigen::VectorXd g = Eigen::VectorXd::Zero(nodes);
-  g.tail(free) = solver.solve(rhs.tail(free));
+  for (int a = 0; a < free; ++a) g(unknown[a]) = solution(a);
 
   // Residuals with each group's offset at its optimum.
   EmissionFit fit;
@@ -172,7 +190,7 @@ EmissionFit FitEmissionProfile(const std::vector<EmissionObservation>& all, cons
   report.texels = static_cast<int64_t>(runs.size());
   report.residual_rms = std::sqrt(swr2 / total_weight);
   report.table_std.assign(nodes, 0.0);
-  for (int k = 1; k < nodes; ++k) report.table_std[k] = std::sqrt(std::max(0.0, covariance(k - 1, k - 1)));
+  for (int a = 0; a < free; ++a) report.table_std[unknown[a]] = std::sqrt(std::max(0.0, covariance(a, a)));
   report.table_observations = near;
 
   int first = -1, last = -1;
@@ -193,7 +211,7 @@ EmissionFit FitEmissionProfile(const std::vector<EmissionObservation>& all, cons
   p.step_deg = step;
   p.covered_min_deg = first * step;
   p.covered_max_deg = last * step;
-  for (int k = 0; k <= last; ++k) p.table.push_back(std::exp(g(k)));
+  for (int k = 0; k <= last; ++k) p.table.push_back(std::exp(g(k) - g(0)));
   report.table_std.resize(last + 1);
   report.table_observations.resize(last + 1);
   const auto [n, cos_rms] = FitCosPower(obs, order, runs);

@@ -71,7 +71,7 @@ TEST(FitEmissionProfile, TableFollowsAShapeNoCosPowerHas) {
 
 TEST(FitEmissionProfile, ReportsOnlyTheAnglesTheDataReach) {
   const auto truth = [](double theta) { return std::pow(Cos(theta), 3.0); };
-  std::vector<EmissionObservation> obs = Observe(truth, 30.0, 0.01, 5);
+  std::vector<EmissionObservation> obs = Observe([&](double theta) { return truth(theta + 10.0); }, 30.0, 0.01, 5);
   for (EmissionObservation& o : obs) o.theta_deg += 10.0;  // 10 to 40 degrees
   const EmissionFit fit = FitEmissionProfile(obs);
   EXPECT_GE(fit.profile.covered_min_deg, 8.0);

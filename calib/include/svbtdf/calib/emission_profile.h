@@ -56,7 +56,9 @@ struct EmissionFitReport {
   int64_t observations = 0;      // (texel, dot) samples used
   int64_t texels = 0;            // texels they came from
   double residual_rms = 0.0;     // RMS of ln(measured / fitted), over the observations
-  std::vector<double> table_std; // standard error of ln P at each node (0 at theta = 0: the scale)
+  // Standard error of ln P at each node relative to the best-measured one (0 there): the
+  // shape's uncertainty (the scale is free).
+  std::vector<double> table_std;
   std::vector<int64_t> table_observations;  // observations within a step of each node
   double cos_power_residual_rms = 0.0;       // RMS of the best single cos^n's ln residual
 };
