@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <numbers>
 
 #include "measured_btdf_error.h"
@@ -47,6 +48,13 @@ fs::path SimulateLcd(const std::string& name, double n, const std::string& patte
   return folder;
 }
 
+// The diffuser session of a cos^n LCD, simulated once per test program (the tests share it).
+fs::path Diffuser(double n) {
+  static std::map<double, fs::path> made;
+  if (!made.count(n)) made[n] = SimulateLcd("diffuser_n" + std::to_string(static_cast<int>(n)), n, "diffuser");
+  return made[n];
+}
+
 EmissionCalibrationOptions Quiet() {
   EmissionCalibrationOptions options;
   options.progress = false;
@@ -62,31 +70,36 @@ double WorstProfileError(const calib::EmissionProfile& p, double n) {
   return worst;
 }
 
-TEST(CalibrateEmission, RecoversCosTwoAndCosFiveWithinTwoPercentWhereverTheDotsReach) {
-  for (double n : {2.0, 5.0}) {
-    const fs::path sim = SimulateLcd("diffuser_n" + std::to_string(static_cast<int>(n)), n, "diffuser");
-    const EmissionCalibration result = CalibrateEmission(sim / "session", sim / "work", Quiet());
-    const calib::EmissionProfile& p = result.fit.profile;
-    const double worst = WorstProfileError(p, n);
-    std::printf("[ measured ] n = %.0f: covered %.0f-%.0f degrees, worst %.2f%%, residual %.2f%%, cos^n fit n = %.3f\n",
-                n, p.covered_min_deg, p.covered_max_deg, 100 * worst, 100 * result.fit.report.residual_rms, p.exponent);
-    EXPECT_LT(worst, 0.02) << "n = " << n;
-    // The tiny rig's dots reach every texel from straight behind to beyond 45 degrees.
-    EXPECT_LE(p.covered_min_deg, 2.0);
-    EXPECT_GE(p.covered_max_deg, 46.0);
-    EXPECT_NEAR(p.exponent, n, 0.1);
-    // A rerun reuses the processed diffuser and gives the same profile.
-    const EmissionCalibration again = CalibrateEmission(sim / "session", sim / "work", Quiet());
-    EXPECT_TRUE(again.processing.already_complete);
-    EXPECT_EQ(again.fit.profile.table, p.table);
-  }
+void ExpectRecovered(double n) {
+  const fs::path sim = Diffuser(n);
+  const EmissionCalibration result = CalibrateEmission(sim / "session", sim / "work", Quiet());
+  const calib::EmissionProfile& p = result.fit.profile;
+  const double worst = WorstProfileError(p, n);
+  std::printf("[ measured ] n = %.0f: covered %.0f-%.0f degrees, worst %.2f%%, residual %.2f%%, cos^n fit n = %.3f, "
+              "%lld samples\n",
+              n, p.covered_min_deg, p.covered_max_deg, 100 * worst, 100 * result.fit.report.residual_rms, p.exponent,
+              static_cast<long long>(result.fit.report.observations));
+  EXPECT_LT(worst, 0.02) << "n = " << n;
+  // The tiny rig's 6 x 6 dots reach the texels from a few degrees off the normal (few samples
+  // lie nearer) to beyond 60 degrees.
+  EXPECT_LE(p.covered_min_deg, 6.0);
+  EXPECT_GE(p.covered_max_deg, 60.0);
+  EXPECT_NEAR(p.exponent, n, 0.1);
+  // A rerun reuses the processed diffuser and gives the same profile.
+  const EmissionCalibration again = CalibrateEmission(sim / "session", sim / "work", Quiet());
+  EXPECT_TRUE(again.processing.already_complete);
+  EXPECT_EQ(again.fit.profile.table, p.table);
 }
+
+// Measured on 2026-12-03: n = 2 covered 4-74 degrees, worst 0.93%; n = 5 covered 4-64, worst 1.62%.
+TEST(CalibrateEmission, RecoversCosTwoWithinTwoPercentWhereverTheDotsReach) { ExpectRecovered(2.0); }
+TEST(CalibrateEmission, RecoversCosFiveWithinTwoPercentWhereverTheDotsReach) { ExpectRecovered(5.0); }
 
 // A sample on the cos^5 LCD: processed as if the screen were isotropic its R is off by tens of
 // percent; with the measured profile it is as good as on an isotropic rig (process_session_test:
-// 0.3% median with noise).
+// 0.3% median with noise). Measured on 2026-12-03: 79.4% and 0.59%.
 TEST(CalibrateEmission, TheMeasuredProfileRemovesTheLcdBiasFromASample) {
-  const fs::path diffuser = SimulateLcd("diffuser_for_sample", 5.0, "diffuser");
+  const fs::path diffuser = Diffuser(5.0);
   const calib::EmissionProfile profile = CalibrateEmission(diffuser / "session", diffuser / "work", Quiet()).fit.profile;
   const fs::path sample = SimulateLcd("sample", 5.0, "");
   const session::Session session = session::Session::Open(sample / "session");
