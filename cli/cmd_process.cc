@@ -8,6 +8,7 @@
 #include "commands.h"
 #include "svbtdf/common/folder_lock.h"
 #include "quality_output.h"
+#include "svbtdf/calib/emission_profile.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/process/pipeline.h"
 
@@ -17,6 +18,7 @@ namespace {
 struct ProcessCommandOptions {
   std::string session, out;
   std::string texels;  // "WxH"
+  std::string emission_profile;
   process::ProcessOptions process;
   bool strict = false;
 };
@@ -34,6 +36,7 @@ void ParseTexels(const std::string& text, process::ProcessOptions* options) {
 
 void RunProcess(ProcessCommandOptions options) {
   ParseTexels(options.texels, &options.process);
+  if (!options.emission_profile.empty()) options.process.emission = calib::ReadEmissionProfileFile(options.emission_profile);
   const common::FolderLock lock = common::FolderLock::Acquire(options.out, "svbtdf process");
   const process::ProcessStage stage = process::ProcessAndCheck(options.session, options.out, options.process);
   const process::ProcessReport& report = stage.report;
@@ -61,6 +64,8 @@ void AddProcessCommand(CLI::App& app) {
   process->add_option("--light-resolution", options->process.light_resolution,
                       "light hemicube resolution of the resampled slices (power of two)")
       ->capture_default_str();
+  process->add_option("--emission-profile", options->emission_profile,
+                      "the monitor's measured emission profile (svbtdf calibrate-emission) instead of the calibration's");
   process->add_option("--threads", options->process.threads, "worker threads (0: all cores)")->capture_default_str();
   AddStrictFlag(process, &options->strict);
   process->callback([options] { RunProcess(*options); });

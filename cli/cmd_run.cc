@@ -11,6 +11,7 @@
 #include "svbtdf/common/folder_lock.h"
 #include "fit_command.h"
 #include "quality_output.h"
+#include "svbtdf/calib/emission_profile.h"
 #include "svbtdf/process/pipeline.h"
 
 namespace svbtdf::cli {
@@ -18,7 +19,7 @@ namespace {
 namespace fs = std::filesystem;
 
 struct RunOptions {
-  std::string session, out, work;
+  std::string session, out, work, emission_profile;
   std::string representatives = "0.01";
   process::PipelineOptions pipeline;
   bool strict = false;
@@ -29,6 +30,9 @@ void Run(RunOptions options) {
   pipeline.session = options.session;
   pipeline.out = options.out;
   pipeline.work = options.work;
+  if (!options.emission_profile.empty()) {
+    pipeline.process.emission = calib::ReadEmissionProfileFile(options.emission_profile);
+  }
   pipeline.fit.representative_fraction = fit::ParseRepresentativeFraction(options.representatives);
   // The material names the run; its work folder is only ever written under it.
   const common::FolderLock lock = common::FolderLock::Acquire(pipeline.out, "svbtdf run");
@@ -55,6 +59,8 @@ void AddRunCommand(CLI::App& app) {
   run->add_option("--work", options->work, "folder for the processed slices (default: MATERIAL.work)");
   run->add_option("--light-resolution", options->pipeline.process.light_resolution, "light hemicube of the resampled slices")
       ->capture_default_str();
+  run->add_option("--emission-profile", options->emission_profile,
+                  "the monitor's measured emission profile (svbtdf calibrate-emission) instead of the calibration's");
   AddFitOptions(run, &options->pipeline.fit, &options->representatives);
   AddStrictFlag(run, &options->strict);
   run->callback([options] {

@@ -43,8 +43,16 @@ void AddSimulateCommand(CLI::App& app) {
   simulate->add_option("--monitor-tilt", options->monitor_tilt_deg, "tilt the screen about the x axis (degrees) instead of the preset's");
   simulate->add_flag("--mirror-monitor", options->mirror_monitor,
                      "show a mirror image of the screen (a mirrored display mode), which calibration must refuse");
+  auto emission = std::make_shared<std::string>();
+  simulate->add_option("--monitor-emission", *emission,
+                       "the screen's angular emission instead of the preset's: isotropic, lambertian or lcd:N (cos^N); "
+                       "docs/simulator.md, 'An LCD rig'");
+  simulate->add_option("--pattern", options->pattern,
+                       "the material instead of the preset's: smooth, grid-sheet, leaf-glass, rice-paper, or diffuser (a "
+                       "Lambertian transmitter, for `svbtdf calibrate-emission`)");
   simulate->add_option("--threads", options->threads, "worker threads (0: all cores)")->capture_default_str();
-  simulate->callback([options, out, plan_file, rig_file, preset] {
+  simulate->callback([options, out, plan_file, rig_file, preset, emission] {
+    if (!emission->empty()) options->monitor_emission = simulate::EmissionProfile::Parse(*emission, "--monitor-emission");
     if (!rig_file->empty()) {
       const simulate::RigFile rig = simulate::ReadRigFile(*rig_file);
       if (preset->count() > 0 && options->preset != rig.preset) {

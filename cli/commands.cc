@@ -6,6 +6,7 @@ void AddAllCommands(CLI::App& app) {
   AddAcquireCommand(app);
   AddBtdfCommand(app);
   AddCalibrateCommand(app);
+  AddCalibrateEmissionCommand(app);
   AddCompareCommand(app);
   AddDevicesCommand(app);
   AddEvalCommand(app);

@@ -13,6 +13,7 @@ void AddAllCommands(CLI::App& app);
 void AddAcquireCommand(CLI::App& app);        // svbtdf acquire
 void AddBtdfCommand(CLI::App& app);           // svbtdf btdf eval
 void AddCalibrateCommand(CLI::App& app);      // svbtdf calibrate
+void AddCalibrateEmissionCommand(CLI::App& app);  // svbtdf calibrate-emission
 void AddCompareCommand(CLI::App& app);        // svbtdf compare
 void AddDevicesCommand(CLI::App& app);         // svbtdf devices
 void AddEvalCommand(CLI::App& app);            // svbtdf eval

@@ -354,7 +354,8 @@ MonitorCalibration CalibrateMonitor(const session::Session& session, const Camer
   monitor.pixel_pitch_m = grid.pixel_pitch_m;
   monitor.dot_radius_m = nominal.radius_px * grid.pixel_pitch_m;
   // Checked by CalibrateSession: empty (not noted) or a known profile.
-  monitor.emission = session.rig().monitor.emission.empty() ? "isotropic" : session.rig().monitor.emission;
+  // A nominal profile only: `svbtdf calibrate-emission` measures one (calib/emission_fit.h).
+  monitor.emission.kind = session.rig().monitor.emission.empty() ? "isotropic" : session.rig().monitor.emission;
   // The screen's u axis in the sample plane, as measured by the pose.
   const model::Vec3 right = to_sample.col(0);
   monitor.orientation_deg = std::fmod(360.0 + std::atan2(right.y(), right.x()) * 180.0 / model::kPi, 360.0);

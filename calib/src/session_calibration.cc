@@ -66,13 +66,6 @@ void RequirePositiveFinite(double value, const std::string& source, const std::s
 
 }  // namespace
 
-double MonitorCalibration::Emission(double cos_theta) const {
-  cos_theta = std::clamp(cos_theta, 0.0, 1.0);
-  if (emission == "lambertian") return cos_theta;
-  if (emission == "lcd") return std::pow(cos_theta, emission_exponent);
-  return 1.0;
-}
-
 nlohmann::json ToJson(const SessionCalibration& calibration) {
   nlohmann::json camera = ToJson(calibration.camera);
   const SamplePlane& plane = calibration.sample_plane;
@@ -87,6 +80,18 @@ nlohmann::json ToJson(const SessionCalibration& calibration) {
                     {"residual_mm", d.residual_mm}});
   }
   const Radiometry& r = calibration.radiometry;
+  nlohmann::json monitor = {{"normal", ToJson(m.normal)},
+                            {"distance_m", m.distance_m},
+                            {"pixel_pitch_m", m.pixel_pitch_m},
+                            {"dot_radius_m", m.dot_radius_m},
+                            {"residual_rms_mm", m.residual_rms_mm},
+                            {"residual_max_mm", m.residual_max_mm},
+                            {"orientation_deg", m.orientation_deg},
+                            {"identification",
+                             {{"by", m.identified_by}, {"fiducial_agreement", m.fiducial_agreement},
+                              {"fiducial_runner_up", m.fiducial_runner_up}}},
+                            {"dots", dots}};
+  PutEmissionProfile(m.emission, &monitor);
   return {
       {"format", "svbtdf-calibration"},
       {"version", calibration.version},
@@ -98,20 +103,7 @@ nlohmann::json ToJson(const SessionCalibration& calibration) {
         {"rms_px", plane.rms_px},
         {"width_m", plane.width_m},
         {"height_m", plane.height_m}}},
-      {"monitor",
-       {{"normal", ToJson(m.normal)},
-        {"distance_m", m.distance_m},
-        {"pixel_pitch_m", m.pixel_pitch_m},
-        {"dot_radius_m", m.dot_radius_m},
-        {"emission", m.emission},
-        {"emission_exponent", m.emission_exponent},
-        {"residual_rms_mm", m.residual_rms_mm},
-        {"residual_max_mm", m.residual_max_mm},
-        {"orientation_deg", m.orientation_deg},
-        {"identification",
-         {{"by", m.identified_by}, {"fiducial_agreement", m.fiducial_agreement},
-          {"fiducial_runner_up", m.fiducial_runner_up}}},
-        {"dots", dots}}},
+      {"monitor", monitor},
       {"radiometry",
        {{"response", r.response},
         {"inverse_response", r.inverse_response},
@@ -127,9 +119,9 @@ SessionCalibration SessionCalibrationFromJson(const nlohmann::json& json, const 
   try {
     if (json.at("format") != "svbtdf-calibration") common::ThrowFormatError(source, "is not an svbtdf calibration");
     c.version = json.at("version").get<int>();
-    if (c.version != kCalibrationFormatVersion) {
+    if (c.version != 1 && c.version != kCalibrationFormatVersion) {
       common::ThrowFormatError(source, "has calibration format version " + std::to_string(c.version) +
-                                   "; this svbtdf reads version " + std::to_string(kCalibrationFormatVersion),
+                                   "; this svbtdf reads versions 1 and " + std::to_string(kCalibrationFormatVersion),
                        "re-run 'svbtdf calibrate' on the session");
     }
     c.camera = CameraFromJson(json.at("camera"));
@@ -146,8 +138,7 @@ SessionCalibration SessionCalibrationFromJson(const nlohmann::json& json, const 
     c.monitor.distance_m = m.at("distance_m").get<double>();
     c.monitor.pixel_pitch_m = m.at("pixel_pitch_m").get<double>();
     c.monitor.dot_radius_m = m.at("dot_radius_m").get<double>();
-    c.monitor.emission = m.at("emission").get<std::string>();
-    c.monitor.emission_exponent = m.value("emission_exponent", 0.0);
+    c.monitor.emission = EmissionProfileFromJson(m, source);
     c.monitor.residual_rms_mm = m.value("residual_rms_mm", 0.0);
     c.monitor.residual_max_mm = m.value("residual_max_mm", 0.0);
     c.monitor.orientation_deg = m.value("orientation_deg", 0.0);
@@ -172,6 +163,7 @@ SessionCalibration SessionCalibrationFromJson(const nlohmann::json& json, const 
     c.radiometry.saturation_dn = r.at("saturation_dn").get<double>();
     c.radiometry.black_offset_dn = r.value("black_offset_dn", 0.0);
     c.provenance = json.value("provenance", nlohmann::json::object());
+    c.version = kCalibrationFormatVersion;  // a version 1 file is a version 2 file without a measured profile
   } catch (const nlohmann::json::exception& e) {
     common::ThrowFormatError(source, std::string("is malformed: ") + e.what(), "re-run 'svbtdf calibrate' on the session");
   }
@@ -187,9 +179,6 @@ SessionCalibration SessionCalibrationFromJson(const nlohmann::json& json, const 
   if (c.monitor.dots.empty()) common::ThrowFormatError(source, "lists no dots");
   if (c.radiometry.response != "linear" && c.radiometry.response != "table") {
     common::ThrowFormatError(source, "has an unknown radiometry.response '" + c.radiometry.response + "'");
-  }
-  if (c.monitor.emission != "isotropic" && c.monitor.emission != "lambertian" && c.monitor.emission != "lcd") {
-    common::ThrowFormatError(source, "has an unknown monitor.emission '" + c.monitor.emission + "'");
   }
   if (c.sample_plane.CameraCentre().z() <= 0.0) {
     common::ThrowFormatError(source, "puts the camera behind the sample plane (sample_plane pose is wrong)");

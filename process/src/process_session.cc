@@ -359,10 +359,12 @@ ProcessReport FinishedReport(const fs::path& out, int num_dots, std::chrono::ste
 
 }  // namespace
 
-ProcessReport ProcessSession(const session::Session& session, const calib::SessionCalibration& calibration, const fs::path& out,
-                             const ProcessOptions& requested) {
+ProcessReport ProcessSession(const session::Session& session, const calib::SessionCalibration& given,
+                             const fs::path& out, const ProcessOptions& requested) {
   const auto start = std::chrono::steady_clock::now();
   ProcessOptions options = requested;
+  calib::SessionCalibration calibration = given;
+  if (options.emission) calibration.monitor.emission = *options.emission;
   ResolveTexelGrid(session, calibration, &options);
   const int num_dots = static_cast<int>(calibration.monitor.dots.size());
   const CapturePlan plan = ParsePlan(session, num_dots);

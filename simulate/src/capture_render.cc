@@ -44,6 +44,7 @@ CaptureTruth PlanCapture(const SimulationPreset& preset, const RigRenderer& rend
   CaptureTruth plan;
   plan.seed = seed;
   plan.preset = preset.name;
+  plan.pattern = preset.pattern;
   // Dot images: the shortest exposure puts the brightest dot image at peak_fill of the well.
   const double peak = renderer.ProbePeakRadiance();
   const double base = preset.peak_fill * sensor.full_well / (peak * sensor.sensitivity);

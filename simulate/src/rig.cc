@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <string>
 
 #include "svbtdf/common/error.h"
@@ -95,6 +96,23 @@ double EmissionProfile::operator()(double cos_theta_e) const {
   if (kind == "isotropic") return c > 0.0 ? 1.0 : 0.0;
   if (kind == "lambertian") return c;
   return std::pow(c, exponent);  // lcd
+}
+
+EmissionProfile EmissionProfile::Parse(const std::string& spec, const std::string& option) {
+  EmissionProfile profile;
+  if (spec == "isotropic" || spec == "lambertian") {
+    profile.kind = spec;
+    return profile;
+  }
+  char* end = nullptr;
+  const double n = spec.rfind("lcd:", 0) == 0 ? std::strtod(spec.c_str() + 4, &end) : 0.0;
+  if (end == nullptr || *end != '\0' || end == spec.c_str() + 4 || !(n > 0.0 && n <= 20.0)) {
+    common::ThrowInvalidInput(option, "must be isotropic, lambertian or lcd:N with 0 < N <= 20 (P = cos^N), got '" +
+                                          spec + "'");
+  }
+  profile.kind = "lcd";
+  profile.exponent = n;
+  return profile;
 }
 
 double MonitorConfig::Luminance(double level) const {

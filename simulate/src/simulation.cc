@@ -1,5 +1,6 @@
 #include "svbtdf/simulate/simulation.h"
 
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -94,6 +95,18 @@ SimulationPreset PresetWithOptions(const SimulationOptions& options) {
   if (!std::isnan(options.monitor_orientation_deg)) preset.rig.monitor.orientation_deg = options.monitor_orientation_deg;
   if (!std::isnan(options.monitor_tilt_deg)) preset.rig.monitor.tilt_deg = options.monitor_tilt_deg;
   if (options.mirror_monitor) preset.rig.monitor.mirrored = true;
+  if (options.monitor_emission) preset.rig.monitor.emission = *options.monitor_emission;
+  if (!options.pattern.empty()) {
+    const std::vector<std::string> names = TruthPatternNames();
+    if (std::find(names.begin(), names.end(), options.pattern) == names.end()) {
+      common::ThrowInvalidInput("--pattern", "unknown material pattern '" + options.pattern + "'",
+                                "use smooth, grid-sheet, leaf-glass, rice-paper or diffuser");
+    }
+    if (options.truth != "model") {
+      common::ThrowInvalidInput("--pattern", "applies to the analytic truth only (--truth model)");
+    }
+    preset.pattern = options.pattern;
+  }
   if (options.eta != 0.0) {
     if (!(options.eta > 1.0) || !std::isfinite(options.eta)) {
       common::ThrowInvalidInput("--eta", "must be > 1, got " + std::to_string(options.eta));
@@ -128,6 +141,8 @@ std::unique_ptr<SimulatedSetup> LoadSimulatedSetup(const fs::path& out, int thre
   preset.rig.monitor.orientation_deg = truth.monitor.orientation_deg;
   preset.rig.monitor.tilt_deg = truth.monitor.tilt_deg;
   preset.rig.monitor.mirrored = truth.monitor.mirrored;
+  preset.rig.monitor.emission = truth.monitor.emission;
+  if (!truth.capture.pattern.empty()) preset.pattern = truth.capture.pattern;
   SimulationOptions options;  // what MakeTruth needs to read the truth back (it exists: eta was read)
   options.truth = truth.capture.truth_kind;
   options.seed = truth.capture.seed;

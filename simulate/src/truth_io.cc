@@ -49,6 +49,7 @@ void WriteRigTruth(const std::filesystem::path& path, const Rig& rig, const Capt
   out["format"] = "svbtdf-rig-truth";
   out["version"] = kRigTruthVersion;
   out["preset"] = capture.preset;
+  out["pattern"] = capture.pattern;
   out["seed"] = capture.seed;
   out["truth"] = capture.truth_kind;
   out["frame"] = "sample frame: sample in z = 0 centred on the origin, z toward the camera, "
@@ -179,6 +180,7 @@ RigTruth ReadRigTruth(const std::filesystem::path& path) {
     truth.capture.board_exposure_s = e.at("board_s");
     truth.capture.seed = in.at("seed");
     truth.capture.preset = in.at("preset");
+    truth.capture.pattern = in.value("pattern", std::string());  // older truths: the preset's
     truth.capture.truth_kind = in.at("truth");
   } catch (const json::exception& e) {
     common::ThrowFormatError(path.string(), std::string("cannot be read: ") + e.what(),

@@ -118,19 +118,33 @@ TruthTexel RicePaperPattern(double u, double v, double aspect, uint64_t seed) {
   return t;
 }
 
+// A near-Lambertian transmitting diffuser (opal glass): a flat BTDF, rho_d only. A lab puts one
+// in the holder to measure its monitor's emission profile (svbtdf calibrate-emission). 0.1 1/sr
+// is about an opal glass's: a third of the light through, spread over the hemisphere.
+TruthTexel DiffuserPattern(double, double, double, uint64_t) {
+  TruthTexel t;
+  t.ndf.alpha_x = t.ndf.alpha_y = 0.5;  // no refractive term (k_s = 0): only for the dot quadrature
+  t.alpha = 0.5;
+  t.shadowing_roughness = 0.0;
+  t.k_s = {0.0, 0.0, 0.0};
+  t.rho_d = {0.1, 0.1, 0.1};
+  return t;
+}
+
 PatternFunction FindPattern(const std::string& name) {
   if (name == "smooth") return SmoothPattern;
   if (name == "grid-sheet") return GridSheetPattern;
   if (name == "leaf-glass") return LeafGlassPattern;
   if (name == "rice-paper") return RicePaperPattern;
+  if (name == "diffuser") return DiffuserPattern;
   common::ThrowInvalidInput("pattern", "unknown truth pattern '" + name + "'",
-                    "use smooth, grid-sheet, leaf-glass or rice-paper");
+                    "use smooth, grid-sheet, leaf-glass, rice-paper or diffuser");
 }
 
 }  // namespace
 
 std::vector<std::string> TruthPatternNames() {
-  return {"smooth", "grid-sheet", "leaf-glass", "rice-paper"};
+  return {"smooth", "grid-sheet", "leaf-glass", "rice-paper", "diffuser"};
 }
 
 TruthMaterial::TruthMaterial(int texels_x, int texels_y, double eta, std::string ndf_name,

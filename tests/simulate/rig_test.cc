@@ -14,6 +14,7 @@
 #include "svbtdf/simulate/montecarlo_truth.h"
 #include "svbtdf/simulate/presets.h"
 #include "svbtdf/simulate/renderer.h"
+#include "svbtdf/simulate/simulation.h"
 #include "svbtdf/simulate/rig.h"
 #include "svbtdf/simulate/truth_material.h"
 
@@ -392,6 +393,68 @@ TEST(RigRenderer, EveryPresetsBoardsFitTheirView) {
       EXPECT_LT(px->y(), k.height - 2.0) << name;
     }
   }
+}
+
+}  // namespace
+}  // namespace svbtdf::simulate
+
+namespace svbtdf::simulate {
+namespace {
+
+// `svbtdf simulate --monitor-emission`: the three kinds, refusals naming the option.
+TEST(EmissionProfile, ParseTakesIsotropicLambertianAndLcdN) {
+  EXPECT_EQ(EmissionProfile::Parse("isotropic", "--m").kind, "isotropic");
+  EXPECT_NEAR(EmissionProfile::Parse("lambertian", "--m")(0.5), 0.5, 1e-12);
+  const EmissionProfile lcd = EmissionProfile::Parse("lcd:5", "--m");
+  EXPECT_EQ(lcd.kind, "lcd");
+  EXPECT_NEAR(lcd(0.5), 1.0 / 32, 1e-12);
+  EXPECT_NEAR(EmissionProfile::Parse("lcd:2.5", "--m").exponent, 2.5, 1e-12);
+  for (const char* bad : {"lcd", "lcd:", "lcd:0", "lcd:25", "lcd:2x", "oled", "cos:2"}) {
+    try {
+      EmissionProfile::Parse(bad, "--monitor-emission");
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const common::Error& e) {
+      EXPECT_EQ(e.kind(), common::ErrorKind::kInvalidInput);
+      EXPECT_NE(std::string(e.what()).find("--monitor-emission"), std::string::npos) << e.what();
+    }
+  }
+}
+
+// The emission calibration's sample: the same R whatever the directions.
+TEST(TruthMaterial, DiffuserIsAFlatTransmitter) {
+  const TruthMaterial diffuser = TruthMaterial::FromPattern("diffuser", 8, 8, 1.5, 3);
+  for (const model::Vec3& i : {model::Vec3(0, 0, -1), model::Vec3(0.6, 0.0, -0.8), model::Vec3(-0.3, 0.8, -0.52)}) {
+    for (const model::Vec3& o : {model::Vec3(0, 0, 1), model::Vec3(0.0, -0.7071, 0.7071)}) {
+      const model::Rgb r = diffuser.Evaluate(27, i.normalized(), o.normalized());
+      for (int c = 0; c < 3; ++c) EXPECT_DOUBLE_EQ(r[c], 0.1);
+    }
+  }
+}
+
+// The option pair of an LCD rig: emission and pattern replace the preset's; a pattern is the
+// analytic truth's only.
+TEST(SimulationOptions, MonitorEmissionAndPatternReplaceThePresets) {
+  SimulationOptions options;
+  options.preset = "small";
+  options.monitor_emission = EmissionProfile{"lcd", 5.0};
+  options.pattern = "diffuser";
+  const SimulationPreset preset = PresetWithOptions(options);
+  EXPECT_EQ(preset.rig.monitor.emission.kind, "lcd");
+  EXPECT_EQ(preset.rig.monitor.emission.exponent, 5.0);
+  EXPECT_EQ(preset.pattern, "diffuser");
+  const auto refused = [](SimulationOptions o, const std::string& text) {
+    try {
+      PresetWithOptions(o);
+      ADD_FAILURE() << "accepted";
+    } catch (const common::Error& e) {
+      EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
+    }
+  };
+  options.truth = "montecarlo";
+  refused(options, "--pattern: applies to the analytic truth only");
+  options.truth = "model";
+  options.pattern = "opal";
+  refused(options, "unknown material pattern 'opal'");
 }
 
 }  // namespace

@@ -33,8 +33,8 @@ inline calib::SessionCalibration CalibrationFromTruth(const std::filesystem::pat
   c.monitor.distance_m = truth.monitor.distance;
   c.monitor.pixel_pitch_m = truth.monitor.pixel_pitch;
   c.monitor.dot_radius_m = truth.dots.front().radius;
-  c.monitor.emission = truth.monitor.emission.kind;
-  c.monitor.emission_exponent = truth.monitor.emission.exponent;
+  c.monitor.emission.kind = truth.monitor.emission.kind;
+  c.monitor.emission.exponent = truth.monitor.emission.exponent;
   for (const simulate::Dot& dot : truth.dots) {
     calib::DotPosition p;
     p.position = dot.position;

@@ -15,12 +15,15 @@
 #include <nlohmann/json.hpp>
 
 #include "svbtdf/calib/camera_calibration.h"
+#include "svbtdf/calib/emission_profile.h"
 #include "svbtdf/calib/radiometry.h"
 #include "svbtdf/model/vec.h"
 
 namespace svbtdf::calib {
 
-inline constexpr int kCalibrationFormatVersion = 1;
+// Version 2 adds the measured emission profile (monitor.emission "measured" with
+// monitor.emission_profile); version 1 files are read as they are.
+inline constexpr int kCalibrationFormatVersion = 2;
 
 // Where the sample plane is: the pose of the sample frame in the camera frame, from the board
 // lying in the sample holder (centred on the sample, its rows along the sample's x axis).
@@ -48,8 +51,7 @@ struct MonitorCalibration {
   double distance_m = 0.04;     // d: distance of the monitor plane behind the sample plane
   double pixel_pitch_m = 2.5e-4;
   double dot_radius_m = 5e-4;   // radius of a displayed dot (its lit area is pi r^2)
-  std::string emission = "isotropic";  // angular profile: "isotropic" | "lambertian" | "lcd"
-  double emission_exponent = 0.0;      // "lcd": P(theta) = cos^n theta
+  EmissionProfile emission;     // the angular profile P(theta_e) (calib/emission_profile.h)
   double residual_rms_mm = 0.0, residual_max_mm = 0.0;  // dots vs the fitted grid
   // Which way the screen lies: the direction of its u axis (pixel x) in the sample plane,
   // counter-clockwise from +x seen from the camera side, degrees in [0, 360).
@@ -62,7 +64,7 @@ struct MonitorCalibration {
   std::vector<DotPosition> dots;  // in plan order (q row-major over the grid)
 
   // The angular emission profile P(theta_e) relative to the normal direction.
-  double Emission(double cos_theta) const;
+  double Emission(double cos_theta) const { return emission(cos_theta); }
 };
 
 struct SessionCalibration {

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 
 #include "svbtdf/calib/session_calibration.h"
 #include "svbtdf/session/session.h"
@@ -23,6 +24,10 @@ struct ProcessOptions {
   double diffuse_threshold = 0.05;
   int threads = 0;
   bool progress = true;
+  // The monitor's measured emission profile (`--emission-profile PROFILE.json`, from `svbtdf
+  // calibrate-emission`) instead of the calibration's nominal one; the store's copy of
+  // calibration.json records the profile used.
+  std::optional<calib::EmissionProfile> emission;
 };
 
 struct ProcessReport {

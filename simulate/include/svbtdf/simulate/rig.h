@@ -80,6 +80,10 @@ struct EmissionProfile {
   double exponent = 1.0;
 
   double operator()(double cos_theta_e) const;
+
+  // `isotropic`, `lambertian` or `lcd:N` (N in (0, 20]), as `svbtdf simulate --monitor-emission`
+  // takes it; svbtdf::Error(kInvalidInput) naming `option` otherwise.
+  static EmissionProfile Parse(const std::string& spec, const std::string& option);
 };
 
 // The monitor is a physical screen (docs/calibration-format.md, "The monitor frame"): its pixel

@@ -28,6 +28,11 @@ struct SimulationOptions {
   double monitor_orientation_deg = std::numeric_limits<double>::quiet_NaN();
   double monitor_tilt_deg = std::numeric_limits<double>::quiet_NaN();
   bool mirror_monitor = false;  // a mirrored display, which calibration must refuse (tests)
+  // The screen's angular emission instead of the preset's (`--monitor-emission lcd:5`), and the
+  // material pattern instead of the preset's (`--pattern diffuser`): together the diffuser
+  // session and the sample session of one LCD rig (docs/simulator.md, "An LCD rig").
+  std::optional<EmissionProfile> monitor_emission;
+  std::string pattern;
   // A lab's own rig (`svbtdf simulate --rig`, simulate/rig_file.h) instead of the preset's; the
   // preset still gives the material. `rig_source` names it in the session's notes.
   std::optional<RigConfig> rig;

@@ -34,6 +34,7 @@ struct CaptureTruth {
   double board_exposure_s = 0;
   uint64_t seed = 0;
   std::string preset;
+  std::string pattern;  // the analytic truth's pattern (TruthMaterial::FromPattern); empty: the preset's
   std::string truth_kind = "model";  // model | montecarlo
 };
 

@@ -32,6 +32,7 @@ struct TruthTexel {
 //   grid-sheet  strongly anisotropic GGX whose long axis swaps on the lines of a grid
 //   leaf-glass  rough leaf-shaped patches on smooth glass
 //   rice-paper  fibrous rough paper, coloured k_s and a diffuse part
+//   diffuser    a flat Lambertian transmitter (rho_d 0.1, k_s 0): the emission calibration's sample
 std::vector<std::string> TruthPatternNames();
 
 class TruthMaterial final : public SpatialBtdf {
