@@ -4,6 +4,8 @@
 #include <nlohmann/json.hpp>
 
 #include "svbtdf/calib/calibrate_session.h"
+#include "svbtdf/calib/emission_profile.h"
+#include "svbtdf/calib/session_calibration.h"
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/fit/material.h"
@@ -78,20 +80,36 @@ calib::SessionCalibration CalibrationOf(const session::Session& session, const P
   return calibration;
 }
 
+// The emission profile a finished store was processed under, as calibration.json keys.
+nlohmann::json EmissionKeys(const calib::EmissionProfile& profile) {
+  nlohmann::json keys = nlohmann::json::object();
+  calib::PutEmissionProfile(profile, &keys);
+  return keys;
+}
+
 void ProcessUnlessDone(const session::Session& session, const calib::SessionCalibration& calibration,
                        const fs::path& processed, const ProcessOptions& options, const PipelineListener& listener) {
   try {
     fit::SliceStore::Open(processed);
-    Say(listener, "== 2/3 processing: using " + processed.string());
-    return;
   } catch (const common::Error&) {
     // Not there or unfinished: process (an unfinished store resumes).
+    Say(listener, "== 2/3 processing into " + processed.string());
+    const ProcessReport report = ProcessSession(session, calibration, processed, options);
+    Say(listener, Format("%d dots (%d resumed), %lld of %lld texels valid, %.1f s", report.dots, report.dots_resumed,
+                         static_cast<long long>(report.valid_texels), static_cast<long long>(report.texels),
+                         report.seconds));
+    return;
   }
-  Say(listener, "== 2/3 processing into " + processed.string());
-  const ProcessReport report = ProcessSession(session, calibration, processed, options);
-  Say(listener, Format("%d dots (%d resumed), %lld of %lld texels valid, %.1f s", report.dots, report.dots_resumed,
-                       static_cast<long long>(report.valid_texels), static_cast<long long>(report.texels),
-                       report.seconds));
+  // A finished store is reused, but never one processed under another emission profile than the
+  // one asked for (a --work folder shared between runs with and without --emission-profile).
+  const calib::EmissionProfile& wanted = options.emission ? *options.emission : calibration.monitor.emission;
+  const fs::path store_calibration = processed / "calibration.json";
+  if (EmissionKeys(calib::ReadSessionCalibration(store_calibration).monitor.emission) != EmissionKeys(wanted)) {
+    common::ThrowInvalidInput(processed.string(),
+                              "was processed under another monitor emission profile than the one asked for",
+                              "give the same --emission-profile, or another --work folder");
+  }
+  Say(listener, "== 2/3 processing: using " + processed.string());
 }
 
 }  // namespace

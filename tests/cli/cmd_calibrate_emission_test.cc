@@ -42,6 +42,17 @@ TEST(CalibrateEmissionCommand, MeasuresAnLcdFromADiffuserSessionAndProcessUsesIt
   ASSERT_EQ(process.exit_code, 0) << process.output;
   const calib::SessionCalibration used = calib::ReadSessionCalibration(processed / "calibration.json");
   EXPECT_EQ(used.monitor.emission.table, p.table);
+  // `run` whose work folder holds a store processed with the profile, but not given the profile,
+  // must not fit samples made under another emission than the one it was asked for: refused.
+  const fs::path work = folder.path() / "work";
+  const auto with_profile = RunSvbtdf("-q process " + (sim / "session").string() + " --out " + (work / "processed").string() +
+                                      " --emission-profile " + profile.string());
+  ASSERT_EQ(with_profile.exit_code, 0) << with_profile.output;
+  const auto mismatched = RunSvbtdf("-q run " + (sim / "session").string() + " --out " +
+                                    (folder.path() / "material").string() + " --work " + work.string());
+  EXPECT_EQ(mismatched.exit_code, 2) << mismatched.output;
+  EXPECT_NE(mismatched.output.find("another monitor emission profile"), std::string::npos) << mismatched.output;
+  EXPECT_FALSE(fs::exists(folder.path() / "material"));
 
   // A damaged profile is one line naming it, exit 2, before anything is written.
   const fs::path bad = folder.path() / "bad.json";
