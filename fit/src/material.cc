@@ -58,11 +58,22 @@ MaterialModel ParseModel(const std::string& name, const std::string& source) {
   common::ThrowFormatError(source, "has an unknown btdf '" + name + "' (expected dual-microfacet or walter-ggx)");
 }
 
+// "WxH" or "WxHxC"; built with += because GCC 12 misreads a long chain of temporaries as an overflow.
+std::string ShapeText(int width, int height, int channels) {
+  std::string text = std::to_string(width);
+  text += 'x';
+  text += std::to_string(height);
+  if (channels > 0) {
+    text += 'x';
+    text += std::to_string(channels);
+  }
+  return text;
+}
+
 void CheckShape(const common::FloatImage& image, int width, int height, int channels, const std::string& source) {
   if (image.width != width || image.height != height || (channels > 0 && image.channels != channels)) {
-    common::ThrowFormatError(source, "is " + std::to_string(image.width) + "x" + std::to_string(image.height) + "x" +
-                                 std::to_string(image.channels) + ", expected " + std::to_string(width) + "x" +
-                                 std::to_string(height) + (channels > 0 ? "x" + std::to_string(channels) : ""));
+    common::ThrowFormatError(source, "is " + ShapeText(image.width, image.height, image.channels) + ", expected " +
+                                         ShapeText(width, height, channels));
   }
 }
 

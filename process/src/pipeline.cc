@@ -80,13 +80,6 @@ calib::SessionCalibration CalibrationOf(const session::Session& session, const P
   return calibration;
 }
 
-// The emission profile a finished store was processed under, as calibration.json keys.
-nlohmann::json EmissionKeys(const calib::EmissionProfile& profile) {
-  nlohmann::json keys = nlohmann::json::object();
-  calib::PutEmissionProfile(profile, &keys);
-  return keys;
-}
-
 void ProcessUnlessDone(const session::Session& session, const calib::SessionCalibration& calibration,
                        const fs::path& processed, const ProcessOptions& options, const PipelineListener& listener) {
   try {
@@ -104,7 +97,7 @@ void ProcessUnlessDone(const session::Session& session, const calib::SessionCali
   // one asked for (a --work folder shared between runs with and without --emission-profile).
   const calib::EmissionProfile& wanted = options.emission ? *options.emission : calibration.monitor.emission;
   const fs::path store_calibration = processed / "calibration.json";
-  if (EmissionKeys(calib::ReadSessionCalibration(store_calibration).monitor.emission) != EmissionKeys(wanted)) {
+  if (calib::ReadSessionCalibration(store_calibration).monitor.emission != wanted) {
     common::ThrowInvalidInput(processed.string(),
                               "was processed under another monitor emission profile than the one asked for",
                               "give the same --emission-profile, or another --work folder");

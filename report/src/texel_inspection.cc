@@ -16,7 +16,9 @@ using model::Vec3;
 
 std::string Float32Base64(const std::vector<float>& values) {
   std::string bytes(values.size() * sizeof(float), '\0');
-  std::memcpy(bytes.data(), values.data(), bytes.size());  // little-endian, as JS's Float32Array reads it
+  // little-endian, as JS's Float32Array reads it; an empty vector's data() may be null, which
+  // memcpy must never be given even for zero bytes
+  if (!values.empty()) std::memcpy(bytes.data(), values.data(), bytes.size());
   return Base64(bytes);
 }
 

@@ -171,7 +171,9 @@ TEST(Ndf, MaskingIsABoundedIndicatorOfFrontFacingFacets) {
       const double g = ndf->G1(v, h);
       EXPECT_GE(g, 0.0);
       EXPECT_LE(g, 1.0);
-      if (v.dot(h) <= 0) EXPECT_EQ(g, 0.0);
+      if (v.dot(h) <= 0) {
+        EXPECT_EQ(g, 0.0);
+      }
       EXPECT_EQ(ndf->G1(-v, h), g) << "a direction below the surface is side-adjusted";
     }
   }

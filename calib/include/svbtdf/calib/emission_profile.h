@@ -40,6 +40,10 @@ struct EmissionProfile {
   double AtDegrees(double theta_deg) const;
 
   static EmissionProfile Isotropic() { return {}; }
+
+  // Field by field; calibration.json keeps doubles to the last bit, so a profile read back
+  // equals the one written.
+  bool operator==(const EmissionProfile&) const = default;
 };
 
 // The profile as calibration.json's monitor keys hold it: `emission` (the kind),
