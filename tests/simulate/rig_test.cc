@@ -510,7 +510,7 @@ TEST(RigRenderer, PolarisedDotImageInvertsToThePolarisedTruth) {
 // preset's y-z plane, so a field along it (p) transmits more than one across it (s). The mean
 // of the screen's two orthogonal polarisations is close to the unpolarised rendering, not equal
 // to it: the model's unpolarised Fresnel is a product of unpolarised transmittances (the exact
-// slab differs by up to about 1%, tests/model/polarisation_test.cc), and two fields orthogonal
+// slab differs by up to 0.7%, tests/model/polarisation_test.cc), and two fields orthogonal
 // in the screen are not orthogonal once projected across an oblique ray.
 TEST(RigRenderer, OrthogonalPolarisationsBracketTheUnpolarisedImage) {
   RigConfig config = NoiseFreeTiny();
