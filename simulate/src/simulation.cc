@@ -103,6 +103,10 @@ SimulationPreset PresetWithOptions(const SimulationOptions& options) {
     }
     preset.rig.monitor.polarisation = *options.monitor_polarisation;
   }
+  if (preset.rig.monitor.polarisation.linear() && options.truth != "model") {  // a rig file's
+    common::ThrowInvalidInput("monitor.polarisation", "applies to the analytic truth only (--truth model)",
+                              "the Monte Carlo slab tracer does not follow polarisation");
+  }
   if (!options.pattern.empty()) {
     const std::vector<std::string> names = TruthPatternNames();
     if (std::find(names.begin(), names.end(), options.pattern) == names.end()) {
