@@ -18,7 +18,7 @@ namespace {
 struct ProcessCommandOptions {
   std::string session, out;
   std::string texels;  // "WxH"
-  std::string emission_profile;
+  std::string emission_profile, polarisation;
   process::ProcessOptions process;
   bool strict = false;
 };
@@ -37,6 +37,7 @@ void ParseTexels(const std::string& text, process::ProcessOptions* options) {
 void RunProcess(ProcessCommandOptions options) {
   ParseTexels(options.texels, &options.process);
   if (!options.emission_profile.empty()) options.process.emission = calib::ReadEmissionProfileFile(options.emission_profile);
+  if (!options.polarisation.empty()) options.process.polarisation = options.polarisation;
   const common::FolderLock lock = common::FolderLock::Acquire(options.out, "svbtdf process");
   const process::ProcessStage stage = process::ProcessAndCheck(options.session, options.out, options.process);
   const process::ProcessReport& report = stage.report;
@@ -66,6 +67,9 @@ void AddProcessCommand(CLI::App& app) {
       ->capture_default_str();
   process->add_option("--emission-profile", options->emission_profile,
                       "the monitor's measured emission profile (svbtdf calibrate-emission) instead of the calibration's");
+  process->add_option("--monitor-polarisation,--monitor-polarization", options->polarisation,
+                      "none or linear:DEG instead of the session's rig.monitor.polarisation: a polarised screen's "
+                      "samples are corrected for the slab's polarised Fresnel (docs/capture.md, 'A polarised monitor')");
   process->add_option("--threads", options->process.threads, "worker threads (0: all cores)")->capture_default_str();
   AddStrictFlag(process, &options->strict);
   process->callback([options] { RunProcess(*options); });

@@ -19,7 +19,7 @@ namespace {
 namespace fs = std::filesystem;
 
 struct RunOptions {
-  std::string session, out, work, emission_profile;
+  std::string session, out, work, emission_profile, polarisation;
   std::string representatives = "0.01";
   process::PipelineOptions pipeline;
   bool strict = false;
@@ -33,6 +33,7 @@ void Run(RunOptions options) {
   if (!options.emission_profile.empty()) {
     pipeline.process.emission = calib::ReadEmissionProfileFile(options.emission_profile);
   }
+  if (!options.polarisation.empty()) pipeline.process.polarisation = options.polarisation;
   pipeline.fit.representative_fraction = fit::ParseRepresentativeFraction(options.representatives);
   // The material names the run; its work folder is only ever written under it.
   const common::FolderLock lock = common::FolderLock::Acquire(pipeline.out, "svbtdf run");
@@ -61,6 +62,9 @@ void AddRunCommand(CLI::App& app) {
       ->capture_default_str();
   run->add_option("--emission-profile", options->emission_profile,
                   "the monitor's measured emission profile (svbtdf calibrate-emission) instead of the calibration's");
+  run->add_option("--monitor-polarisation,--monitor-polarization", options->polarisation,
+                  "none or linear:DEG instead of the session's rig.monitor.polarisation: a polarised screen's samples "
+                  "are corrected for the slab's polarised Fresnel (docs/capture.md, 'A polarised monitor')");
   AddFitOptions(run, &options->pipeline.fit, &options->representatives);
   AddStrictFlag(run, &options->strict);
   run->callback([options] {

@@ -47,12 +47,19 @@ void AddSimulateCommand(CLI::App& app) {
   simulate->add_option("--monitor-emission", *emission,
                        "the screen's angular emission instead of the preset's: isotropic, lambertian or lcd:N (cos^N); "
                        "docs/simulator.md, 'An LCD rig'");
+  auto polarisation = std::make_shared<std::string>();
+  simulate->add_option("--monitor-polarization,--monitor-polarisation", *polarisation,
+                       "the screen's polarisation: none (default) or linear:DEG, the field's angle from the screen's "
+                       "pixel x axis toward its top (an LCD; docs/simulator.md, 'A polarised LCD')");
   simulate->add_option("--pattern", options->pattern,
                        "the material instead of the preset's: smooth, grid-sheet, leaf-glass, rice-paper, or diffuser (a "
                        "Lambertian transmitter, for `svbtdf calibrate-emission`)");
   simulate->add_option("--threads", options->threads, "worker threads (0: all cores)")->capture_default_str();
-  simulate->callback([options, out, plan_file, rig_file, preset, emission] {
+  simulate->callback([options, out, plan_file, rig_file, preset, emission, polarisation] {
     if (!emission->empty()) options->monitor_emission = simulate::EmissionProfile::Parse(*emission, "--monitor-emission");
+    if (!polarisation->empty()) {
+      options->monitor_polarisation = simulate::Polarisation::Parse(*polarisation, "--monitor-polarization");
+    }
     if (!rig_file->empty()) {
       const simulate::RigFile rig = simulate::ReadRigFile(*rig_file);
       if (preset->count() > 0 && options->preset != rig.preset) {

@@ -88,9 +88,18 @@ void ParseCalibration(const json& object, const std::string& source, CapturePlan
 void ParseRigNotes(const json& object, const std::string& source, RigNotes* rig) {
   const Fields f(object, source, "rig.", {"monitor_distance_mm", "emission", "board", "sample_plane_board", "sample_width_mm",
                                           "sample_height_mm", "texels_x", "texels_y", "eta", "camera_response",
-                                          "monitor_orientation_deg"});
+                                          "monitor_orientation_deg", "monitor_polarisation"});
   rig->monitor_distance_mm = f.Number("monitor_distance_mm", 0.0, 10000.0, 0.0);
   rig->emission = f.Text("emission", "");
+  rig->monitor_polarisation = f.Text("monitor_polarisation", "");
+  if (!rig->monitor_polarisation.empty()) {
+    try {
+      rig->monitor_polarisation = simulate::Polarisation::Parse(rig->monitor_polarisation, "").ToString();
+    } catch (const common::Error&) {
+      f.Fail("rig.monitor_polarisation", "must be none or linear:DEG (the field's angle from the screen's pixel x axis "
+                                         "toward its top, degrees)");
+    }
+  }
   if (!rig->emission.empty() && rig->emission != "isotropic" && rig->emission != "lambertian" && rig->emission != "lcd") {
     f.Fail("rig.emission", "must be isotropic, lambertian or lcd");
   }
@@ -193,6 +202,7 @@ json CapturePlanToJson(const CapturePlan& plan) {
                {"texels_y", plan.rig.texels_y}, {"eta", plan.rig.eta}, {"camera_response", plan.rig.camera_response}}},
   };
   if (!std::isnan(plan.rig.monitor_orientation_deg)) out["rig"]["monitor_orientation_deg"] = plan.rig.monitor_orientation_deg;
+  if (!plan.rig.monitor_polarisation.empty()) out["rig"]["monitor_polarisation"] = plan.rig.monitor_polarisation;
   return out;
 }
 
@@ -245,6 +255,8 @@ CapturePlan PlanFromSimulation(const simulate::SimulatedSetup& setup) {
   plan.rig.eta = setup.preset.eta;
   plan.rig.camera_response = config.sensor.response;
   plan.rig.monitor_orientation_deg = simulate::NominalOrientationDeg(config.monitor);
+  // Noted only for a polarised screen, so that the presets' plans and manifests stay as they were.
+  if (config.monitor.polarisation.linear()) plan.rig.monitor_polarisation = config.monitor.polarisation.ToString();
   return plan;
 }
 

@@ -334,6 +334,7 @@ nlohmann::json AcquisitionRig(const CapturePlan& plan, const CameraInfo& camera,
   if (pitch_mm > 0) rig.monitor.pixel_pitch_m = pitch_mm / 1000.0;
   if (notes.monitor_distance_mm > 0) rig.monitor.distance_m = notes.monitor_distance_mm / 1000.0;
   rig.monitor.emission = notes.emission;
+  rig.monitor.polarisation = notes.monitor_polarisation;
   rig.monitor.orientation_deg = notes.monitor_orientation_deg;
   rig.dots.cols = plan.dot_cols;
   rig.dots.rows = plan.dot_rows;

@@ -105,6 +105,7 @@ CapturePlan AsSimulated(const CapturePlan& lab_plan, const simulate::SimulatedSe
   const RigNotes& truth = simulated.rig;
   if (!(notes.monitor_distance_mm > 0)) notes.monitor_distance_mm = truth.monitor_distance_mm;
   if (notes.emission.empty()) notes.emission = truth.emission;
+  if (notes.monitor_polarisation.empty()) notes.monitor_polarisation = truth.monitor_polarisation;
   notes.board = truth.board;
   notes.sample_plane_board = truth.sample_plane_board;
   if (!(notes.sample_width_mm > 0)) notes.sample_width_mm = truth.sample_width_mm;

@@ -6,6 +6,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/model/fresnel.h"
 #include "svbtdf/model/internal_reflection.h"
+#include "svbtdf/model/polarisation.h"
 
 namespace svbtdf::model {
 namespace {
@@ -26,7 +27,7 @@ DualMicrofacetModel::DualMicrofacetModel(double eta, SmithShadowing shadowing)
   }
 }
 
-VirtualConfiguration DualMicrofacetModel::RoughEntry(const Vec3& i, const Vec3& o) const {
+VirtualConfiguration DualMicrofacetModel::RoughEntry(const Vec3& i, const Vec3& o, const Vec3* field) const {
   VirtualConfiguration config;
   if (i.z() >= 0 || o.z() <= 0) return config;
   const Vec3 om = ScaledSlabDirection(o.x(), o.y(), eta_);
@@ -38,17 +39,18 @@ VirtualConfiguration DualMicrofacetModel::RoughEntry(const Vec3& i, const Vec3& 
   const double cos_omh = om.dot(h);
   // Refraction through a facet needs the light below it and the refracted ray above it.
   if (cos_ih >= 0 || cos_omh <= 0) return config;
-  const double transmit_entry = 1.0 - FresnelDielectric(-cos_ih, eta_);
-  const double transmit_exit = 1.0 - FresnelDielectric(o.z(), eta_);
+  // Through the facet h into the slab, then out through the flat exit (normal z).
+  const double transmit = field ? TwoInterfaceTransmittance(-i, *field, h, eta_, Vec3::UnitZ(), 1.0 / eta_)
+                                : (1.0 - FresnelDielectric(-cos_ih, eta_)) * (1.0 - FresnelDielectric(o.z(), eta_));
   const double g = shadowing_.G(i, om / eta_, h);
   config.valid = true;
   config.h = h;
-  config.factor = transmit_entry * transmit_exit * g * std::abs(cos_ih) * cos_omh /
+  config.factor = transmit * g * std::abs(cos_ih) * cos_omh /
                   (std::abs(i.z()) * om.z() * length2);
   return config;
 }
 
-VirtualConfiguration DualMicrofacetModel::RoughExit(const Vec3& i, const Vec3& o) const {
+VirtualConfiguration DualMicrofacetModel::RoughExit(const Vec3& i, const Vec3& o, const Vec3* field) const {
   VirtualConfiguration config;
   if (i.z() >= 0 || o.z() <= 0) return config;
   const Vec3 im = ScaledSlabDirection(-i.x(), -i.y(), eta_);
@@ -59,29 +61,30 @@ VirtualConfiguration DualMicrofacetModel::RoughExit(const Vec3& i, const Vec3& o
   const double cos_imh = im.dot(h);
   const double cos_oh = o.dot(h);
   if (cos_imh <= 0 || cos_oh <= 0) return config;
-  const double transmit_entry = 1.0 - FresnelDielectric(-i.z(), eta_);
-  const double transmit_exit = 1.0 - FresnelDielectric(cos_oh, eta_);
+  // Into the slab through the flat entry (normal z), then out through the facet h.
+  const double transmit = field ? TwoInterfaceTransmittance(-i, *field, Vec3::UnitZ(), eta_, h, 1.0 / eta_)
+                                : (1.0 - FresnelDielectric(-i.z(), eta_)) * (1.0 - FresnelDielectric(cos_oh, eta_));
   const double g = shadowing_.G(-im / eta_, o, h);
   config.valid = true;
   config.h = h;
-  config.factor = transmit_entry * transmit_exit * g * cos_imh * cos_oh / (im.z() * o.z() * length2);
+  config.factor = transmit * g * cos_imh * cos_oh / (im.z() * o.z() * length2);
   return config;
 }
 
-double DualMicrofacetModel::RhoT(const Ndf& ndf, const Vec3& i, const Vec3& o) const {
-  const VirtualConfiguration c = RoughEntry(i, o);
+double DualMicrofacetModel::RhoT(const Ndf& ndf, const Vec3& i, const Vec3& o, const Vec3* field) const {
+  const VirtualConfiguration c = RoughEntry(i, o, field);
   return c.valid ? c.factor * ndf.D(c.h) : 0.0;
 }
 
-double DualMicrofacetModel::RhoB(const Ndf& ndf, const Vec3& i, const Vec3& o) const {
-  const VirtualConfiguration c = RoughExit(i, o);
+double DualMicrofacetModel::RhoB(const Ndf& ndf, const Vec3& i, const Vec3& o, const Vec3* field) const {
+  const VirtualConfiguration c = RoughExit(i, o, field);
   return c.valid ? c.factor * ndf.D(c.h) : 0.0;
 }
 
-double DualMicrofacetModel::Rho(const Ndf& ndf, double alpha, const Vec3& i, const Vec3& o) const {
-  if (alpha >= 1.0) return RhoT(ndf, i, o);
-  if (alpha <= 0.0) return RhoB(ndf, i, o);
-  return LogBlend(RhoT(ndf, i, o), RhoB(ndf, i, o), alpha);
+double DualMicrofacetModel::Rho(const Ndf& ndf, double alpha, const Vec3& i, const Vec3& o, const Vec3* field) const {
+  if (alpha >= 1.0) return RhoT(ndf, i, o, field);
+  if (alpha <= 0.0) return RhoB(ndf, i, o, field);
+  return LogBlend(RhoT(ndf, i, o, field), RhoB(ndf, i, o, field), alpha);
 }
 
 double LogBlend(double rho_T, double rho_B, double alpha) {

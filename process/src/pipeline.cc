@@ -82,8 +82,9 @@ calib::SessionCalibration CalibrationOf(const session::Session& session, const P
 
 void ProcessUnlessDone(const session::Session& session, const calib::SessionCalibration& calibration,
                        const fs::path& processed, const ProcessOptions& options, const PipelineListener& listener) {
+  std::string corrected;  // the polarisation a finished store was corrected for ("": none)
   try {
-    fit::SliceStore::Open(processed);
+    corrected = fit::SliceStore::Open(processed).info().provenance.value("polarisation_corrected", std::string());
   } catch (const common::Error&) {
     // Not there or unfinished: process (an unfinished store resumes).
     Say(listener, "== 2/3 processing into " + processed.string());
@@ -101,6 +102,14 @@ void ProcessUnlessDone(const session::Session& session, const calib::SessionCali
     common::ThrowInvalidInput(processed.string(),
                               "was processed under another monitor emission profile than the one asked for",
                               "give the same --emission-profile, or another --work folder");
+  }
+  // ... nor one corrected for another polarisation of the monitor.
+  const std::string wanted_polarisation = options.polarisation ? *options.polarisation : session.rig().monitor.polarisation;
+  const session::PolarisationNote note = session::ParsePolarisationNote(wanted_polarisation, "--monitor-polarisation");
+  if (note.linear != !corrected.empty() ||
+      (note.linear && session::ParsePolarisationNote(corrected, processed.string()).angle_deg != note.angle_deg)) {
+    common::ThrowInvalidInput(processed.string(), "was processed for another monitor polarisation than the one asked for",
+                              "give the same --monitor-polarisation, or another --work folder");
   }
   Say(listener, "== 2/3 processing: using " + processed.string());
 }

@@ -20,6 +20,8 @@
 #include "svbtdf/common/parallel.h"
 #include "svbtdf/common/progress.h"
 #include "svbtdf/fit/slice_store.h"
+#include "svbtdf/model/dual_microfacet.h"
+#include "svbtdf/model/polarisation.h"
 #include "svbtdf/process/slice_store_writer.h"
 #include "svbtdf/session/capture_key.h"
 
@@ -296,16 +298,60 @@ std::vector<float> MergeBrackets(ReadAhead& images, int brackets, const Rectifie
   return merge.Rates();
 }
 
+// A linearly polarised screen (docs/capture.md, "A polarised monitor"): the slab transmits the
+// dot's light with its polarised Fresnel factors, not the unpolarised ones the model assumes.
+// The correction divides each sample by the ratio of the two for the model's configurations,
+// each with its own facet (model::DualMicrofacetModel's `field`), blended with alpha = 1/2 in
+// log space as the model blends them (the texel's alpha is not known before the fit; the
+// configurations' ratios agree near the lobe's peak, where the samples carry most weight).
+class PolarisationCorrection {
+ public:
+  PolarisationCorrection(const session::PolarisationNote& note, const calib::MonitorCalibration& monitor, double eta)
+      : linear_(note.linear), model_(eta > 1.0 ? eta : 1.5) {
+    if (!linear_) return;
+    const model::Vec3 n = monitor.normal.normalized();
+    const double o = monitor.orientation_deg * model::kPi / 180.0;
+    const model::Vec3 u0(std::cos(o), std::sin(o), 0.0);
+    const model::Vec3 right = (u0 - u0.dot(n) * n).normalized();
+    const model::Vec3 up = n.cross(right);  // -down: a physical screen has right x down = -normal
+    const double a = note.angle_deg * model::kPi / 180.0;
+    field_ = std::cos(a) * right + std::sin(a) * up;
+  }
+  bool linear() const { return linear_; }
+  // Measured R over the unpolarised R of the same texel (to first order in alpha's spread).
+  double Ratio(const model::Vec3& i, const model::Vec3& o) const {
+    const model::Vec3 field = model::TransverseField(field_, -i);
+    double log_sum = 0.0;
+    int terms = 0;
+    for (int config = 0; config < 2; ++config) {
+      const model::VirtualConfiguration plain = config ? model_.RoughExit(i, o) : model_.RoughEntry(i, o);
+      if (!plain.valid || !(plain.factor > 0)) continue;
+      const model::VirtualConfiguration polarised = config ? model_.RoughExit(i, o, &field) : model_.RoughEntry(i, o, &field);
+      if (!(polarised.factor > 0)) continue;
+      log_sum += std::log(polarised.factor / plain.factor);
+      ++terms;
+    }
+    return terms > 0 ? std::exp(log_sum / terms) : 1.0;
+  }
+
+ private:
+  bool linear_;
+  model::DualMicrofacetModel model_;
+  model::Vec3 field_ = model::Vec3::Zero();
+};
+
 // The measurement equation (notes, "Measurement to BTDF"): R = I |p - x|^2 / (|i.z| L_q P(theta_q)),
 // with L_q = exitance * pi r^2 in the same camera units as I.
 void ToBtdf(const TexelGeometry& geometry, const calib::MonitorCalibration& monitor, int dot,
-            const std::vector<float>& exitance, std::vector<float>* values) {
+            const std::vector<float>& exitance, const PolarisationCorrection& polarisation,
+            std::vector<float>* values) {
   const double dot_area = std::numbers::pi * monitor.dot_radius_m * monitor.dot_radius_m;
   for (int64_t t = 0; t < geometry.num_texels(); ++t) {
     const model::Vec3 to_dot = geometry.dots[dot] - geometry.TexelCentre(t);
     const double r2 = to_dot.squaredNorm();
     const model::Vec3 i = to_dot / std::sqrt(r2);
-    const double emission = monitor.Emission(-i.dot(monitor.normal));
+    double emission = monitor.Emission(-i.dot(monitor.normal));
+    if (polarisation.linear()) emission *= polarisation.Ratio(i, geometry.View(t));
     for (int c = 0; c < 3; ++c) {
       const double l_q = exitance[3 * t + c] * dot_area * emission;
       float& v = (*values)[3 * t + c];
@@ -380,10 +426,21 @@ ProcessReport ProcessSession(const session::Session& session, const calib::Sessi
   info.provenance = {{"session", fs::absolute(session.folder()).string()},
                      {"rectify_samples", options.rectify_samples},
                      {"diffuse_threshold", options.diffuse_threshold}};
+  const std::string polarisation_spec = options.polarisation ? *options.polarisation : session.rig().monitor.polarisation;
+  const session::PolarisationNote polarisation_note = session::ParsePolarisationNote(
+      polarisation_spec, options.polarisation ? "--monitor-polarisation" : "session.json rig.monitor.polarisation");
+  if (polarisation_note.linear) {
+    if (!(info.eta > 1.0)) {
+      common::ThrowInvalidInput("session.json rig.sample.eta", "is needed to correct for the monitor's polarisation",
+                                "note the sample's eta, or process with --monitor-polarisation none");
+    }
+    info.provenance["polarisation_corrected"] = polarisation_spec;  // only when corrected: stores stay as they were
+  }
   SliceStoreWriter writer(out, info, calibration);
   if (writer.finished()) return FinishedReport(out, num_dots, start);
   const TexelGeometry geometry = MakeTexelGeometry(calibration, info.texels_x, info.texels_y);
   const Rectifier rectifier(calibration, geometry, options.rectify_samples);
+  const PolarisationCorrection polarisation(polarisation_note, calibration.monitor, info.eta);
 
   ImageReader reader(session, calibration);
   std::map<int, std::vector<float>> darks;
@@ -408,7 +465,7 @@ ProcessReport ProcessSession(const session::Session& session, const calib::Sessi
     common::ThrowIfInterrupted("processing");
     std::vector<float> values =
         MergeBrackets(images, static_cast<int>(plan.dot_keys[q].size()), rectifier, options.threads);
-    ToBtdf(geometry, calibration.monitor, q, exitance, &values);
+    ToBtdf(geometry, calibration.monitor, q, exitance, polarisation, &values);
     writer.WriteDot(q, values);
     if (progress) progress->Advance();
   }

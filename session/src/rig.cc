@@ -1,6 +1,8 @@
 #include "svbtdf/session/rig.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <sstream>
 #include <type_traits>
 
@@ -144,6 +146,7 @@ RigDescription ParseRigDescription(const json& rig, const std::string& source) {
   monitor.ReadInRange("orientation_deg", &d.monitor.orientation_deg, -360.0, 360.0);
   monitor.ReadInRange("black_level", &d.monitor.black_level, 0.0, 0.999);
   monitor.Read("emission", &d.monitor.emission);
+  monitor.Read("polarisation", &d.monitor.polarisation);
 
   const Fields dots = all.Member("dots");
   dots.ReadInRange("cols", &d.dots.cols, 1, 100000);
@@ -202,6 +205,7 @@ json ToJson(const RigDescription& d) {
   if (!std::isnan(d.monitor.orientation_deg)) monitor["orientation_deg"] = d.monitor.orientation_deg;
   if (!std::isnan(d.monitor.black_level)) monitor["black_level"] = d.monitor.black_level;
   Put(monitor, "emission", d.monitor.emission);
+  Put(monitor, "polarisation", d.monitor.polarisation);
   PutObject(rig, "monitor", monitor);
 
   json dots = json::object();
@@ -229,6 +233,20 @@ json ToJson(const RigDescription& d) {
   if (!d.acquisition_plan.is_null()) rig["acquisition_plan"] = d.acquisition_plan;
   if (!d.simulated.is_null()) rig["simulated"] = d.simulated;
   return rig;
+}
+
+PolarisationNote ParsePolarisationNote(const std::string& spec, const std::string& source) {
+  PolarisationNote note;
+  if (spec.empty() || spec == "none") return note;
+  char* end = nullptr;
+  const double angle = spec.rfind("linear:", 0) == 0 ? std::strtod(spec.c_str() + 7, &end) : 0.0;
+  if (end == nullptr || *end != '\0' || end == spec.c_str() + 7 || !std::isfinite(angle)) {
+    common::ThrowInvalidInput(source, "must be none or linear:DEG (the field's angle from the screen's pixel x axis "
+                                      "toward its top, degrees), got '" + spec + "'");
+  }
+  note.linear = true;
+  note.angle_deg = angle;
+  return note;
 }
 
 }  // namespace svbtdf::session

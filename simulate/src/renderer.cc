@@ -15,6 +15,7 @@
 
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/random.h"
+#include "svbtdf/model/polarisation.h"
 
 namespace svbtdf::simulate {
 namespace {
@@ -160,6 +161,8 @@ void RigRenderer::PrecomputeBackground() {
   const double patch_w = m.width / kPatchesX, patch_h = m.height / kPatchesY;
   const double patch_intensity = m.white_exitance * m.Luminance(0.0) * patch_w * patch_h;
   const model::Vec3 camera = rig_.camera().Centre();
+  const bool polarised = m.polarisation.linear();
+  const model::Vec3 field = m.polarisation.FieldDirection(frame);
   background_.assign(groups_.size() * 3, 0.f);
   common::ParallelFor(static_cast<int>(groups_.size()), threads_, 256, [&](int begin, int end) {
     for (int g = begin; g < end; ++g) {
@@ -174,7 +177,8 @@ void RigRenderer::PrecomputeBackground() {
           const double r2 = to_light.squaredNorm();
           const model::Vec3 i = to_light / std::sqrt(r2);
           const double intensity = patch_intensity * m.emission(-frame.normal.dot(i));
-          const model::Rgb rgb = material_->Evaluate(group.texel, i, o);
+          const model::Rgb rgb = polarised ? material_->EvaluatePolarised(group.texel, i, o, model::TransverseField(field, -i))
+                                           : material_->Evaluate(group.texel, i, o);
           sum += model::Vec3(rgb[0], rgb[1], rgb[2]) * (std::abs(i.z()) * intensity / r2);
         }
       }
@@ -188,6 +192,8 @@ model::Vec3 RigRenderer::DotRadianceAt(const Dot& dot, const Group& group) const
   const model::Vec3 o = (rig_.camera().Centre() - x).normalized();
   const EmissionProfile& profile = rig_.config().monitor.emission;
   const MonitorFrame& frame = rig_.monitor_frame();
+  const Polarisation& polarisation = rig_.config().monitor.polarisation;
+  const model::Vec3 field = polarisation.linear() ? polarisation.FieldDirection(frame) : model::Vec3::Zero();
   const double angular_radius = dot.radius / (dot.position - x).norm();
   const bool point = angular_radius < 0.1 * material_->MinRoughness(group.texel);
   model::Vec3 sum = model::Vec3::Zero();
@@ -198,7 +204,10 @@ model::Vec3 RigRenderer::DotRadianceAt(const Dot& dot, const Group& group) const
     const double r2 = to_light.squaredNorm();
     const model::Vec3 i = to_light / std::sqrt(r2);
     const double intensity = dot.intensity * (point ? 1.0 : kRadonWeights[k]) * profile(-frame.normal.dot(i));
-    const model::Rgb rgb = material_->Evaluate(group.texel, i, o);
+    // A polarised screen's light reaches x along -i with the transverse part of its field.
+    const model::Rgb rgb = polarisation.linear()
+                               ? material_->EvaluatePolarised(group.texel, i, o, model::TransverseField(field, -i))
+                               : material_->Evaluate(group.texel, i, o);
     sum += model::Vec3(rgb[0], rgb[1], rgb[2]) * (std::abs(i.z()) * intensity / r2);
   }
   return sum;

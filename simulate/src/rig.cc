@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <string>
 
@@ -113,6 +114,32 @@ EmissionProfile EmissionProfile::Parse(const std::string& spec, const std::strin
   profile.kind = "lcd";
   profile.exponent = n;
   return profile;
+}
+
+model::Vec3 Polarisation::FieldDirection(const MonitorFrame& frame) const {
+  const double a = angle_deg * model::kPi / 180.0;
+  return (std::cos(a) * frame.right - std::sin(a) * frame.down).normalized();
+}
+
+Polarisation Polarisation::Parse(const std::string& spec, const std::string& option) {
+  Polarisation polarisation;
+  if (spec == "none") return polarisation;
+  char* end = nullptr;
+  const double angle = spec.rfind("linear:", 0) == 0 ? std::strtod(spec.c_str() + 7, &end) : 0.0;
+  if (end == nullptr || *end != '\0' || end == spec.c_str() + 7 || !std::isfinite(angle)) {
+    common::ThrowInvalidInput(option, "must be none or linear:DEG (the field's angle from the screen's pixel x axis "
+                                      "toward its top, degrees), got '" + spec + "'");
+  }
+  polarisation.kind = "linear";
+  polarisation.angle_deg = angle;
+  return polarisation;
+}
+
+std::string Polarisation::ToString() const {
+  if (!linear()) return "none";
+  char text[64];
+  std::snprintf(text, sizeof text, "linear:%g", angle_deg);
+  return text;
 }
 
 double MonitorConfig::Luminance(double level) const {
@@ -256,6 +283,10 @@ void Rig::Validate() const {
                       "use isotropic, lambertian or lcd");
   }
   if (kind == "lcd") RequirePositive(m.emission.exponent, "monitor.emission.exponent");
+  if ((m.polarisation.kind != "none" && m.polarisation.kind != "linear") || !std::isfinite(m.polarisation.angle_deg)) {
+    common::ThrowInvalidInput("monitor.polarisation", "unknown polarisation '" + m.polarisation.kind + "'",
+                              "use none or linear with a finite angle");
+  }
   const DotGridConfig& g = config_.dots;
   if (g.cols < 1 || g.rows < 1) common::ThrowInvalidInput("dots", "the grid needs at least 1 x 1 dots");
   RequirePositive(g.span_scale, "dots.span_scale");

@@ -64,7 +64,7 @@ void ParseCamera(const json& object, const std::string& source, RigFile* file) {
 
 void ParseMonitor(const json& object, const std::string& source, RigConfig* rig) {
   const Fields f(object, source, "monitor.", {"distance_mm", "width_mm", "height_mm", "centre_mm", "pixel_pitch_mm",
-                                              "orientation_deg", "tilt_deg", "gamma", "emission", "emission_exponent"});
+                                              "orientation_deg", "tilt_deg", "gamma", "emission", "emission_exponent", "polarisation"});
   MonitorConfig& m = rig->monitor;
   m.distance = f.Number("distance_mm", 0.1, 1e4, 1000.0 * m.distance) / 1000.0;
   m.width = f.Number("width_mm", 1.0, 1e5, 1000.0 * m.width) / 1000.0;
@@ -82,6 +82,15 @@ void ParseMonitor(const json& object, const std::string& source, RigConfig* rig)
     f.Fail("monitor.emission", "must be isotropic, lambertian or lcd");
   }
   m.emission.exponent = f.Number("emission_exponent", 1e-3, 100.0, m.emission.exponent);
+  if (f.Has("polarisation")) {
+    const std::string spec = f.Text("polarisation", "none");
+    try {
+      m.polarisation = Polarisation::Parse(spec, "monitor.polarisation");
+    } catch (const common::Error&) {
+      f.Fail("monitor.polarisation", "must be none or linear:DEG (the field's angle from the screen's pixel x axis "
+                                     "toward its top, degrees)");
+    }
+  }
 }
 
 void ParseSample(const json& object, const std::string& source, RigFile* file) {

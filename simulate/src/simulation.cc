@@ -96,6 +96,17 @@ SimulationPreset PresetWithOptions(const SimulationOptions& options) {
   if (!std::isnan(options.monitor_tilt_deg)) preset.rig.monitor.tilt_deg = options.monitor_tilt_deg;
   if (options.mirror_monitor) preset.rig.monitor.mirrored = true;
   if (options.monitor_emission) preset.rig.monitor.emission = *options.monitor_emission;
+  if (options.monitor_polarisation) {
+    if (options.monitor_polarisation->linear() && options.truth != "model") {
+      common::ThrowInvalidInput("--monitor-polarization", "applies to the analytic truth only (--truth model)",
+                                "the Monte Carlo slab tracer does not follow polarisation");
+    }
+    preset.rig.monitor.polarisation = *options.monitor_polarisation;
+  }
+  if (preset.rig.monitor.polarisation.linear() && options.truth != "model") {  // a rig file's
+    common::ThrowInvalidInput("monitor.polarisation", "applies to the analytic truth only (--truth model)",
+                              "the Monte Carlo slab tracer does not follow polarisation");
+  }
   if (!options.pattern.empty()) {
     const std::vector<std::string> names = TruthPatternNames();
     if (std::find(names.begin(), names.end(), options.pattern) == names.end()) {
@@ -142,6 +153,7 @@ std::unique_ptr<SimulatedSetup> LoadSimulatedSetup(const fs::path& out, int thre
   preset.rig.monitor.tilt_deg = truth.monitor.tilt_deg;
   preset.rig.monitor.mirrored = truth.monitor.mirrored;
   preset.rig.monitor.emission = truth.monitor.emission;
+  preset.rig.monitor.polarisation = truth.monitor.polarisation;
   if (!truth.capture.pattern.empty()) preset.pattern = truth.capture.pattern;
   SimulationOptions options;  // what MakeTruth needs to read the truth back (it exists: eta was read)
   options.truth = truth.capture.truth_kind;

@@ -1,8 +1,14 @@
 #include "svbtdf/simulate/truth.h"
 
+#include "svbtdf/common/error.h"
 #include "svbtdf/simulate/truth_material.h"
 
 namespace svbtdf::simulate {
+
+model::Rgb SpatialBtdf::EvaluatePolarised(int, const model::Vec3&, const model::Vec3&, const model::Vec3&) const {
+  common::ThrowInvalidInput("--monitor-polarization", "this truth cannot render polarised light",
+                            "polarised monitors are simulated with the analytic truth (--truth model) only");
+}
 
 Truth ReadTruth(const std::filesystem::path& folder) {
   Truth truth;

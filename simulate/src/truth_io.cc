@@ -76,6 +76,13 @@ void WriteRigTruth(const std::filesystem::path& path, const Rig& rig, const Capt
                     {"white_exitance", m.white_exitance},
                     {"emission", {{"kind", m.emission.kind}, {"exponent", m.emission.exponent}}},
                     {"orientation_deg", m.orientation_deg}, {"tilt_deg", m.tilt_deg}, {"mirrored", m.mirrored}};
+  // Only a polarised screen is written, so that the presets' truths stay as they were.
+  if (m.polarisation.linear()) {
+    out["monitor"]["polarisation"] = {
+        {"kind", m.polarisation.kind}, {"angle_deg", m.polarisation.angle_deg},
+        {"convention", "the field along the screen's right (u) turned by angle_deg toward its top (-down), "
+                       "counter-clockwise seen from the sample; each ray carries its transverse part"}};
+  }
   // The screen's frame: monitor pixel coordinates (u, v) sit at origin + pitch (u right + v down).
   const MonitorFrame& frame = rig.monitor_frame();
   out["monitor"]["frame"] = {{"origin", ToJson(frame.origin)}, {"right", ToJson(frame.right)},
@@ -155,6 +162,13 @@ RigTruth ReadRigTruth(const std::filesystem::path& path) {
     truth.monitor.orientation_deg = m.at("orientation_deg");
     truth.monitor.tilt_deg = m.at("tilt_deg");
     truth.monitor.mirrored = m.at("mirrored");
+    if (m.contains("polarisation")) {  // absent: unpolarised
+      truth.monitor.polarisation.kind = m.at("polarisation").at("kind");
+      truth.monitor.polarisation.angle_deg = m.at("polarisation").at("angle_deg");
+      if (truth.monitor.polarisation.kind != "linear" && truth.monitor.polarisation.kind != "none") {
+        common::ThrowFormatError(path.string(), "monitor.polarisation.kind must be none or linear");
+      }
+    }
     const json& s = in.at("sample");
     truth.sample.width = s.at("width");
     truth.sample.texels_x = s.at("texels_x");

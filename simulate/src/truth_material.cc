@@ -197,6 +197,13 @@ model::Rgb TruthMaterial::Evaluate(int index, const model::Vec3& i, const model:
   return {t.k_s[0] * rho + t.rho_d[0], t.k_s[1] * rho + t.rho_d[1], t.k_s[2] * rho + t.rho_d[2]};
 }
 
+model::Rgb TruthMaterial::EvaluatePolarised(int index, const model::Vec3& i, const model::Vec3& o,
+                                             const model::Vec3& field) const {
+  const TruthTexel& t = texels_[index];
+  const double rho = models_[index].Rho(*ndfs_[index], t.alpha, i, o, &field);
+  return {t.k_s[0] * rho + t.rho_d[0], t.k_s[1] * rho + t.rho_d[1], t.k_s[2] * rho + t.rho_d[2]};
+}
+
 double TruthMaterial::MinRoughness(int index) const {
   const model::AnalyticNdfParams& p = texels_[index].ndf;
   return std::min(p.alpha_x, p.alpha_y);

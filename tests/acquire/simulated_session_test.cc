@@ -17,6 +17,9 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/session/session.h"
+#include "svbtdf/simulate/capture_render.h"
+#include "svbtdf/simulate/simulation.h"
+#include "svbtdf/simulate/truth_io.h"
 #include "temp_folder.h"
 
 namespace svbtdf::acquire {
@@ -158,6 +161,37 @@ TEST_F(SimulatedSession, BadOptionsAreRefusedBeforeAnythingIsWritten) {
   const fs::path out = folder_->path() / "bad_eta";
   EXPECT_THROW(SimulateSession(out, options), common::Error);
   EXPECT_FALSE(fs::exists(out));
+}
+
+// `svbtdf simulate --monitor-polarization linear:45`: a complete session whose manifest notes
+// the polarisation and whose truth records it (and rebuilds it); the dot images change, the
+// captures without the sample do not. The unpolarised session notes nothing new.
+TEST_F(SimulatedSession, APolarisedScreenIsRecordedInTheSessionAndTheTruth) {
+  const fs::path out = folder_->path() / "polarised";
+  simulate::SimulationOptions options = Options();
+  options.monitor_polarisation = simulate::Polarisation::Parse("linear:45", "--monitor-polarization");
+  const SimulationOutput output = SimulateSession(out, options);
+  const session::Session session = session::Session::Open(out / "session");
+  EXPECT_TRUE(session.Verify(true).complete()) << session.Verify().Summary();
+  EXPECT_EQ(session.rig().monitor.polarisation, "linear:45");
+  EXPECT_EQ(session.rig_json().at("acquisition_plan").at("rig").at("monitor_polarisation"), "linear:45");
+  const simulate::RigTruth truth = simulate::ReadRigTruth(out / "truth" / "rig.json");
+  EXPECT_EQ(truth.monitor.polarisation.kind, "linear");
+  EXPECT_EQ(truth.monitor.polarisation.angle_deg, 45.0);
+  EXPECT_EQ(simulate::LoadSimulatedSetup(out, 1)->preset.rig.monitor.polarisation.angle_deg, 45.0);
+
+  const session::Session whole = session::Session::Open(Whole() / "session");
+  EXPECT_TRUE(whole.rig().monitor.polarisation.empty());
+  EXPECT_FALSE(simulate::ReadRigTruth(Whole() / "truth" / "rig.json").monitor.polarisation.linear());
+  EXPECT_EQ(session.Entry("flat_white/e0").crc32, whole.Entry("flat_white/e0").crc32);
+  EXPECT_EQ(session.Entry("board/v00").crc32, whole.Entry("board/v00").crc32);
+  int changed = 0;
+  for (const std::string& key : whole.planned_keys()) {
+    if (key.rfind("dot/", 0) == 0) changed += session.Entry(key).crc32 != whole.Entry(key).crc32;
+  }
+  EXPECT_GT(changed, 0);
+  // Run again with the same options: already complete.
+  EXPECT_TRUE(SimulateSession(out, options).already_complete);
 }
 
 }  // namespace

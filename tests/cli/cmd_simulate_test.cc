@@ -124,5 +124,19 @@ TEST_F(SimulateCommand, BadArgumentsAndFoldersAreClearErrors) {
   EXPECT_EQ(common::ReadTextFile(root_ / "busy" / "notes.txt"), "mine");
 }
 
+// `--monitor-polarization`: a bad spec, or a polarised Monte Carlo truth, is one line naming the
+// option, exit 2, before anything is written.
+TEST_F(SimulateCommand, BadMonitorPolarisationsAreClearErrors) {
+  for (const std::string& option : {std::string("--monitor-polarization linear:north"),
+                                    std::string("--monitor-polarization circular"),
+                                    std::string("--monitor-polarisation linear:45 --truth montecarlo")}) {
+    const fs::path out = root_ / "polarised";
+    const auto result = RunSvbtdf("simulate --preset tiny " + option + " --out " + out.string());
+    EXPECT_EQ(result.exit_code, 2) << option << "\n" << result.output;
+    EXPECT_NE(result.output.find("--monitor-polarization"), std::string::npos) << result.output;
+    EXPECT_FALSE(fs::exists(out / "session" / "journal.jsonl")) << option;
+  }
+}
+
 }  // namespace
 }  // namespace svbtdf

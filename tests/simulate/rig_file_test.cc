@@ -17,7 +17,7 @@ constexpr const char* kLabRig = R"({
   "format": "svbtdf-rig", "version": 1, "preset": "demo",
   "camera": { "fx": 5000, "distance_mm": 1100, "theta_deg": 40, "frame_time_s": 0.05,
               "control_delay_frames": 4, "bit_depth": 14 },
-  "monitor": { "distance_mm": 45, "pixel_pitch_mm": 0.2, "emission": "lambertian" },
+  "monitor": { "distance_mm": 45, "pixel_pitch_mm": 0.2, "emission": "lambertian", "polarisation": "linear:135" },
   "sample": { "width_mm": 70, "eta": 1.45 }
 })";
 
@@ -36,6 +36,7 @@ TEST(RigFile, GivenSettingsReplaceThePresetsAndTheRestStay) {
   EXPECT_DOUBLE_EQ(file.rig.monitor.distance, 0.045);
   EXPECT_DOUBLE_EQ(file.rig.monitor.pixel_pitch, 0.0002);
   EXPECT_EQ(file.rig.monitor.emission.kind, "lambertian");
+  EXPECT_EQ(file.rig.monitor.polarisation.ToString(), "linear:135");
   EXPECT_DOUBLE_EQ(file.rig.monitor.width, preset.monitor.width);
   EXPECT_DOUBLE_EQ(file.rig.sample.width, 0.07);
   EXPECT_EQ(file.rig.sample.texels_x, preset.sample.texels_x);
@@ -45,6 +46,7 @@ TEST(RigFile, GivenSettingsReplaceThePresetsAndTheRestStay) {
   const RigFile bare = ParseRigFile(R"({"format": "svbtdf-rig", "version": 1, "preset": "tiny"})", "bare.json");
   EXPECT_DOUBLE_EQ(bare.rig.intrinsics.fx, MakePreset("tiny").rig.intrinsics.fx);
   EXPECT_DOUBLE_EQ(bare.eta, MakePreset("tiny").eta);
+  EXPECT_FALSE(bare.rig.monitor.polarisation.linear());
 }
 
 std::string ErrorOf(const std::string& text) {
@@ -65,6 +67,7 @@ TEST(RigFile, AWrongFieldOrAnImpossibleRigIsOneErrorNamingFileAndField) {
       {head + R"("camera": {"fx": "big"}})", "camera.fx"},
       {head + R"("monitor": {"distance_mm": -3}})", "monitor.distance_mm"},
       {head + R"("monitor": {"emission": "laser"}})", "monitor.emission"},
+      {head + R"("monitor": {"polarisation": "linear:up"}})", "monitor.polarisation"},
       {head + R"("sample": {"texels_x": 2.5}})", "sample.texels_x"},
       {head + R"("preset": "huge"})", "preset"},
       {R"({"format": "svbtdf-rig", "version": 7})", "version 7"},

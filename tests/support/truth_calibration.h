@@ -30,6 +30,9 @@ inline calib::SessionCalibration CalibrationFromTruth(const std::filesystem::pat
   c.sample_plane.width_m = truth.sample.width;
   c.sample_plane.height_m = truth.sample.height();
   c.monitor.normal = simulate::MonitorFrame::Of(truth.monitor).normal;  // the screen may be tilted
+  // Which way it lies: its u axis's direction in the sample plane, counter-clockwise from +x.
+  const model::Vec3 right = simulate::MonitorFrame::Of(truth.monitor).right;
+  c.monitor.orientation_deg = std::fmod(std::atan2(right.y(), right.x()) * 180.0 / model::kPi + 360.0, 360.0);
   c.monitor.distance_m = truth.monitor.distance;
   c.monitor.pixel_pitch_m = truth.monitor.pixel_pitch;
   c.monitor.dot_radius_m = truth.dots.front().radius;

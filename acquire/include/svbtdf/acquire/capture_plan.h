@@ -45,6 +45,10 @@ struct RigNotes {
   // Which way the screen lies (rig.monitor.orientation_deg, docs/calibration-format.md); NaN: not
   // noted. Calibration checks it against the fiducial capture.
   double monitor_orientation_deg = std::numeric_limits<double>::quiet_NaN();
+  // The screen's polarisation, as a lab measures it with a polariser (docs/capture.md, "A
+  // polarised monitor"): none, or linear:DEG (the field's angle from the screen's pixel x axis
+  // toward its top); empty: not noted. Recorded in the manifest's rig.monitor.polarisation.
+  std::string monitor_polarisation;
 };
 
 struct CapturePlan {

@@ -37,16 +37,22 @@ class DualMicrofacetModel {
   // Rough entry, flat exit: om = (o.x, o.y, sqrt(eta^2 - |o_xy|^2)), h_T = normalize(i + om),
   //   rho_T = (1-F(|i.h|)) (1-F(o.z)) G(i, t, h) D(h) |i.h| |om.h| / (|i.z| om.z |i + om|^2)
   // with t = om / eta the in-slab direction.
-  VirtualConfiguration RoughEntry(const Vec3& i, const Vec3& o) const;
+  //
+  // `field`: for linearly polarised light, its unit electric field, transverse to the travel
+  // direction -i (polarisation.h, TransverseField). The Fresnel product (1 - F_entry)(1 - F_exit)
+  // is then the power the two interfaces transmit of that field (TwoInterfaceTransmittance, each
+  // facet's own plane of incidence); null: unpolarised light, the product of the unpolarised
+  // transmittances (docs/model.md, "Polarised light").
+  VirtualConfiguration RoughEntry(const Vec3& i, const Vec3& o, const Vec3* field = nullptr) const;
 
   // Flat entry, rough exit: im = (-i.x, -i.y, sqrt(eta^2 - |i_xy|^2)), h_B = normalize(im - o),
   //   rho_B = (1-F(|i.z|)) (1-F(|o.h|)) G(-im/eta, o, h) D(h) |im.h| |o.h| / (im.z o.z |im - o|^2)
-  VirtualConfiguration RoughExit(const Vec3& i, const Vec3& o) const;
+  VirtualConfiguration RoughExit(const Vec3& i, const Vec3& o, const Vec3* field = nullptr) const;
 
-  double RhoT(const Ndf& ndf, const Vec3& i, const Vec3& o) const;
-  double RhoB(const Ndf& ndf, const Vec3& i, const Vec3& o) const;
+  double RhoT(const Ndf& ndf, const Vec3& i, const Vec3& o, const Vec3* field = nullptr) const;
+  double RhoB(const Ndf& ndf, const Vec3& i, const Vec3& o, const Vec3* field = nullptr) const;
   // The blended model with weight alpha in [0, 1] on the rough-entry term.
-  double Rho(const Ndf& ndf, double alpha, const Vec3& i, const Vec3& o) const;
+  double Rho(const Ndf& ndf, double alpha, const Vec3& i, const Vec3& o, const Vec3* field = nullptr) const;
 
  private:
   double eta_;

@@ -28,6 +28,11 @@ struct ProcessOptions {
   // calibrate-emission`) instead of the calibration's nominal one; the store's copy of
   // calibration.json records the profile used.
   std::optional<calib::EmissionProfile> emission;
+  // The monitor's polarisation (`--monitor-polarisation none|linear:DEG`) instead of the
+  // session's rig.monitor.polarisation note. A linearly polarised screen's samples are divided by
+  // the ratio of the slab's polarised to unpolarised transmittance (docs/capture.md, "A
+  // polarised monitor"); "none" ignores a note.
+  std::optional<std::string> polarisation;
 };
 
 struct ProcessReport {

@@ -56,7 +56,17 @@ struct RigMonitor {
   double orientation_deg = kNotNoted;  // which way the screen lies (docs/calibration-format.md)
   double black_level = kNotNoted;      // luminance of level 0 as a fraction of white
   std::string emission;                // isotropic | lambertian | lcd; empty: not noted
+  std::string polarisation;            // none | linear:DEG (docs/capture.md); empty: not noted
 };
+
+// rig.monitor.polarisation parsed: "none" or empty (unpolarised, or not noted), or "linear:DEG"
+// (the field's angle from the screen's pixel x axis toward its top, counter-clockwise seen from
+// the sample). Throws svbtdf::Error(kInvalidInput) naming `source` for anything else.
+struct PolarisationNote {
+  bool linear = false;
+  double angle_deg = 0.0;
+};
+PolarisationNote ParsePolarisationNote(const std::string& spec, const std::string& source);
 
 struct RigDots {
   int cols = 0, rows = 0;

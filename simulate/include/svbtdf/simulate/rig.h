@@ -86,6 +86,27 @@ struct EmissionProfile {
   static EmissionProfile Parse(const std::string& spec, const std::string& option);
 };
 
+struct MonitorFrame;
+
+// The polarisation of the monitor's light (docs/simulator.md, "A polarised LCD"):
+//   none        unpolarised (a CRT, an OLED; the default)
+//   linear      linearly polarised, as an LCD's output polariser makes it: the electric field lies
+//               along the screen's pixel x axis (u) turned by angle_deg toward its top (-v),
+//               counter-clockwise as seen from the screen's front (from the sample)
+// A ray leaving the screen at an angle carries the part of that field transverse to it.
+struct Polarisation {
+  std::string kind = "none";
+  double angle_deg = 0.0;
+
+  bool linear() const { return kind == "linear"; }
+  // The field direction in the sample frame: cos(angle) right - sin(angle) down.
+  model::Vec3 FieldDirection(const MonitorFrame& frame) const;
+  // `none` or `linear:DEG` (any finite DEG), as `svbtdf simulate --monitor-polarization` takes
+  // it; svbtdf::Error(kInvalidInput) naming `option` otherwise.
+  static Polarisation Parse(const std::string& spec, const std::string& option);
+  std::string ToString() const;
+};
+
 // The monitor is a physical screen (docs/calibration-format.md, "The monitor frame"): its pixel
 // coordinates (u, v) run to the right and down as seen from its front, from the sample and the
 // camera, so that u x v points into the screen, away from the sample. Monitor pixel (i, j) covers
@@ -111,6 +132,7 @@ struct MonitorConfig {
   // simulator's radiometric unit (the camera's `sensitivity` turns it into electrons).
   double white_exitance = 1.0;
   EmissionProfile emission;
+  Polarisation polarisation;
 
   double Luminance(double level) const;
 };

@@ -32,6 +32,9 @@ struct SimulationOptions {
   // material pattern instead of the preset's (`--pattern diffuser`): together the diffuser
   // session and the sample session of one LCD rig (docs/simulator.md, "An LCD rig").
   std::optional<EmissionProfile> monitor_emission;
+  // The screen's polarisation instead of the preset's unpolarised light
+  // (`--monitor-polarization linear:45`; docs/simulator.md, "A polarised LCD"); analytic truth only.
+  std::optional<Polarisation> monitor_polarisation;
   std::string pattern;
   // A lab's own rig (`svbtdf simulate --rig`, simulate/rig_file.h) instead of the preset's; the
   // preset still gives the material. `rig_source` names it in the session's notes.

@@ -22,6 +22,12 @@ class SpatialBtdf {
   // camera, o.z > 0), including any diffuse part.
   virtual model::Rgb Evaluate(int index, const model::Vec3& i, const model::Vec3& o) const = 0;
 
+  // The same for linearly polarised light whose unit electric field `field` is transverse to its
+  // travel direction -i (a polarised monitor, docs/simulator.md "A polarised LCD"). A truth that
+  // cannot tell polarisations apart throws svbtdf::Error(kInvalidInput).
+  virtual model::Rgb EvaluatePolarised(int index, const model::Vec3& i, const model::Vec3& o,
+                                       const model::Vec3& field) const;
+
   // How sharp the texel's lobe can be, as a microfacet roughness: the renderer treats a dot as a
   // point when it subtends less than a tenth of this.
   virtual double MinRoughness(int index) const = 0;

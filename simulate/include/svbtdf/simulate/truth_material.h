@@ -54,6 +54,10 @@ class TruthMaterial final : public SpatialBtdf {
 
   // R(x, i, o) of texel `index` for unit i (toward the light, i.z < 0) and o (toward the camera).
   model::Rgb Evaluate(int index, const model::Vec3& i, const model::Vec3& o) const override;
+  // Each configuration's Fresnel product replaced by the power its two interfaces transmit of the
+  // polarised field (model::DualMicrofacetModel::RoughEntry's `field`); rho_d is unpolarised.
+  model::Rgb EvaluatePolarised(int index, const model::Vec3& i, const model::Vec3& o,
+                               const model::Vec3& field) const override;
 
   // The smallest NDF roughness of a texel: how sharp its lobe can be (for quadrature choices).
   double MinRoughness(int index) const override;
