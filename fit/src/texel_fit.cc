@@ -10,9 +10,11 @@
 
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/minimize.h"
+#include "svbtdf/fit/ndf_error.h"
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/tabulated_ndf.h"
 #include "small_problem.h"
+#include "uncertainty.h"
 
 namespace svbtdf::fit {
 
@@ -317,7 +319,11 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
   const model::DualMicrofacetModel initial_model(eta_, ShadowingFor(shadowing_roughness));
   const Configurations configs = ComputeConfigurations(initial_model, samples, view);
 
-  // (1) ln D for a fixed alpha.
+  // (1) ln D for a fixed alpha. The last solve's unknowns and the sum of its data rows' squared
+  // residuals are kept for the NDF's standard error.
+  Eigen::VectorXd last_x;
+  double last_data_ssr = 0.0;
+  int last_data_rows = 0;
   const auto solve_ln_d = [&](double alpha, bool with_symmetry) {
     SparseRows data;
     for (size_t k = 0; k < samples.size(); ++k) {
@@ -350,6 +356,13 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
     // Added with weight zero in the final pass so that both passes share one pattern.
     normal += (with_symmetry ? 1.0 : model::Square(options_.final_symmetry_weight)) * system.symmetry_normal;
     const Eigen::VectorXd x = SolveNormalEquations(normal, rhs, state);
+    std::vector<double> row_residual(data.rhs.size());
+    for (size_t r = 0; r < data.rhs.size(); ++r) row_residual[r] = -data.rhs[r];
+    for (const Triplet& t : data.triplets) row_residual[t.row()] += t.value() * x[t.col()];
+    last_data_ssr = 0.0;
+    for (double r : row_residual) last_data_ssr += r * r;
+    last_data_rows = used;
+    last_x = x;
     std::vector<double> ln_d(grid_.num_cells(), options_.horizon_ln_d);
     for (int c = 0; c < grid_.num_cells(); ++c) {
       if (system.column[c] >= 0) ln_d[c] = x[system.column[c]];
@@ -383,6 +396,67 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
   result.alternations = std::min(result.alternations, options_.max_alternations);
   ln_d = solve_ln_d(alpha, /*with_symmetry=*/false);
 
+  // The NDF's width and its standard error: var = s^2 g^T N^-1 g, with N the final pass's normal
+  // matrix (still factorised in the workspace: one more solve), g the width's gradient in the
+  // unknowns and s^2 the data rows' mean squared residual (docs/fitting.md, "Uncertainty").
+  if (options_.profile_uncertainty) {
+    std::vector<double> d(grid_.num_cells());
+    double mass = 0;
+    for (int c = 0; c < grid_.num_cells(); ++c) {
+      d[c] = std::exp(ln_d[c]);
+      mass += d[c] * grid_.CellCenter(c).z() * grid_.CellSolidAngle(c);
+    }
+    const double width = NdfWidth(grid_, d);
+    if (std::isfinite(width) && width > 0 && mass > 0 && last_x.size() == system.num_unknowns) {
+      Eigen::VectorXd gradient = Eigen::VectorXd::Zero(system.num_unknowns);
+      for (int c = 0; c < grid_.num_cells(); ++c) {
+        if (system.column[c] < 0) continue;
+        const double z = grid_.CellCenter(c).z();
+        gradient[system.column[c]] =
+            d[c] * z * grid_.CellSolidAngle(c) * (1.0 - z * z - width * width) / (2.0 * width * mass);
+      }
+      const Eigen::VectorXd solved = state->solver.solve(gradient);
+      const double s2 = last_data_ssr / std::max(1, last_data_rows - 1);
+      result.ndf_width = width;
+      result.ndf_width_se = StandardError(s2 * gradient.dot(solved));
+    }
+  }
+
+  // alpha's profile: the final pass solved again at alpha -+ h, D free. With one view the data
+  // cannot tell how D is split between h_T and h_B (above), so alpha trades against D, and D's
+  // normalisation against k_s; the profile's curvature counts that, which a fit with D held fixed
+  // cannot. var(alpha) = s^2 / (kappa / 2), kappa the second difference of the data rows' sum of
+  // squares, s^2 their mean square; k_s's relative error adds d ln k_s / d alpha times it.
+  if (options_.profile_uncertainty) {
+    const double ssr0 = last_data_ssr, s2 = last_data_ssr / std::max(1, last_data_rows - 1);
+    const double h = 0.05;
+    const double lo = std::max(0.0, alpha - h), hi = std::min(1.0, alpha + h);
+    const auto scale_at = [&](const std::vector<double>& table) {
+      model::TabulatedNdf t(grid_, table);
+      return t.Normalize();
+    };
+    const double k0 = scale_at(ln_d);
+    const std::vector<double> ln_d_lo = solve_ln_d(lo, false);
+    const double ssr_lo = last_data_ssr, k_lo = scale_at(ln_d_lo);
+    const std::vector<double> ln_d_hi = solve_ln_d(hi, false);
+    const double ssr_hi = last_data_ssr, k_hi = scale_at(ln_d_hi);
+    // A parabola through the three points (the middle one need not be centred at a bound).
+    const double d1 = (ssr_lo - ssr0) / (lo - alpha + (lo == alpha ? 1 : 0)), d2 = (ssr_hi - ssr0) / (hi - alpha + (hi == alpha ? 1 : 0));
+    const double curvature = (hi > lo) && lo < alpha && hi > alpha ? 2.0 * (d2 - d1) / (hi - lo) : 0.0;
+    if (curvature > 0 && s2 > 0) {
+      result.alpha_profile_se = std::sqrt(2.0 * s2 / curvature);
+      if (k0 > 0 && k_lo > 0 && k_hi > 0) {
+        result.k_s_profile_relative_se = std::abs(std::log(k_hi) - std::log(k_lo)) / (hi - lo) * result.alpha_profile_se;
+      }
+    } else {
+      // Flat or concave: the data do not pin alpha down near the optimum.
+      result.alpha_profile_se = 0.5;
+      if (k0 > 0 && k_lo > 0 && k_hi > 0) {
+        result.k_s_profile_relative_se = std::abs(std::log(k_hi) - std::log(k_lo)) / std::max(hi - lo, 1e-3) * 0.5;
+      }
+    }
+  }
+
   // (3) Normalise D; its scale is the transmission scale k_s.
   model::TabulatedNdf ndf(grid_, ln_d);
   const double scale = ndf.Normalize();
@@ -411,6 +485,22 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
     if (summary.IsSolutionUsable()) {
       shadowing_roughness = parameters[0];
       result.k_s = std::exp(parameters[1]);
+      // Its standard error: the sandwich covariance of the same residuals at the optimum.
+      double cost_value = 0;
+      std::vector<double> residuals;
+      ceres::CRSMatrix jacobian;
+      if (options_.profile_uncertainty &&
+          problem.Evaluate(ceres::Problem::EvaluateOptions(), &cost_value, &residuals, nullptr, &jacobian)) {
+        Eigen::MatrixXd j = Eigen::MatrixXd::Zero(jacobian.num_rows, jacobian.num_cols);
+        for (int r = 0; r < jacobian.num_rows; ++r) {
+          for (int k = jacobian.rows[r]; k < jacobian.rows[r + 1]; ++k) j(r, jacobian.cols[k]) = jacobian.values[k];
+        }
+        const Eigen::VectorXd r = Eigen::Map<const Eigen::VectorXd>(residuals.data(), static_cast<Eigen::Index>(residuals.size()));
+        std::vector<model::Vec3> lights;
+        for (int k : rows) lights.push_back(samples[k].light);
+        const Neighbours neighbours = PointNeighbours(lights, NeighbourRadius());
+        result.shadowing_roughness_se = StandardError(SandwichCovariance(j, r, &neighbours)(0, 0));
+      }
     }
   }
   result.shadowing_roughness = shadowing_roughness;
