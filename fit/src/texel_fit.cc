@@ -324,8 +324,11 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
   Eigen::VectorXd last_x;
   double last_data_ssr = 0.0;
   int last_data_rows = 0;
+  SparseRows last_data;                // the last solve's data rows ...
+  std::vector<int> last_row_sample;    // ... and the sample of each
   const auto solve_ln_d = [&](double alpha, bool with_symmetry) {
     SparseRows data;
+    std::vector<int> row_sample;
     for (size_t k = 0; k < samples.size(); ++k) {
       const Sample& s = samples[k];
       // Samples too dark to use still get a row, with weight zero: the pattern of the normal
@@ -334,6 +337,7 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
       if (s.weight <= 0 || !RowDefined(configs.entry[k], configs.exit[k], alpha)) continue;
       const double w = s.used ? std::sqrt(s.weight) : 0.0;
       const int row = data.rows++;
+      row_sample.push_back(static_cast<int>(k));
       double rhs = 0.0;
       if (s.used) {
         rhs = std::log(s.rho);
@@ -363,6 +367,8 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
     for (double r : row_residual) last_data_ssr += r * r;
     last_data_rows = used;
     last_x = x;
+    last_data = std::move(data);
+    last_row_sample = std::move(row_sample);
     std::vector<double> ln_d(grid_.num_cells(), options_.horizon_ln_d);
     for (int c = 0; c < grid_.num_cells(); ++c) {
       if (system.column[c] >= 0) ln_d[c] = x[system.column[c]];
@@ -422,38 +428,47 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
     }
   }
 
-  // alpha's profile: the final pass solved again at alpha -+ h, D free. With one view the data
-  // cannot tell how D is split between h_T and h_B (above), so alpha trades against D, and D's
-  // normalisation against k_s; the profile's curvature counts that, which a fit with D held fixed
-  // cannot. var(alpha) = s^2 / (kappa / 2), kappa the second difference of the data rows' sum of
-  // squares, s^2 their mean square; k_s's relative error adds d ln k_s / d alpha times it.
-  if (options_.profile_uncertainty) {
-    const double ssr0 = last_data_ssr, s2 = last_data_ssr / std::max(1, last_data_rows - 1);
-    const double h = 0.05;
-    const double lo = std::max(0.0, alpha - h), hi = std::min(1.0, alpha + h);
-    const auto scale_at = [&](const std::vector<double>& table) {
-      model::TabulatedNdf t(grid_, table);
-      return t.Normalize();
-    };
-    const double k0 = scale_at(ln_d);
-    const std::vector<double> ln_d_lo = solve_ln_d(lo, false);
-    const double ssr_lo = last_data_ssr, k_lo = scale_at(ln_d_lo);
-    const std::vector<double> ln_d_hi = solve_ln_d(hi, false);
-    const double ssr_hi = last_data_ssr, k_hi = scale_at(ln_d_hi);
-    // A parabola through the three points (the middle one need not be centred at a bound).
-    const double d1 = (ssr_lo - ssr0) / (lo - alpha + (lo == alpha ? 1 : 0)), d2 = (ssr_hi - ssr0) / (hi - alpha + (hi == alpha ? 1 : 0));
-    const double curvature = (hi > lo) && lo < alpha && hi > alpha ? 2.0 * (d2 - d1) / (hi - lo) : 0.0;
-    if (curvature > 0 && s2 > 0) {
-      result.alpha_profile_se = std::sqrt(2.0 * s2 / curvature);
-      if (k0 > 0 && k_lo > 0 && k_hi > 0) {
-        result.k_s_profile_relative_se = std::abs(std::log(k_hi) - std::log(k_lo)) / (hi - lo) * result.alpha_profile_se;
+  // alpha's profile: with one view the data cannot tell how D is split between h_T and h_B
+  // (above), so alpha trades against D, and D's normalisation against k_s; a system with D held
+  // fixed cannot see that. The final pass with alpha free too has the Jacobian [A g], A the data
+  // rows' and g_i = w_i (ln rho_T,i - ln rho_B,i) their derivative in alpha; alpha's variance with
+  // D free is s^2 / (g^T g - u^T N^-1 u), u = A^T g (the Schur complement of the normal matrix N,
+  // still factorised: one more solve), and D moves with alpha by dx/dalpha = -N^-1 u, which moves
+  // ln k_s (D's mass) too.
+  if (options_.profile_uncertainty && last_x.size() == system.num_unknowns && last_data.rows > 0) {
+    const model::TabulatedNdf table(grid_, ln_d);
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(last_data.rows);
+    for (int r = 0; r < last_data.rows; ++r) {
+      const int k = last_row_sample[r];
+      const Sample& smp = samples[k];
+      if (!smp.used || !(smp.weight > 0)) continue;
+      const model::VirtualConfiguration& e = configs.entry[k];
+      const model::VirtualConfiguration& x = configs.exit[k];
+      if (!e.valid || !x.valid || !(e.factor > 0) || !(x.factor > 0)) continue;
+      const double ln_t = std::log(e.factor) + std::log(std::max(table.D(e.h), 1e-300));
+      const double ln_b = std::log(x.factor) + std::log(std::max(table.D(x.h), 1e-300));
+      g[r] = std::sqrt(smp.weight) * (ln_t - ln_b);
+    }
+    SparseMatrix a(last_data.rows, system.num_unknowns);
+    a.setFromTriplets(last_data.triplets.begin(), last_data.triplets.end());
+    const Eigen::VectorXd u = a.transpose() * g;
+    // The factorisation is the final pass's unless the width's solve above replaced it (it did not:
+    // that was a solve, not a factorisation).
+    const Eigen::VectorXd z = state->solver.solve(u);
+    const double schur = g.squaredNorm() - u.dot(z);
+    const double s2 = last_data_ssr / std::max(1, last_data_rows - 2);
+    if (schur > 0 && s2 > 0) {
+      result.alpha_profile_se = std::sqrt(s2 / schur);
+      double mass = 0, moved = 0;
+      for (int c = 0; c < grid_.num_cells(); ++c) {
+        if (system.column[c] < 0) continue;
+        const double m = std::exp(ln_d[c]) * grid_.CellCenter(c).z() * grid_.CellSolidAngle(c);
+        mass += m;
+        moved -= m * z[system.column[c]];
       }
+      if (mass > 0) result.k_s_profile_relative_se = std::abs(moved / mass) * result.alpha_profile_se;
     } else {
-      // Flat or concave: the data do not pin alpha down near the optimum.
-      result.alpha_profile_se = 0.5;
-      if (k0 > 0 && k_lo > 0 && k_hi > 0) {
-        result.k_s_profile_relative_se = std::abs(std::log(k_hi) - std::log(k_lo)) / std::max(hi - lo, 1e-3) * 0.5;
-      }
+      result.alpha_profile_se = 0.5;  // the data do not pin alpha down
     }
   }
 
