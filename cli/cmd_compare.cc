@@ -3,6 +3,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -33,6 +34,15 @@ void PrintSummary(const report::CompareMetrics& m) {
   }
   std::printf("held-out rel. RMSE %.4f, all-dots rel. RMSE %.4f%s\n", m.heldout_rel_rmse, m.all_dots_rel_rmse,
               m.holdout_recorded ? "" : " (no held-out dots recorded: all dots)");
+  // A material with standard errors: how often the truth lies within 2 of them.
+  const auto percent = [](double v) { return std::isfinite(v) ? std::to_string(std::lround(1000 * v) / 10.0).substr(0, 5) + "%" : std::string("-"); };
+  if (std::isfinite(m.coverage_rho_d) || std::isfinite(m.coverage_alpha)) {
+    std::printf("truth within 2 standard errors: alpha %s, k_s %s, rho_d %s, shadowing %s, NDF width %s; "
+                "rank correlation of the predicted and the held-out error %.2f (of the residual %.2f)\n",
+                percent(m.coverage_alpha).c_str(), percent(m.coverage_k_s).c_str(), percent(m.coverage_rho_d).c_str(),
+                percent(m.coverage_shadowing).c_str(), percent(m.coverage_ndf_width).c_str(), m.heldout_rank_correlation,
+                m.residual_rank_correlation);
+  }
 }
 
 void RunCompare(CompareCommandOptions options) {

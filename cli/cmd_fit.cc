@@ -39,6 +39,8 @@ void AddFitOptions(CLI::App* command, fit::FitMaterialOptions* options, std::str
   command->add_flag("!--no-refine", options->refine_texels,
                     "keep the paper's plain interpolation and alpha criterion instead of fitting every texel's "
                     "alpha, k_s and weights to its own samples");
+  command->add_flag("!--no-uncertainty", options->uncertainty,
+                    "do not compute the per-texel standard errors (a material of format version 1, as before)");
   command->add_flag("!--fixed-horizon", options->free_horizon,
                     "hold the NDF at its horizon to the paper's 1e-6 instead of leaving it to the smoothness "
                     "prior (which fits rough lobes, GGX roughness above about 0.3, far better)");

@@ -97,7 +97,12 @@ nlohmann::json FitToJson(const TexelFitResult& f) {
           {"k_s", f.k_s},           {"k_s_rgb", f.k_s_rgb},
           {"ln_d", f.ln_d},         {"log_rms", f.log_rms},
           {"relative_rmse", f.relative_rmse}, {"alternations", f.alternations},
-          {"samples_used", f.samples_used}};
+          {"samples_used", f.samples_used},
+          {"shadowing_roughness_se", f.shadowing_roughness_se},
+          {"ndf_width", f.ndf_width},
+          {"ndf_width_se", f.ndf_width_se},
+          {"alpha_profile_se", f.alpha_profile_se},
+          {"k_s_profile_relative_se", f.k_s_profile_relative_se}};
 }
 
 nlohmann::json BaselineToJson(const BaselineFitResult& f) {
@@ -130,6 +135,12 @@ TexelFitResult FitFromJson(const nlohmann::json& j) {
   f.relative_rmse = j.at("relative_rmse").get<double>();
   f.alternations = j.at("alternations").get<int>();
   f.samples_used = j.at("samples_used").get<int>();
+  // Journals written before the standard errors existed resume without them.
+  f.shadowing_roughness_se = j.value("shadowing_roughness_se", -1.0);
+  f.ndf_width = j.value("ndf_width", -1.0);
+  f.ndf_width_se = j.value("ndf_width_se", -1.0);
+  f.alpha_profile_se = j.value("alpha_profile_se", -1.0);
+  f.k_s_profile_relative_se = j.value("k_s_profile_relative_se", -1.0);
   return f;
 }
 
@@ -266,6 +277,7 @@ class RepresentativeFits {
     TexelFitOptions fit_options;
     fit_options.ndf_resolution = options.ndf_resolution;
     fit_options.free_horizon = options.free_horizon;
+    fit_options.profile_uncertainty = options.uncertainty;
     return fit_options;
   }
 
@@ -375,7 +387,14 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
     RefineOptions refine_options;
     refine_options.threads = options.threads;
     refine_options.progress = options.progress;
+    refine_options.uncertainty = options.uncertainty;
     refined = RefineTexels(store, use_dot, valid, refine_options, &material);
+  }
+  if (!options.uncertainty) {
+    for (common::FloatImage* map : {&material.alpha_se, &material.k_s_se, &material.rho_d_se, &material.shadowing_roughness_se,
+                                    &material.ndf_width, &material.ndf_width_se, &material.prediction_se}) {
+      *map = common::FloatImage();
+    }
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   material.provenance = {
@@ -388,6 +407,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
         {"ndf_resolution", options.ndf_resolution},
         {"refine_texels", options.refine_texels},
         {"free_horizon", options.free_horizon},
+        {"uncertainty", options.uncertainty},
         {"seed", options.seed}}},
       {"statistics",
        {{"texels", store.geometry().num_texels()},

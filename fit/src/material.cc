@@ -38,9 +38,21 @@ const MapSpec kBaselineMaps[] = {
     {"baseline_azimuth", "baseline_azimuth.exr", &Material::baseline_azimuth, 1},
 };
 
-std::vector<MapSpec> MapsOf(MaterialModel model) {
+// The standard errors (version 3; docs/fitting.md, "Uncertainty").
+const MapSpec kUncertaintyMaps[] = {
+    {"alpha_se", "alpha_se.exr", &Material::alpha_se, 1},
+    {"k_s_se", "k_s_se.exr", &Material::k_s_se, 3},
+    {"rho_d_se", "rho_d_se.exr", &Material::rho_d_se, 3},
+    {"shadowing_roughness_se", "shadowing_roughness_se.exr", &Material::shadowing_roughness_se, 1},
+    {"ndf_width", "ndf_width.exr", &Material::ndf_width, 1},
+    {"ndf_width_se", "ndf_width_se.exr", &Material::ndf_width_se, 1},
+    {"prediction_se", "prediction_se.exr", &Material::prediction_se, 1},
+};
+
+std::vector<MapSpec> MapsOf(MaterialModel model, bool uncertainty) {
   std::vector<MapSpec> maps(std::begin(kMaps), std::end(kMaps));
   if (model == MaterialModel::kWalterGgx) maps.insert(maps.end(), std::begin(kBaselineMaps), std::end(kBaselineMaps));
+  if (uncertainty) maps.insert(maps.end(), std::begin(kUncertaintyMaps), std::end(kUncertaintyMaps));
   return maps;
 }
 
@@ -77,6 +89,23 @@ void CheckShape(const common::FloatImage& image, int width, int height, int chan
   }
 }
 
+// The standard error of a texel's blended shadowing roughness sum_j w_j r_j: the
+// representatives' own errors propagated, sum_j w_j^2 se_j^2, plus the spread of their values
+// about the blend, sum_j |w_j| (r_j - r)^2 / sum_j |w_j|, which stands for what interpolating
+// between texels that differ cannot know. -1 when a representative's is not known.
+double BlendedStandardError(const std::vector<std::pair<int, float>>& terms, const std::vector<TexelFitResult>& fits) {
+  double blend = 0, total = 0, variance = 0;
+  for (const auto& [rep, w] : terms) {
+    if (!(fits[rep].shadowing_roughness_se >= 0)) return -1.0;
+    blend += w * fits[rep].shadowing_roughness;
+    total += std::abs(w);
+    variance += model::Square(w * fits[rep].shadowing_roughness_se);
+  }
+  if (!(total > 0)) return -1.0;
+  for (const auto& [rep, w] : terms) variance += std::abs(w) * model::Square(fits[rep].shadowing_roughness - blend) / total;
+  return std::sqrt(variance);
+}
+
 }  // namespace
 
 Material AssembleMaterial(int width, int height, double eta, int ndf_resolution, const Clustering& clustering,
@@ -108,6 +137,21 @@ Material AssembleMaterial(int width, int height, double eta, int ndf_resolution,
     const int64_t t = clustering.representatives[r];
     m.residual.pixels[t] = static_cast<float>(representative_fits[r].relative_rmse);
   }
+  // The standard errors (docs/fitting.md, "Uncertainty"). alpha, k_s, rho_d and the prediction's
+  // are the refinement's (-1 until it runs); the shadowing roughness and the NDF width are the
+  // representatives', blended below.
+  m.alpha_se = common::FloatImage(width, height, 1, -1.0f);
+  m.k_s_se = common::FloatImage(width, height, 3, -1.0f);
+  m.rho_d_se = common::FloatImage(width, height, 3, -1.0f);
+  m.shadowing_roughness_se = common::FloatImage(width, height, 1, -1.0f);
+  m.ndf_width = common::FloatImage(width, height, 1, -1.0f);
+  m.ndf_width_se = common::FloatImage(width, height, 1, -1.0f);
+  m.prediction_se = common::FloatImage(width, height, 1, -1.0f);
+  for (size_t r = 0; r < clustering.representatives.size(); ++r) {
+    const int64_t t = clustering.representatives[r];
+    m.ndf_width.pixels[t] = static_cast<float>(representative_fits[r].ndf_width);
+    m.ndf_width_se.pixels[t] = static_cast<float>(representative_fits[r].ndf_width_se);
+  }
   for (size_t t = 0; t < texels; ++t) {
     const int x = static_cast<int>(t % width), y = static_cast<int>(t / width);
     double alpha = 0, shadowing = 0;
@@ -124,6 +168,25 @@ Material AssembleMaterial(int width, int height, double eta, int ndf_resolution,
     }
     m.alpha.at(x, y) = static_cast<float>(std::clamp(alpha, 0.0, 1.0));
     m.shadowing_roughness.at(x, y) = static_cast<float>(std::max(0.0, shadowing));
+    m.shadowing_roughness_se.at(x, y) = static_cast<float>(BlendedStandardError(terms, representative_fits));
+    // alpha's and k_s's share of what the data cannot tell apart (the representatives' profiles
+    // over alpha, TexelFitResult): their variances averaged with the weights' sizes. The
+    // refinement adds its own statistical error to these.
+    double weight_sum = 0, alpha_variance = 0, k_s_variance = 0;
+    bool known = !terms.empty();
+    for (const auto& [rep, w] : terms) {
+      const TexelFitResult& fit = representative_fits[rep];
+      known = known && fit.alpha_profile_se >= 0 && fit.k_s_profile_relative_se >= 0;
+      weight_sum += std::abs(w);
+      alpha_variance += std::abs(w) * model::Square(fit.alpha_profile_se);
+      k_s_variance += std::abs(w) * model::Square(fit.k_s_profile_relative_se);
+    }
+    if (known && weight_sum > 0) {
+      m.alpha_se.at(x, y) = static_cast<float>(std::sqrt(alpha_variance / weight_sum));
+      for (int c = 0; c < 3; ++c) {
+        m.k_s_se.at(x, y, c) = static_cast<float>(std::max(0.0, k_s[c]) * std::sqrt(k_s_variance / weight_sum));
+      }
+    }
     for (int c = 0; c < 3; ++c) m.k_s.at(x, y, c) = static_cast<float>(std::max(0.0, k_s[c]));
     m.cluster.at(x, y) = static_cast<float>(clustering.cluster[t]);
   }
@@ -156,6 +219,11 @@ Material AssembleBaselineMaterial(int width, int height, double eta, int ndf_res
   for (size_t t = 0; t < by_cluster.weights.size(); ++t) by_cluster.weights[t].terms = {{by_cluster.cluster[t], 1.0f}};
   Material m = AssembleMaterial(width, height, eta, ndf_resolution, by_cluster, as_dual, rho_d);
   m.model = MaterialModel::kWalterGgx;
+  // The baseline carries no standard errors (they are the dual-microfacet fit's).
+  for (common::FloatImage* map : {&m.alpha_se, &m.k_s_se, &m.rho_d_se, &m.shadowing_roughness_se, &m.ndf_width,
+                                  &m.ndf_width_se, &m.prediction_se}) {
+    *map = common::FloatImage();
+  }
   m.baseline_alpha_x = common::FloatImage(width, height, 1);
   m.baseline_alpha_y = common::FloatImage(width, height, 1);
   m.baseline_azimuth = common::FloatImage(width, height, 1);
@@ -191,7 +259,7 @@ void WriteMaterial(const fs::path& folder, const Material& m) {
   }
   common::WriteFloatImage(folder / "ndf_ln_d.exr", tables, /*half_precision=*/false, false);
   nlohmann::json maps = nlohmann::json::object();
-  for (const MapSpec& spec : MapsOf(m.model)) {
+  for (const MapSpec& spec : MapsOf(m.model, m.has_uncertainty())) {
     CheckShape(m.*spec.image, m.width, m.height, spec.channels, std::string("material map ") + spec.key);
     // Parameters in full float: k_s and rho_d would survive half, indices would not.
     common::WriteFloatImage(folder / spec.file, m.*spec.image, /*half_precision=*/false, false);
@@ -200,7 +268,8 @@ void WriteMaterial(const fs::path& folder, const Material& m) {
   nlohmann::json manifest = {
       {"format", "svbtdf-material"},
       // Version 1 readers would evaluate a baseline as a dual-microfacet material: only it needs 2.
-      {"version", m.model == MaterialModel::kWalterGgx ? 2 : 1},
+      // The standard errors need 3 (a version 2 reader would not know to check their maps).
+      {"version", m.has_uncertainty() ? 3 : m.model == MaterialModel::kWalterGgx ? 2 : 1},
       {"conventions", "docs/model.md version 1: z toward the camera, i toward the light (i.z < 0)"},
       {"btdf", MaterialModelName(m.model)},
       {"model", ModelFormula(m.model)},
@@ -222,9 +291,11 @@ Material ReadMaterial(const fs::path& folder) {
   const fs::path manifest_path = folder / "material.json";
   const nlohmann::json manifest = common::ReadJsonFile(manifest_path);
   Material m;
+  int version = 0;
+  bool uncertainty = false;
   try {
     if (manifest.at("format") != "svbtdf-material") common::ThrowFormatError(manifest_path.string(), "is not an svbtdf material");
-    const int version = manifest.at("version").get<int>();
+    version = manifest.at("version").get<int>();
     if (version < 1 || version > kMaterialFormatVersion) {
       common::ThrowFormatError(manifest_path.string(), "has material format version " + std::to_string(version) +
                                                    "; this svbtdf reads version " + std::to_string(kMaterialFormatVersion));
@@ -240,6 +311,7 @@ Material ReadMaterial(const fs::path& folder) {
     }
     m.representative_texels = manifest.at("representatives").at("texels").get<std::vector<int64_t>>();
     m.provenance = manifest.value("provenance", nlohmann::json::object());
+    uncertainty = manifest.contains("maps") && manifest["maps"].is_object() && manifest["maps"].contains("alpha_se");
   } catch (const nlohmann::json::exception& e) {
     common::ThrowFormatError(manifest_path.string(), std::string("misses a field or has a wrong type: ") + e.what());
   }
@@ -270,7 +342,10 @@ Material ReadMaterial(const fs::path& folder) {
     for (int c = 0; c < grid.num_cells(); ++c) row[c] = tables.at(c, r);
     m.representative_ln_d.push_back(std::move(row));
   }
-  for (const MapSpec& spec : MapsOf(m.model)) {
+  if (uncertainty && version < 3) {
+    common::ThrowFormatError(manifest_path.string(), "lists standard-error maps, which need material format version 3");
+  }
+  for (const MapSpec& spec : MapsOf(m.model, uncertainty)) {
     const fs::path file = folder / spec.file;
     m.*spec.image = common::ReadFloatImage(file);
     common::RequireFinite(m.*spec.image, file.string());

@@ -22,4 +22,21 @@ double NdfRelativeL2(const model::Hemicube& grid, const model::Ndf& fitted, cons
   return norm > 0 ? std::sqrt(error / norm) : std::nan("");
 }
 
+double NdfWidth(const model::Hemicube& grid, const std::vector<double>& cell_d) {
+  double moment = 0, mass = 0;
+  for (int c = 0; c < grid.num_cells() && c < static_cast<int>(cell_d.size()); ++c) {
+    const double z = grid.CellCenter(c).z();
+    const double m = cell_d[c] * z * grid.CellSolidAngle(c);
+    mass += m;
+    moment += m * (1.0 - z * z);
+  }
+  return mass > 0 ? std::sqrt(std::max(0.0, moment / mass)) : std::nan("");
+}
+
+double NdfWidth(const model::Hemicube& grid, const model::Ndf& ndf) {
+  std::vector<double> d(grid.num_cells());
+  for (int c = 0; c < grid.num_cells(); ++c) d[c] = ndf.D(grid.CellCenter(c));
+  return NdfWidth(grid, d);
+}
+
 }  // namespace svbtdf::fit

@@ -14,7 +14,9 @@
 #include "svbtdf/common/parallel.h"
 #include "svbtdf/common/progress.h"
 #include "svbtdf/common/statistics.h"
+#include "svbtdf/fit/ndf_error.h"
 #include "small_problem.h"
+#include "uncertainty.h"
 
 namespace svbtdf::fit {
 namespace {
@@ -104,6 +106,14 @@ class ScalarRefiner {
     return std::sqrt(squared_error / sum_rho_squared_);
   }
 
+  // d shape_k / d alpha at `alpha` for the shape last evaluated there (0 where the blend is flat).
+  double ShapeAlphaDerivative(size_t k) const {
+    if (rho_t_.empty() || !(rho_t_[k] > 0 && rho_b_[k] > 0)) return 0.0;
+    return shape_[k] * (ln_t_[k] - ln_b_[k]);
+  }
+  bool has_alpha() const { return !rho_t_.empty(); }
+  const std::vector<double>& last_shape() const { return shape_; }
+
   // Per-channel scales for the shape last evaluated.
   std::array<double, 3> ChannelScales(double luminance_scale) const {
     std::array<double, 3> scales;
@@ -130,6 +140,7 @@ class ScalarRefiner {
 
 struct RefinedScalars {
   double alpha = 0.5;
+  double scale = 0.0;  // the luminance scale
   std::array<double, 3> k_s = {0, 0, 0};
   double relative_rmse = 1.0;
 };
@@ -146,6 +157,7 @@ RefinedScalars RefineScalars(ScalarRefiner* refiner, double start_alpha, bool re
     }
   }
   const ScaledFit best = refiner->FitAt(result.alpha);  // leaves the shape at alpha for the channels
+  result.scale = best.scale;
   result.k_s = refiner->ChannelScales(best.scale);
   result.relative_rmse = std::sqrt(best.relative_squared_error);
   return result;
@@ -268,7 +280,7 @@ constexpr double kExtrapolation = 3.0;
 // weights w_j (sum 1) that make TexelNdf blend a_j D_j, or nothing when the fit does not run.
 std::optional<TexelWeights> RefitWeights(const Material& material, const MaterialEvaluator& evaluator,
                                          const model::Hemicube& grid, const TexelBtdf& blended, const TexelWeights& start,
-                                         const TexelSlice& slice) {
+                                         const TexelSlice& slice, RepresentativeTerms* terms_out) {
   const size_t m = start.reps.size();
   if (m < 2) return std::nullopt;
   std::vector<double> scale(m);
@@ -277,7 +289,8 @@ std::optional<TexelWeights> RefitWeights(const Material& material, const Materia
     if (!(scale[j] > 0)) return std::nullopt;
   }
   const model::DualMicrofacetModel btdf(blended.params().eta, blended.params().shadowing);
-  const RepresentativeTerms terms = TermsOf(material, grid, start.reps, btdf, slice);
+  RepresentativeTerms& terms = *terms_out;
+  terms = TermsOf(material, grid, start.reps, btdf, slice);
   // TexelNdf blends w_j s_j D_j; start there (negative weights clipped), at the texel's k_s.
   std::vector<double> amount(m);
   for (size_t j = 0; j < m; ++j) amount[j] = std::max(0.0, start.weights[j]) * scale[j];
@@ -314,13 +327,156 @@ struct RefineContext {
   const std::vector<bool>& use_dot;
   const RefineOptions& options;
   bool refine_alpha = false;
+  // Neighbouring dots (uncertainty.h, PointNeighbours over the store's dots).
+  std::vector<std::vector<std::pair<int, double>>> dot_neighbours;
 };
+
+// ---------------------------------------------------------------------------------------------
+// Standard errors (docs/fitting.md, "Uncertainty").
+
+// A representative's NDF table by the moments NdfWidth takes: its mass P = sum D z Omega, its
+// moment M = sum D z s^2 Omega, its width and the width's standard error (from its own fit).
+struct RepresentativeMoments {
+  double mass = 0, moment = 0, width = 0, width_se = -1;
+};
+
+std::vector<RepresentativeMoments> MomentsOf(const Material& material, const model::Hemicube& grid) {
+  std::vector<RepresentativeMoments> moments(material.representative_ln_d.size());
+  for (size_t j = 0; j < moments.size(); ++j) {
+    for (int c = 0; c < grid.num_cells(); ++c) {
+      const double z = grid.CellCenter(c).z();
+      const double m = std::exp(material.representative_ln_d[j][c]) * z * grid.CellSolidAngle(c);
+      moments[j].mass += m;
+      moments[j].moment += m * (1.0 - z * z);
+    }
+    moments[j].width = moments[j].mass > 0 ? std::sqrt(moments[j].moment / moments[j].mass) : 0.0;
+    if (material.has_uncertainty()) moments[j].width_se = material.ndf_width_se.pixels[material.representative_texels[j]];
+  }
+  return moments;
+}
+
+// What the tables of the texel's representatives add to its width's variance: each table's own
+// standard error, weighted by its share f_j of the texel's mass (W^2 = sum_j f_j W_j^2, so
+// dW / dW_j = f_j W_j / W). -1 when a representative's is not known.
+double TablesVariance(const std::vector<int>& reps, const std::vector<double>& amounts,
+                      const std::vector<RepresentativeMoments>& moments, double width) {
+  double total = 0;
+  for (size_t j = 0; j < reps.size(); ++j) total += amounts[j] * moments[reps[j]].mass;
+  if (!(total > 0) || !(width > 0)) return -1.0;
+  double variance = 0;
+  for (size_t j = 0; j < reps.size(); ++j) {
+    const RepresentativeMoments& r = moments[reps[j]];
+    if (!(r.width_se >= 0)) return -1.0;
+    variance += model::Square(amounts[j] * r.mass / total * r.width / width * r.width_se);
+  }
+  return variance;
+}
+
+struct TexelUncertainty {
+  double alpha_se = -1, scale_se = -1, prediction_se = -1;
+  std::array<double, 3> rho_d_se = {-1, -1, -1};
+  double ndf_width = -1, ndf_width_se = -1;
+};
+
+// rho_d's standard error from the samples where the fitted lobe is negligible (below 5% of
+// rho_d, or 0.1% of the lobe's peak): there every sample is rho_d plus noise, and the store's
+// floor estimate is their mean (docs/slice-store.md), whose standard error is their standard
+// deviation over sqrt(n). Not known with fewer than 5 such samples.
+std::array<double, 3> RhoDStandardError(const TexelSlice& slice, const std::vector<double>& shape,
+                                        const std::array<double, 3>& k_s, const model::Rgb& rho_d) {
+  std::array<double, 3> se = {-1, -1, -1};
+  if (slice.measured_rgb.size() != shape.size() || shape.empty()) return se;
+  const double scale = (k_s[0] + k_s[1] + k_s[2]) / 3.0;
+  const double peak = scale * *std::max_element(shape.begin(), shape.end());
+  const double threshold = std::max(0.05 * model::Luminance(rho_d), 1e-3 * peak);
+  for (int c = 0; c < 3; ++c) {
+    double sum = 0, sum_squared = 0;
+    int n = 0;
+    for (size_t k = 0; k < shape.size(); ++k) {
+      if (scale * shape[k] > threshold) continue;
+      const double e = slice.measured_rgb[k][c] - k_s[c] * shape[k] - rho_d[c];
+      sum += e;
+      sum_squared += e * e;
+      ++n;
+    }
+    if (n < 5) continue;
+    const double mean = sum / n;
+    se[c] = std::sqrt(std::max(0.0, (sum_squared - n * mean * mean) / (n - 1)) / n);
+  }
+  return se;
+}
+
+// alpha and the scale with the texel's NDF fixed: the two columns shape_k and scale d shape_k /
+// d alpha of the residuals scale shape_k - rho_k (only the scale for a model without alpha).
+void ScalarUncertainty(ScalarRefiner* refiner, const TexelSlice& slice, const RefinedScalars& best, bool with_alpha,
+                       const Neighbours* neighbours, TexelUncertainty* u) {
+  const std::vector<double>& shape = refiner->Shape(best.alpha);
+  const size_t n = shape.size();
+  const int p = with_alpha && refiner->has_alpha() ? 2 : 1;
+  Eigen::MatrixXd j(n, p);
+  Eigen::VectorXd r(n);
+  double norm = 0;
+  for (size_t k = 0; k < n; ++k) {
+    j(k, 0) = shape[k];
+    if (p == 2) j(k, 1) = best.scale * refiner->ShapeAlphaDerivative(k);
+    r[k] = best.scale * shape[k] - slice.rho[k];
+    norm += slice.rho[k] * slice.rho[k];
+  }
+  const Eigen::MatrixXd c = SandwichCovariance(j, r, neighbours);
+  u->scale_se = StandardError(c(0, 0));
+  if (p == 2) u->alpha_se = StandardError(c(1, 1));
+  if (norm > 0) u->prediction_se = StandardError((j * c).cwiseProduct(j).sum() / norm);
+}
+
+// alpha and the blend amounts a_j of the representatives' NDFs (whose sum is the scale), at the
+// refined texel, from the weights' own system (BlendCost): the NDF's freedom the weights give is
+// then counted in alpha's and the scale's errors, and the width's error is the weights'.
+void BlendUncertainty(const RepresentativeTerms& terms, const TexelSlice& slice, const TexelWeights& weights,
+                      const std::vector<double>& rep_scale, const RefinedScalars& best,
+                      const std::vector<RepresentativeMoments>& moments, double width, const Neighbours* neighbours,
+                      TexelUncertainty* u) {
+  const size_t m = weights.reps.size(), n = slice.rho.size();
+  std::vector<double> amount(m);
+  double total = 0;
+  for (size_t j = 0; j < m; ++j) total += weights.weights[j] * rep_scale[j];
+  if (!(total != 0)) return;
+  for (size_t j = 0; j < m; ++j) amount[j] = best.scale * weights.weights[j] * rep_scale[j] / total;
+  double alpha = best.alpha;
+  const BlendCost cost(terms, slice.rho);
+  std::vector<double> residuals(n), jacobian_a(n * m), jacobian_alpha(n);
+  const double* parameters[2] = {amount.data(), &alpha};
+  double* jacobians[2] = {jacobian_a.data(), jacobian_alpha.data()};
+  if (!cost.Evaluate(parameters, residuals.data(), jacobians)) return;
+  Eigen::MatrixXd j(n, m + 1);
+  for (size_t k = 0; k < n; ++k) {
+    for (size_t i = 0; i < m; ++i) j(k, i) = jacobian_a[k * m + i];
+    j(k, m) = jacobian_alpha[k];
+  }
+  const Eigen::VectorXd r = Eigen::Map<const Eigen::VectorXd>(residuals.data(), static_cast<Eigen::Index>(n));
+  const Eigen::MatrixXd c = SandwichCovariance(j, r, neighbours);
+  u->alpha_se = StandardError(c(m, m));
+  u->scale_se = StandardError(c.topLeftCorner(m, m).sum());
+  u->prediction_se = StandardError((j * c).cwiseProduct(j).sum());  // the residuals are relative already
+  // The width W = sqrt(sum a_j M_j / sum a_j P_j): dW / da_j = (M_j - W^2 P_j) / (2 W sum a P).
+  double mass = 0;
+  for (size_t i = 0; i < m; ++i) mass += amount[i] * moments[weights.reps[i]].mass;
+  if (!(width > 0) || !(mass > 0)) return;
+  Eigen::VectorXd g(m);
+  for (size_t i = 0; i < m; ++i) {
+    const RepresentativeMoments& rm = moments[weights.reps[i]];
+    g[i] = (rm.moment - width * width * rm.mass) / (2.0 * width * mass);
+  }
+  const double tables = TablesVariance(weights.reps, amount, moments, width);
+  const double from_weights = g.dot(c.topLeftCorner(m, m) * g);
+  u->ndf_width_se = tables >= 0 ? StandardError(from_weights + tables) : -1.0;
+}
 
 // Refines one texel in place; returns its relative RMSE on its own samples before and after, or
 // nothing when it has no usable samples (it then keeps the blend).
 std::optional<std::pair<double, double>> RefineTexel(const RefineContext& context, const MaterialEvaluator& evaluator,
                                                      const model::Hemicube& grid, bool refit_weights, int64_t t,
-                                                     const TexelSlice& slice, Material* material) {
+                                                     const TexelSlice& slice, const std::vector<RepresentativeMoments>& moments,
+                                                     bool representatives_pass, Material* material) {
   const int x = static_cast<int>(t % material->width), y = static_cast<int>(t / material->width);
   if (!(SumOfSquares(slice.rho) > 0)) return std::nullopt;
   const TexelWeights blended_weights = ReadWeights(*material, x, y);
@@ -330,17 +486,68 @@ std::optional<std::pair<double, double>> RefineTexel(const RefineContext& contex
   const double before = refiner.RelativeRmse(start_alpha, model::Luminance(blended.params().k_s));
   const double tolerance = context.options.alpha_tolerance;
   RefinedScalars best = RefineScalars(&refiner, start_alpha, context.refine_alpha, tolerance);
+  std::optional<ScalarRefiner> refitted_refiner;
+  RepresentativeTerms terms;
+  std::optional<TexelWeights> kept_weights;  // the refitted weights, when kept
   if (refit_weights) {
-    if (const auto refitted = RefitWeights(*material, evaluator, grid, blended, blended_weights, slice)) {
+    if (const auto refitted = RefitWeights(*material, evaluator, grid, blended, blended_weights, slice, &terms)) {
       WriteWeights(*refitted, x, y, material);
-      ScalarRefiner refitted_refiner(evaluator.Texel(x, y), slice);
+      refitted_refiner.emplace(evaluator.Texel(x, y), slice);
       const RefinedScalars with_refitted =
-          RefineScalars(&refitted_refiner, start_alpha, context.refine_alpha, tolerance);
+          RefineScalars(&*refitted_refiner, start_alpha, context.refine_alpha, tolerance);
       if (with_refitted.relative_rmse < best.relative_rmse) {
         best = with_refitted;
+        kept_weights = refitted;
       } else {
         WriteWeights(blended_weights, x, y, material);
       }
+    }
+  }
+  if (context.options.uncertainty && material->has_uncertainty()) {
+    TexelUncertainty u;
+    ScalarRefiner& chosen = kept_weights ? *refitted_refiner : refiner;
+    const bool dual = material->model == MaterialModel::kDualMicrofacet;
+    // The texel's NDF width (a representative keeps its own fit's, with its error).
+    const TexelWeights& weights = kept_weights ? *kept_weights : blended_weights;
+    if (dual && !representatives_pass) {
+      u.ndf_width = NdfWidth(grid, evaluator.TexelCellD(x, y));
+      std::vector<double> amounts(weights.reps.size());
+      for (size_t j = 0; j < amounts.size(); ++j) amounts[j] = weights.weights[j] * evaluator.RepresentativeScale(weights.reps[j]);
+      const double tables = TablesVariance(weights.reps, amounts, moments, u.ndf_width);
+      u.ndf_width_se = tables >= 0 ? std::sqrt(tables) : -1.0;
+    }
+    std::vector<int> sample_of_dot;
+    const Neighbours neighbours = slice.dot.size() == slice.rho.size()
+                                      ? SampleNeighbours(context.dot_neighbours, slice.dot, &sample_of_dot)
+                                      : Neighbours();
+    const Neighbours* correlated = neighbours.empty() ? nullptr : &neighbours;
+    if (kept_weights) {
+      std::vector<double> rep_scale(weights.reps.size());
+      for (size_t j = 0; j < rep_scale.size(); ++j) rep_scale[j] = evaluator.RepresentativeScale(weights.reps[j]);
+      BlendUncertainty(terms, slice, weights, rep_scale, best, moments, u.ndf_width, correlated, &u);
+    } else {
+      ScalarUncertainty(&chosen, slice, best, context.refine_alpha, correlated, &u);
+    }
+    chosen.Shape(best.alpha);
+    u.rho_d_se = RhoDStandardError(slice, chosen.last_shape(), best.k_s, blended.params().rho_d);
+    // The assembly left the representatives' profile errors (what the data cannot tell apart)
+    // in the maps; the texel's own statistical errors add to them.
+    const double profile_alpha = material->alpha_se.at(x, y);
+    const double profile_k_s = material->k_s.at(x, y) > 0 && material->k_s_se.at(x, y) >= 0
+                                   ? material->k_s_se.at(x, y) / material->k_s.at(x, y)
+                                   : 0.0;
+    material->alpha_se.at(x, y) = static_cast<float>(
+        u.alpha_se >= 0 ? std::sqrt(model::Square(u.alpha_se) + model::Square(std::max(0.0, profile_alpha))) : -1.0);
+    for (int c = 0; c < 3; ++c) {
+      const double relative = u.scale_se >= 0 && best.scale > 0 ? u.scale_se / best.scale : -1.0;
+      material->k_s_se.at(x, y, c) = static_cast<float>(
+          relative >= 0 ? best.k_s[c] * std::sqrt(model::Square(relative) + model::Square(profile_k_s)) : -1.0);
+      material->rho_d_se.at(x, y, c) = static_cast<float>(u.rho_d_se[c]);
+    }
+    material->prediction_se.at(x, y) = static_cast<float>(u.prediction_se);
+    if (dual && !representatives_pass) {
+      material->ndf_width.at(x, y) = static_cast<float>(u.ndf_width);
+      material->ndf_width_se.at(x, y) = static_cast<float>(u.ndf_width_se);
     }
   }
   material->alpha.at(x, y) = static_cast<float>(best.alpha);
@@ -352,11 +559,14 @@ std::optional<std::pair<double, double>> RefineTexel(const RefineContext& contex
 // Refines `texels` in parallel (each writes only its own pixels of the maps) and returns the
 // before/after pairs of those refined.
 std::vector<std::pair<double, double>> RefineAll(const RefineContext& context, const std::vector<int64_t>& texels,
-                                                 bool refit_weights, const char* label, Material* material) {
+                                                 bool refit_weights, bool representatives_pass, const char* label,
+                                                 Material* material) {
   // Constructed here, after any earlier pass changed the representatives' k_s: the blend scales
   // it reads are then the ones a reader of the saved material computes.
   const MaterialEvaluator evaluator(*material);
   const model::Hemicube grid(material->ndf_resolution);
+  const std::vector<RepresentativeMoments> moments =
+      context.options.uncertainty && material->has_uncertainty() ? MomentsOf(*material, grid) : std::vector<RepresentativeMoments>();
   std::vector<std::optional<std::pair<double, double>>> results(texels.size());
   std::unique_ptr<common::ProgressBar> progress;
   if (context.options.progress) {
@@ -378,7 +588,8 @@ std::vector<std::pair<double, double>> RefineAll(const RefineContext& context, c
         common::ThrowIfInterrupted("refining");
         const size_t index = order[begin + k];
         const TexelSlice slice = context.store.MakeTexelSlice(texels[index], tile_samples, context.use_dot);
-        results[index] = RefineTexel(context, evaluator, grid, refit_weights, texels[index], slice, material);
+        results[index] = RefineTexel(context, evaluator, grid, refit_weights, texels[index], slice, moments,
+                                     representatives_pass, material);
         if (progress) progress->Advance();
       }
     });
@@ -414,14 +625,17 @@ RefineStatistics RefineTexels(const SliceStore& store, const std::vector<bool>& 
       representatives.push_back(t);  // the baseline's representatives have nothing to refine
     }
   }
-  const RefineContext context{store, use_dot, options, options.refine_alpha && dual};
+  RefineContext context{store, use_dot, options, options.refine_alpha && dual, {}};
+  if (options.uncertainty && material->has_uncertainty()) {
+    context.dot_neighbours = PointNeighbours(store.geometry().dots, NeighbourRadius());
+  }
   RefineStatistics statistics;
   // The representatives first (alpha and k_s only): the interpolated texels blend their D by the
   // representatives' k_s, so those must be final before the weights are refitted against them.
   statistics.representatives =
-      static_cast<int64_t>(RefineAll(context, representatives, false, "refine representatives", material).size());
+      static_cast<int64_t>(RefineAll(context, representatives, false, true, "refine representatives", material).size());
   const std::vector<std::pair<double, double>> refined =
-      RefineAll(context, interpolated, options.refit_weights && dual, "refine", material);
+      RefineAll(context, interpolated, options.refit_weights && dual, false, "refine", material);
   std::vector<double> before, after;
   for (const auto& [b, a] : refined) {
     before.push_back(b);

@@ -166,6 +166,8 @@ TexelSlice SliceStore::SliceFromSamples(int64_t texel, const float* rgb, size_t 
     slice.light.push_back(i);
     slice.rho.push_back(model::Luminance(refractive));
     slice.rho_rgb.push_back(refractive);
+    slice.measured_rgb.push_back({r[0], r[1], r[2]});
+    slice.dot.push_back(q);
     slice.solid_angle.push_back(files_->dot_cell_area * std::abs(i.z()) / to_dot.squaredNorm());
   }
   return slice;

@@ -10,9 +10,11 @@
 
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/minimize.h"
+#include "svbtdf/fit/ndf_error.h"
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/tabulated_ndf.h"
 #include "small_problem.h"
+#include "uncertainty.h"
 
 namespace svbtdf::fit {
 
@@ -317,9 +319,16 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
   const model::DualMicrofacetModel initial_model(eta_, ShadowingFor(shadowing_roughness));
   const Configurations configs = ComputeConfigurations(initial_model, samples, view);
 
-  // (1) ln D for a fixed alpha.
+  // (1) ln D for a fixed alpha. The last solve's unknowns and the sum of its data rows' squared
+  // residuals are kept for the NDF's standard error.
+  Eigen::VectorXd last_x;
+  double last_data_ssr = 0.0;
+  int last_data_rows = 0;
+  SparseRows last_data;                // the last solve's data rows ...
+  std::vector<int> last_row_sample;    // ... and the sample of each
   const auto solve_ln_d = [&](double alpha, bool with_symmetry) {
     SparseRows data;
+    std::vector<int> row_sample;
     for (size_t k = 0; k < samples.size(); ++k) {
       const Sample& s = samples[k];
       // Samples too dark to use still get a row, with weight zero: the pattern of the normal
@@ -328,6 +337,7 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
       if (s.weight <= 0 || !RowDefined(configs.entry[k], configs.exit[k], alpha)) continue;
       const double w = s.used ? std::sqrt(s.weight) : 0.0;
       const int row = data.rows++;
+      row_sample.push_back(static_cast<int>(k));
       double rhs = 0.0;
       if (s.used) {
         rhs = std::log(s.rho);
@@ -350,6 +360,15 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
     // Added with weight zero in the final pass so that both passes share one pattern.
     normal += (with_symmetry ? 1.0 : model::Square(options_.final_symmetry_weight)) * system.symmetry_normal;
     const Eigen::VectorXd x = SolveNormalEquations(normal, rhs, state);
+    std::vector<double> row_residual(data.rhs.size());
+    for (size_t r = 0; r < data.rhs.size(); ++r) row_residual[r] = -data.rhs[r];
+    for (const Triplet& t : data.triplets) row_residual[t.row()] += t.value() * x[t.col()];
+    last_data_ssr = 0.0;
+    for (double r : row_residual) last_data_ssr += r * r;
+    last_data_rows = used;
+    last_x = x;
+    last_data = std::move(data);
+    last_row_sample = std::move(row_sample);
     std::vector<double> ln_d(grid_.num_cells(), options_.horizon_ln_d);
     for (int c = 0; c < grid_.num_cells(); ++c) {
       if (system.column[c] >= 0) ln_d[c] = x[system.column[c]];
@@ -383,6 +402,76 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
   result.alternations = std::min(result.alternations, options_.max_alternations);
   ln_d = solve_ln_d(alpha, /*with_symmetry=*/false);
 
+  // The NDF's width and its standard error: var = s^2 g^T N^-1 g, with N the final pass's normal
+  // matrix (still factorised in the workspace: one more solve), g the width's gradient in the
+  // unknowns and s^2 the data rows' mean squared residual (docs/fitting.md, "Uncertainty").
+  if (options_.profile_uncertainty) {
+    std::vector<double> d(grid_.num_cells());
+    double mass = 0;
+    for (int c = 0; c < grid_.num_cells(); ++c) {
+      d[c] = std::exp(ln_d[c]);
+      mass += d[c] * grid_.CellCenter(c).z() * grid_.CellSolidAngle(c);
+    }
+    const double width = NdfWidth(grid_, d);
+    if (std::isfinite(width) && width > 0 && mass > 0 && last_x.size() == system.num_unknowns) {
+      Eigen::VectorXd gradient = Eigen::VectorXd::Zero(system.num_unknowns);
+      for (int c = 0; c < grid_.num_cells(); ++c) {
+        if (system.column[c] < 0) continue;
+        const double z = grid_.CellCenter(c).z();
+        gradient[system.column[c]] =
+            d[c] * z * grid_.CellSolidAngle(c) * (1.0 - z * z - width * width) / (2.0 * width * mass);
+      }
+      const Eigen::VectorXd solved = state->solver.solve(gradient);
+      const double s2 = last_data_ssr / std::max(1, last_data_rows - 1);
+      result.ndf_width = width;
+      result.ndf_width_se = StandardError(s2 * gradient.dot(solved));
+    }
+  }
+
+  // alpha's profile: with one view the data cannot tell how D is split between h_T and h_B
+  // (above), so alpha trades against D, and D's normalisation against k_s; a system with D held
+  // fixed cannot see that. The final pass with alpha free too has the Jacobian [A g], A the data
+  // rows' and g_i = w_i (ln rho_T,i - ln rho_B,i) their derivative in alpha; alpha's variance with
+  // D free is s^2 / (g^T g - u^T N^-1 u), u = A^T g (the Schur complement of the normal matrix N,
+  // still factorised: one more solve), and D moves with alpha by dx/dalpha = -N^-1 u, which moves
+  // ln k_s (D's mass) too.
+  if (options_.profile_uncertainty && last_x.size() == system.num_unknowns && last_data.rows > 0) {
+    const model::TabulatedNdf table(grid_, ln_d);
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(last_data.rows);
+    for (int r = 0; r < last_data.rows; ++r) {
+      const int k = last_row_sample[r];
+      const Sample& smp = samples[k];
+      if (!smp.used || !(smp.weight > 0)) continue;
+      const model::VirtualConfiguration& e = configs.entry[k];
+      const model::VirtualConfiguration& x = configs.exit[k];
+      if (!e.valid || !x.valid || !(e.factor > 0) || !(x.factor > 0)) continue;
+      const double ln_t = std::log(e.factor) + std::log(std::max(table.D(e.h), 1e-300));
+      const double ln_b = std::log(x.factor) + std::log(std::max(table.D(x.h), 1e-300));
+      g[r] = std::sqrt(smp.weight) * (ln_t - ln_b);
+    }
+    SparseMatrix a(last_data.rows, system.num_unknowns);
+    a.setFromTriplets(last_data.triplets.begin(), last_data.triplets.end());
+    const Eigen::VectorXd u = a.transpose() * g;
+    // The factorisation is the final pass's unless the width's solve above replaced it (it did not:
+    // that was a solve, not a factorisation).
+    const Eigen::VectorXd z = state->solver.solve(u);
+    const double schur = g.squaredNorm() - u.dot(z);
+    const double s2 = last_data_ssr / std::max(1, last_data_rows - 2);
+    if (schur > 0 && s2 > 0) {
+      result.alpha_profile_se = std::sqrt(s2 / schur);
+      double mass = 0, moved = 0;
+      for (int c = 0; c < grid_.num_cells(); ++c) {
+        if (system.column[c] < 0) continue;
+        const double m = std::exp(ln_d[c]) * grid_.CellCenter(c).z() * grid_.CellSolidAngle(c);
+        mass += m;
+        moved -= m * z[system.column[c]];
+      }
+      if (mass > 0) result.k_s_profile_relative_se = std::abs(moved / mass) * result.alpha_profile_se;
+    } else {
+      result.alpha_profile_se = 0.5;  // the data do not pin alpha down
+    }
+  }
+
   // (3) Normalise D; its scale is the transmission scale k_s.
   model::TabulatedNdf ndf(grid_, ln_d);
   const double scale = ndf.Normalize();
@@ -411,6 +500,22 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
     if (summary.IsSolutionUsable()) {
       shadowing_roughness = parameters[0];
       result.k_s = std::exp(parameters[1]);
+      // Its standard error: the sandwich covariance of the same residuals at the optimum.
+      double cost_value = 0;
+      std::vector<double> residuals;
+      ceres::CRSMatrix jacobian;
+      if (options_.profile_uncertainty &&
+          problem.Evaluate(ceres::Problem::EvaluateOptions(), &cost_value, &residuals, nullptr, &jacobian)) {
+        Eigen::MatrixXd j = Eigen::MatrixXd::Zero(jacobian.num_rows, jacobian.num_cols);
+        for (int r = 0; r < jacobian.num_rows; ++r) {
+          for (int k = jacobian.rows[r]; k < jacobian.rows[r + 1]; ++k) j(r, jacobian.cols[k]) = jacobian.values[k];
+        }
+        const Eigen::VectorXd r = Eigen::Map<const Eigen::VectorXd>(residuals.data(), static_cast<Eigen::Index>(residuals.size()));
+        std::vector<model::Vec3> lights;
+        for (int k : rows) lights.push_back(samples[k].light);
+        const Neighbours neighbours = PointNeighbours(lights, NeighbourRadius());
+        result.shadowing_roughness_se = StandardError(SandwichCovariance(j, r, &neighbours)(0, 0));
+      }
     }
   }
   result.shadowing_roughness = shadowing_roughness;

@@ -65,7 +65,51 @@ double FractionWithin(const std::vector<double>& errors, double tolerance) {
 
 nlohmann::json NumberOrNull(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr); }
 
+// Counts how often |fitted - truth| <= 2 se over the events whose se is known (se >= 0).
+// Also keeps |fitted - truth| / se, whose median is 0.674 for calibrated normal errors.
+struct Coverage {
+  int64_t within = 0, count = 0;
+  std::vector<double> z;
+  void Add(double fitted, double truth, double se) {
+    if (!(se >= 0) || !std::isfinite(fitted) || !std::isfinite(truth)) return;
+    ++count;
+    within += std::abs(fitted - truth) <= 2.0 * se;
+    z.push_back(se > 0 ? std::abs(fitted - truth) / se : (fitted == truth ? 0.0 : 1e30));
+  }
+  double Value() const { return count > 0 ? static_cast<double>(within) / count : std::nan(""); }
+  double MedianZ() const { return common::Median(z); }
+};
+
+std::vector<double> Ranks(const std::vector<double>& v) {
+  std::vector<size_t> order(v.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return v[a] < v[b]; });
+  std::vector<double> ranks(v.size());
+  for (size_t i = 0; i < order.size();) {
+    size_t j = i;
+    while (j + 1 < order.size() && v[order[j + 1]] == v[order[i]]) ++j;
+    for (size_t k = i; k <= j; ++k) ranks[order[k]] = 0.5 * (i + j);
+    i = j + 1;
+  }
+  return ranks;
+}
+
 }  // namespace
+
+double SpearmanCorrelation(const std::vector<double>& a, const std::vector<double>& b) {
+  if (a.size() != b.size() || a.size() < 3) return std::nan("");
+  const std::vector<double> ra = Ranks(a), rb = Ranks(b);
+  const double n = static_cast<double>(a.size());
+  double ma = 0, mb = 0;
+  for (size_t i = 0; i < ra.size(); ++i) ma += ra[i] / n, mb += rb[i] / n;
+  double sab = 0, saa = 0, sbb = 0;
+  for (size_t i = 0; i < ra.size(); ++i) {
+    sab += (ra[i] - ma) * (rb[i] - mb);
+    saa += (ra[i] - ma) * (ra[i] - ma);
+    sbb += (rb[i] - mb) * (rb[i] - mb);
+  }
+  return saa > 0 && sbb > 0 ? sab / std::sqrt(saa * sbb) : std::nan("");
+}
 
 void RequireSameSize(const fit::Material& material, const std::string& material_folder, const simulate::Truth& truth) {
   if (material.width == truth.width() && material.height == truth.height()) return;
@@ -96,6 +140,9 @@ CompareMetrics Compare(const fit::Material& material, const simulate::Truth& tru
   const bool fitted_alpha = material.model == fit::MaterialModel::kDualMicrofacet;
   std::vector<double> alpha_errors, ndf_errors, rho_d_errors;
   RelativeRmse heldout, all_dots;
+  const bool uncertainty = material.has_uncertainty();
+  Coverage alpha_coverage, k_s_coverage, rho_d_coverage, shadowing_coverage, width_coverage;
+  std::vector<double> predicted_error, residual_error, actual_error;
   common::ProgressBar progress("compare", static_cast<int64_t>(texels.size()), "texels");
   for (int t : texels) {
     const int x = t % material.width, y = t / material.width;
@@ -103,7 +150,21 @@ CompareMetrics Compare(const fit::Material& material, const simulate::Truth& tru
     if (const simulate::MaterialTruth* parameters = truth.parameters()) {
       if (fitted_alpha) alpha_errors.push_back(std::abs(fitted.params().alpha - parameters->Params(x, y).alpha));
       ndf_errors.push_back(fit::NdfRelativeL2(grid, fitted.ndf(), *parameters->TexelNdf(x, y)));
+      if (uncertainty) {
+        const model::DualMicrofacetParams true_params = parameters->Params(x, y);
+        alpha_coverage.Add(fitted.params().alpha, true_params.alpha, material.alpha_se.at(x, y));
+        for (int c = 0; c < 3; ++c) k_s_coverage.Add(material.k_s.at(x, y, c), true_params.k_s[c], material.k_s_se.at(x, y, c));
+        shadowing_coverage.Add(material.shadowing_roughness.at(x, y), parameters->shadowing_roughness.at(x, y),
+                               material.shadowing_roughness_se.at(x, y));
+        width_coverage.Add(material.ndf_width.at(x, y), fit::NdfWidth(grid, *parameters->TexelNdf(x, y)),
+                           material.ndf_width_se.at(x, y));
+      }
     }
+    if (uncertainty) {
+      const model::Rgb true_rho_d = truth.RhoD(x, y);
+      for (int c = 0; c < 3; ++c) rho_d_coverage.Add(material.rho_d.at(x, y, c), true_rho_d[c], material.rho_d_se.at(x, y, c));
+    }
+    RelativeRmse texel_heldout;
     const double true_rho_d = model::Luminance(truth.RhoD(x, y));
     if (true_rho_d > 1e-3) rho_d_errors.push_back(std::abs(model::Luminance(fitted.params().rho_d) / true_rho_d - 1.0));
     const model::Vec3 position = rig.sample.TexelCentre(x, y);
@@ -112,7 +173,13 @@ CompareMetrics Compare(const fit::Material& material, const simulate::Truth& tru
       const model::Vec3 i = (rig.dots[q].position - position).normalized();
       const double fitted_value = model::Luminance(fitted.Evaluate(i, o)), expected = model::Luminance(truth.Evaluate(x, y, i, o));
       all_dots.Add(fitted_value, expected);
-      if (held_out[q]) heldout.Add(fitted_value, expected);
+      if (held_out[q]) heldout.Add(fitted_value, expected), texel_heldout.Add(fitted_value, expected);
+    }
+    if (uncertainty && material.prediction_se.at(x, y) >= 0 && material.residual.at(x, y) >= 0 &&
+        std::isfinite(texel_heldout.Value())) {
+      predicted_error.push_back(material.prediction_se.at(x, y));
+      residual_error.push_back(material.residual.at(x, y));
+      actual_error.push_back(texel_heldout.Value());
     }
     progress.Advance();
   }
@@ -123,6 +190,15 @@ CompareMetrics Compare(const fit::Material& material, const simulate::Truth& tru
   metrics.rho_d_rel_error_median = common::Median(rho_d_errors);
   metrics.heldout_rel_rmse = heldout.Value();
   metrics.all_dots_rel_rmse = all_dots.Value();
+  metrics.z_median = {alpha_coverage.MedianZ(), k_s_coverage.MedianZ(), rho_d_coverage.MedianZ(),
+                      shadowing_coverage.MedianZ(), width_coverage.MedianZ()};
+  metrics.coverage_alpha = alpha_coverage.Value();
+  metrics.coverage_k_s = k_s_coverage.Value();
+  metrics.coverage_rho_d = rho_d_coverage.Value();
+  metrics.coverage_shadowing = shadowing_coverage.Value();
+  metrics.coverage_ndf_width = width_coverage.Value();
+  metrics.heldout_rank_correlation = SpearmanCorrelation(predicted_error, actual_error);
+  metrics.residual_rank_correlation = SpearmanCorrelation(residual_error, actual_error);
   return metrics;
 }
 
@@ -141,6 +217,20 @@ nlohmann::json ToJson(const CompareMetrics& metrics) {
       {"all_dots_rel_rmse", NumberOrNull(metrics.all_dots_rel_rmse)},
       {"heldout_dots", metrics.heldout_dots},
       {"holdout_recorded", metrics.holdout_recorded},
+      {"coverage_2se",
+       {{"alpha", NumberOrNull(metrics.coverage_alpha)},
+        {"k_s", NumberOrNull(metrics.coverage_k_s)},
+        {"rho_d", NumberOrNull(metrics.coverage_rho_d)},
+        {"shadowing_roughness", NumberOrNull(metrics.coverage_shadowing)},
+        {"ndf_width", NumberOrNull(metrics.coverage_ndf_width)}}},
+      {"error_over_se_median",
+       {{"alpha", NumberOrNull(metrics.z_median[0])},
+        {"k_s", NumberOrNull(metrics.z_median[1])},
+        {"rho_d", NumberOrNull(metrics.z_median[2])},
+        {"shadowing_roughness", NumberOrNull(metrics.z_median[3])},
+        {"ndf_width", NumberOrNull(metrics.z_median[4])}}},
+      {"heldout_rank_correlation", NumberOrNull(metrics.heldout_rank_correlation)},
+      {"residual_rank_correlation", NumberOrNull(metrics.residual_rank_correlation)},
   };
 }
 

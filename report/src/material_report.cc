@@ -11,6 +11,7 @@
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/json.h"
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/statistics.h"
 #include "svbtdf/fit/material.h"
 #include "svbtdf/fit/slice_store.h"
 #include "svbtdf/report/compare.h"
@@ -124,6 +125,67 @@ common::FloatImage RelativeError(const common::FloatImage& fitted, const common:
   return error;
 }
 
+// A standard-error map with -1 (not known) shown as not fitted; an RGB one as its channels' mean,
+// relative to the value's when `relative_to` is given.
+common::FloatImage KnownOnly(const common::FloatImage& se, const common::FloatImage* relative_to = nullptr) {
+  common::FloatImage out(se.width, se.height, 1);
+  for (int y = 0; y < se.height; ++y) {
+    for (int x = 0; x < se.width; ++x) {
+      double sum = 0, value = 0;
+      bool known = true;
+      for (int c = 0; c < se.channels; ++c) {
+        known = known && se.at(x, y, c) >= 0;
+        sum += se.at(x, y, c);
+        if (relative_to) value += relative_to->at(x, y, c);
+      }
+      double v = sum / se.channels;
+      if (relative_to) v = value > 0 ? sum / value : std::nan("");
+      out.at(x, y) = known ? static_cast<float>(v) : std::nanf("");
+    }
+  }
+  return out;
+}
+
+// The 95th percentile of a map's known values (at least `floor`): a scale that one outlier does
+// not flatten.
+double UpperScale(const common::FloatImage& map, double floor) {
+  std::vector<double> values;
+  for (float v : map.pixels) {
+    if (std::isfinite(v)) values.push_back(v);
+  }
+  return values.empty() ? floor : std::max(floor, common::Quantile(values, 0.95));
+}
+
+template <typename MapFunction>
+void AddUncertaintyMaps(const fit::Material& material, const MapFunction& map) {
+  const common::FloatImage alpha_se = KnownOnly(material.alpha_se);
+  const double alpha_hi = UpperScale(alpha_se, 1e-3);
+  map("alpha_se.png", ScalarMap(alpha_se, 0, 0, alpha_hi),
+      "standard error of alpha (docs/fitting.md, \"Uncertainty\"; white: not known)", 0, alpha_hi, "unitless");
+  const common::FloatImage k_s_se = KnownOnly(material.k_s_se, &material.k_s);
+  const double k_s_hi = UpperScale(k_s_se, 1e-3);
+  map("k_s_se.png", ScalarMap(k_s_se, 0, 0, k_s_hi), "relative standard error of k_s", 0, k_s_hi, "relative");
+  const common::FloatImage rho_d_se = KnownOnly(material.rho_d_se, &material.rho_d);
+  const double rho_d_hi = UpperScale(rho_d_se, 1e-3);
+  map("rho_d_se.png", ScalarMap(rho_d_se, 0, 0, rho_d_hi), "relative standard error of rho_d", 0, rho_d_hi, "relative");
+  const common::FloatImage shadowing_se = KnownOnly(material.shadowing_roughness_se);
+  const double shadowing_hi = UpperScale(shadowing_se, 1e-3);
+  map("shadowing_se.png", ScalarMap(shadowing_se, 0, 0, shadowing_hi), "standard error of the shadowing roughness", 0,
+      shadowing_hi, "GGX alpha");
+  const common::FloatImage width = KnownOnly(material.ndf_width);
+  const double width_hi = UpperScale(width, 1e-3);
+  map("ndf_width.png", ScalarMap(width, 0, 0, width_hi), "NDF width: RMS sine of the half vector's angle from the normal", 0,
+      width_hi, "unitless");
+  const common::FloatImage width_se = KnownOnly(material.ndf_width_se);
+  const double width_se_hi = UpperScale(width_se, 1e-4);
+  map("ndf_width_se.png", ScalarMap(width_se, 0, 0, width_se_hi), "standard error of the NDF width", 0, width_se_hi, "unitless");
+  const common::FloatImage prediction = KnownOnly(material.prediction_se);
+  const double prediction_hi = UpperScale(prediction, 1e-3);
+  map("prediction_se.png", ScalarMap(prediction, 0, 0, prediction_hi),
+      "predicted error of the texel's BTDF: relative RMS standard error of its prediction at its samples", 0, prediction_hi,
+      "relative");
+}
+
 void AddMaps(Page& page, const fit::Material& material, const simulate::Truth* truth, const std::string& lobe_error_file) {
   const simulate::MaterialTruth* parameters = truth ? truth->parameters() : nullptr;
   const int w = material.width, h = material.height;
@@ -168,6 +230,7 @@ void AddMaps(Page& page, const fit::Material& material, const simulate::Truth* t
   common::FloatImage residual = material.residual;
   for (float& r : residual.pixels) r = r < 0 ? std::nanf("") : r;
   map("residual.png", ScalarMap(residual, 0, 0, 0.2), "fit residual: relative RMSE of the texel's own samples (0.2 = 20%)", 0, 0.2, "relative");
+  if (material.has_uncertainty()) AddUncertaintyMaps(material, map);
   const double clusters = std::max(1.0, MaxOf(material.cluster));
   map("cluster.png", ScalarMap(material.cluster, 0, 0, clusters), "cluster: the representative each texel belongs to", 0, clusters, "index");
   if (!lobe_error_file.empty()) {

@@ -85,8 +85,17 @@ TEST_F(FitCommand, AnExistingMaterialIsNeverOverwritten) {
   EXPECT_NE(second.output.find("never overwritten"), std::string::npos) << second.output;
   EXPECT_EQ(common::ReadTextFile(root_ / "dual" / "material.json"), before);
   const nlohmann::json manifest = nlohmann::json::parse(before);
-  EXPECT_EQ(manifest["version"], 1);  // dual-microfacet materials stay readable by version 1 readers
+  // Issue 20: the standard errors are maps of material format version 3; without them
+  // (--no-uncertainty) dual-microfacet materials stay readable by version 1 readers.
+  EXPECT_EQ(manifest["version"], 3);
+  EXPECT_EQ(manifest["maps"]["alpha_se"], "alpha_se.exr");
   EXPECT_EQ(manifest["btdf"], "dual-microfacet");
+  const auto plain = RunSvbtdf(Fit("plain", "--representatives 0.1 --no-uncertainty"));
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  const nlohmann::json plain_manifest = nlohmann::json::parse(common::ReadTextFile(root_ / "plain" / "material.json"));
+  EXPECT_EQ(plain_manifest["version"], 1);
+  EXPECT_FALSE(plain_manifest["maps"].contains("alpha_se"));
+  EXPECT_FALSE(fit::ReadMaterial(root_ / "plain").has_uncertainty());
 }
 
 }  // namespace

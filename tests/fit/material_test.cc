@@ -168,6 +168,63 @@ TEST_F(MaterialTest, DamagedMaterialsAreErrorsNamingTheFile) {
   }
 }
 
+// Version 3: the standard errors round-trip as maps; a material without them is still written
+// as version 1, which older readers read; a manifest that lists them under an older version, or a
+// missing map, is refused naming the file.
+TEST_F(MaterialTest, StandardErrorsRoundTripAsVersion3) {
+  const model::Vec3 view = model::SphericalDirection(model::kPi / 4, 0.0);
+  const SyntheticMaterial synthetic = MakeMaterial(view, DotGrid(view, 16, 0.0));
+  Material material = FitMaterial(synthetic, 0.125);
+  ASSERT_TRUE(material.has_uncertainty());
+  // The assembly fills the shadowing roughness's and the NDF width's errors of every texel.
+  for (float se : material.shadowing_roughness_se.pixels) EXPECT_GE(se, 0.0f);
+  for (const int64_t t : material.representative_texels) {
+    EXPECT_GT(material.ndf_width.pixels[t], 0.0f);
+    EXPECT_GT(material.ndf_width_se.pixels[t], 0.0f);
+  }
+  material.alpha_se.at(1, 1) = 0.25f;
+  WriteMaterial(dir_ / "v3", material);
+  EXPECT_EQ(common::ReadJsonFile(dir_ / "v3" / "material.json")["version"], 3);
+  const Material read = ReadMaterial(dir_ / "v3");
+  ASSERT_TRUE(read.has_uncertainty());
+  EXPECT_EQ(read.alpha_se.pixels, material.alpha_se.pixels);
+  EXPECT_EQ(read.k_s_se.pixels, material.k_s_se.pixels);
+  EXPECT_EQ(read.rho_d_se.pixels, material.rho_d_se.pixels);
+  EXPECT_EQ(read.shadowing_roughness_se.pixels, material.shadowing_roughness_se.pixels);
+  EXPECT_EQ(read.ndf_width_se.pixels, material.ndf_width_se.pixels);
+  EXPECT_EQ(read.prediction_se.pixels, material.prediction_se.pixels);
+
+  Material without = material;
+  for (common::FloatImage* map : {&without.alpha_se, &without.k_s_se, &without.rho_d_se, &without.shadowing_roughness_se,
+                                  &without.ndf_width, &without.ndf_width_se, &without.prediction_se}) {
+    *map = common::FloatImage();
+  }
+  WriteMaterial(dir_ / "v1", without);
+  EXPECT_EQ(common::ReadJsonFile(dir_ / "v1" / "material.json")["version"], 1);
+  EXPECT_FALSE(fs::exists(dir_ / "v1" / "alpha_se.exr"));
+  EXPECT_FALSE(ReadMaterial(dir_ / "v1").has_uncertainty());
+
+  const fs::path manifest = dir_ / "v3" / "material.json";
+  nlohmann::json json = common::ReadJsonFile(manifest);
+  json["version"] = 2;
+  common::WriteTextAtomically(manifest, json.dump(), /*overwrite=*/true);
+  try {
+    ReadMaterial(dir_ / "v3");
+    FAIL() << "standard errors under version 2 were read";
+  } catch (const common::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("version 3"), std::string::npos) << e.what();
+  }
+  json["version"] = 3;
+  common::WriteTextAtomically(manifest, json.dump(), /*overwrite=*/true);
+  fs::remove(dir_ / "v3" / "rho_d_se.exr");
+  try {
+    ReadMaterial(dir_ / "v3");
+    FAIL() << "a missing standard-error map was not noticed";
+  } catch (const common::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("rho_d_se.exr"), std::string::npos) << e.what();
+  }
+}
+
 // The baseline's lobes blend through their slope moments: a lobe blended with itself is itself,
 // and azimuths on either side of +-90 degrees average to 90 degrees, not to 0.
 TEST(BaselineLobes, BlendThroughSlopeMomentsAndWrapAzimuths) {

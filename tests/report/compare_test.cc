@@ -90,6 +90,48 @@ TEST(Compare, AgainstAnAnalyticTruth) {
   }
 }
 
+// Coverage counts the texels whose truth lies within 2 standard errors: the exact material
+// with a standard error of 0.01 on alpha covers all of it, alpha shifted by 0.1 none of it, and
+// shifted by 0.1 with a standard error of 0.06 all of it again; a material without standard
+// errors has no coverage.
+TEST(Compare, CoverageOfTheStandardErrors) {
+  const simulate::Truth truth = simulate::ReadTruth(SimulatedTruths::TruthFolder("model"));
+  ASSERT_NE(truth.parameters(), nullptr);
+  fit::Material exact = MaterialFromTruth(*truth.parameters());
+  EXPECT_TRUE(std::isnan(Compare(exact, truth, Named("none")).coverage_alpha));
+  const int w = exact.width, h = exact.height;
+  exact.alpha_se = common::FloatImage(w, h, 1, 0.01f);
+  exact.k_s_se = common::FloatImage(w, h, 3, 0.01f);
+  exact.rho_d_se = common::FloatImage(w, h, 3, -1.0f);  // not known: not counted
+  exact.shadowing_roughness_se = common::FloatImage(w, h, 1, 0.01f);
+  exact.ndf_width = common::FloatImage(w, h, 1, -1.0f);
+  exact.ndf_width_se = common::FloatImage(w, h, 1, -1.0f);
+  exact.prediction_se = common::FloatImage(w, h, 1, 0.01f);
+  const CompareMetrics covered = Compare(exact, truth, Named("exact"));
+  EXPECT_EQ(covered.coverage_alpha, 1.0);
+  EXPECT_EQ(covered.coverage_k_s, 1.0);
+  EXPECT_EQ(covered.coverage_shadowing, 1.0);
+  EXPECT_TRUE(std::isnan(covered.coverage_rho_d));
+  EXPECT_TRUE(std::isnan(covered.coverage_ndf_width));
+  fit::Material shifted = exact;
+  for (float& a : shifted.alpha.pixels) a = a > 0.5f ? a - 0.1f : a + 0.1f;
+  const CompareMetrics missed = Compare(shifted, truth, Named("shifted"));
+  EXPECT_EQ(missed.coverage_alpha, 0.0);
+  EXPECT_NEAR(missed.z_median[0], 10.0, 1e-3);
+  EXPECT_EQ(missed.coverage_k_s, 1.0);
+  for (float& se : shifted.alpha_se.pixels) se = 0.06f;
+  EXPECT_EQ(Compare(shifted, truth, Named("wide")).coverage_alpha, 1.0);
+}
+
+TEST(Spearman, RanksNotValues) {
+  EXPECT_DOUBLE_EQ(SpearmanCorrelation({1, 2, 3, 4}, {10, 200, 3000, 40000}), 1.0);
+  EXPECT_DOUBLE_EQ(SpearmanCorrelation({1, 2, 3, 4}, {4, 3, 2, 1}), -1.0);
+  // Ties take their mean rank: ranks (0, 1.5, 1.5, 3) against (0, 1, 2, 3).
+  EXPECT_NEAR(SpearmanCorrelation({1, 2, 2, 3}, {1, 2, 3, 4}), 4.5 / std::sqrt(4.5 * 5.0), 1e-12);
+  EXPECT_TRUE(std::isnan(SpearmanCorrelation({1, 2}, {1, 2})));
+  EXPECT_TRUE(std::isnan(SpearmanCorrelation({1, 1, 1}, {1, 2, 3})));
+}
+
 TEST(Compare, AMonteCarloTruthHasNoAlphaOrNdfMetrics) {
   const simulate::Truth montecarlo = simulate::ReadTruth(SimulatedTruths::TruthFolder("montecarlo"));
   EXPECT_EQ(montecarlo.kind(), "montecarlo");
@@ -114,7 +156,11 @@ TEST(Compare, AMonteCarloTruthHasNoAlphaOrNdfMetrics) {
     EXPECT_TRUE(json[key].is_null()) << key;
   }
   EXPECT_TRUE(json["heldout_rel_rmse"].is_number());
-  EXPECT_EQ(json.size(), 13u);
+  // A material without standard errors has no coverage (issue 20's four keys are null).
+  EXPECT_TRUE(json["coverage_2se"]["alpha"].is_null());
+  EXPECT_TRUE(json["coverage_2se"]["rho_d"].is_null());
+  EXPECT_TRUE(json["heldout_rank_correlation"].is_null());
+  EXPECT_EQ(json.size(), 17u);
 }
 
 }  // namespace

@@ -34,6 +34,9 @@ struct FitMaterialOptions {
   // TexelFitOptions::free_horizon for the dual-microfacet fits: on by default here (rice-paper's
   // NDF error 17.9% -> 3.7%, docs/fitting.md); false is the paper's fixed horizon.
   bool free_horizon = true;
+  // Per-texel standard errors (docs/fitting.md, "Uncertainty"): the *_se maps of material format
+  // version 3. false writes a material without them (version 1), as before.
+  bool uncertainty = true;
 };
 
 // A representative whose fit fails (kNumerical) takes the fit of the nearest one that succeeded

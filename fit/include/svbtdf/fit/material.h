@@ -22,9 +22,11 @@
 
 namespace svbtdf::fit {
 
-// Version 2 adds the single-interface baseline (manifest "btdf": "walter-ggx"). Dual-microfacet
-// materials are still written as version 1, so that older readers keep reading them.
-inline constexpr int kMaterialFormatVersion = 2;
+// Version 2 adds the single-interface baseline (manifest "btdf": "walter-ggx"). Version 3 adds
+// the per-texel standard errors (the *_se maps). A material is written with the lowest version
+// that describes it: 3 with standard errors, else 2 for the baseline, else 1, so that older
+// readers keep reading what they can.
+inline constexpr int kMaterialFormatVersion = 3;
 
 // Which BTDF the material's texels hold.
 enum class MaterialModel {
@@ -56,6 +58,18 @@ struct Material {
   // kWalterGgx only (1 channel each, interpolated like alpha): the GGX lobe of every texel. The NDF
   // tables then hold that lobe tabulated, and alpha and the shadowing roughness are unused (0).
   common::FloatImage baseline_alpha_x, baseline_alpha_y, baseline_azimuth;
+  // Version 3, dual-microfacet: standard errors per texel (docs/fitting.md, "Uncertainty"); all
+  // empty (0 x 0) in a material without them. -1 where not known.
+  common::FloatImage alpha_se;                // 1 channel
+  common::FloatImage k_s_se;                  // 3 channels
+  common::FloatImage rho_d_se;                // 3 channels
+  common::FloatImage shadowing_roughness_se;  // 1 channel
+  common::FloatImage ndf_width_se;            // 1 channel: of ndf_width
+  common::FloatImage ndf_width;               // 1 channel: the texel's NDF width (RMS tangent of its half vectors)
+  // 1 channel: the predicted error of the texel's BTDF against the truth, relative RMS over its
+  // own samples, from the standard errors of its fitted parameters.
+  common::FloatImage prediction_se;
+  bool has_uncertainty() const { return alpha_se.width > 0; }
   nlohmann::json provenance = nlohmann::json::object();  // session, settings, statistics, holdout
 };
 

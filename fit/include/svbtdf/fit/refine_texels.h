@@ -26,6 +26,9 @@ struct RefineOptions {
   bool refine_alpha = true;        // false: k_s only (the walter-ggx baseline has no alpha)
   bool refit_weights = true;       // dual-microfacet: refit the weights over the representatives
   double alpha_tolerance = 0.004;  // golden-section bracket width at which the search stops
+  // Standard errors of alpha, k_s, rho_d, the NDF width and the prediction (docs/fitting.md,
+  // "Uncertainty"), written to the material's *_se maps when it has them.
+  bool uncertainty = true;
   int threads = 0;                 // 0: all hardware threads
   bool progress = false;
 };

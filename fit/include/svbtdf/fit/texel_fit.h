@@ -36,6 +36,10 @@ struct TexelSlice {
   std::vector<double> solid_angle;  // solid angle each sample stands for (eq. 18 weights); empty: equal
   std::vector<double> weight;       // confidence of each sample, 0 drops it; empty: all 1
   std::vector<std::array<double, 3>> rho_rgb;  // optional per-channel values, for k_s per channel
+  // Optional: the full measured R per channel, diffuse included and not clipped at zero (the
+  // store's samples), from which the refinement measures rho_d's standard error.
+  std::vector<std::array<double, 3>> measured_rgb;
+  std::vector<int> dot;  // optional: the store's dot index q of each sample
 };
 
 struct TexelFitOptions {
@@ -61,6 +65,9 @@ struct TexelFitOptions {
   int max_alternations = 12;
   double initial_shadowing_roughness = 0.2;
   bool refine_shadowing = true;
+  // Standard errors (docs/fitting.md, "Uncertainty"): of the shadowing roughness and the NDF
+  // width, and alpha's profile (two more sparse solves).
+  bool profile_uncertainty = true;
 };
 
 struct TexelFitResult {
@@ -73,6 +80,12 @@ struct TexelFitResult {
   double relative_rmse = 0.0;            // sqrt(sum (model - rho)^2 / sum rho^2) over all samples
   int alternations = 0;
   int samples_used = 0;
+  // Standard errors (docs/fitting.md, "Uncertainty"); -1 where not known.
+  double shadowing_roughness_se = -1.0;  // the sandwich covariance of the shadowing fit (step 4)
+  double ndf_width = -1.0;               // NdfWidth of the fitted table (ndf_error.h)
+  double ndf_width_se = -1.0;            // from the final ln D system's normal equations
+  double alpha_profile_se = -1.0;        // alpha's, from the profile of the final pass over alpha (D free)
+  double k_s_profile_relative_se = -1.0; // what that adds to k_s, relative
 };
 
 // Reusable per-thread state: the sparse Cholesky factorisation whose symbolic analysis is shared

@@ -4,8 +4,11 @@
 // the BTDF itself at the rig's dots (held-out and all) against either kind of truth.
 
 #include <cstddef>
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -37,7 +40,25 @@ struct CompareMetrics {
   double all_dots_rel_rmse = 0;       // the same over every dot
   size_t heldout_dots = 0;
   bool holdout_recorded = false;  // false: the fit withheld no dots, so every dot counts as held out
+  // Per-texel uncertainty (a material with standard errors, format version 3): the fraction of
+  // the compared texels whose true value lies within 2 standard errors of the fitted one, per
+  // parameter (k_s and rho_d per channel; the NDF by its width, fit::NdfWidth), over the texels
+  // whose standard error is known; alpha, k_s, shadowing and NDF need an analytic truth. NaN
+  // without.
+  double coverage_alpha = std::nan(""), coverage_k_s = std::nan(""), coverage_rho_d = std::nan("");
+  double coverage_shadowing = std::nan(""), coverage_ndf_width = std::nan("");
+  // The median of |fitted - truth| / se for the same parameters in the same order (alpha, k_s,
+  // rho_d, shadowing, NDF width): 0.674 for calibrated normal errors.
+  std::array<double, 5> z_median = {std::nan(""), std::nan(""), std::nan(""), std::nan(""), std::nan("")};
+  // Spearman rank correlation across the compared texels between the predicted error
+  // (prediction_se.exr) and the texel's actual held-out relative RMSE against the truth; and the
+  // same for the fit's residual (residual.exr). NaN without.
+  double heldout_rank_correlation = std::nan(""), residual_rank_correlation = std::nan("");
 };
+
+// Spearman's rank correlation of two equally long samples (ties take their mean rank); NaN for
+// fewer than 3 pairs or a constant sample.
+double SpearmanCorrelation(const std::vector<double>& a, const std::vector<double>& b);
 
 // Throws svbtdf::Error naming options.material_folder when the material and the truth differ in
 // size, or when the material records a held-out dot the rig does not have.

@@ -1,0 +1,106 @@
+#pragma once
+// The standard errors of the fit's least-squares systems (docs/fitting.md, "Uncertainty").
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <utility>
+#include <vector>
+
+namespace svbtdf::fit {
+
+// Covariance of the parameters of a least-squares fit from its Jacobian J (n residuals x p
+// parameters) and its residuals r at the optimum: the sandwich (HC1)
+//   n / (n - p) (J^T J)^-1 (sum_k r_k^2 J_k^T J_k) (J^T J)^-1,
+// which does not assume every residual has the same variance: the samples' shot noise grows with
+// R, and a misfit of the model concentrates where the lobe is. (J^T J)^-1 is a pseudo-inverse, so
+// a direction the data do not constrain gets variance 0 rather than infinity: callers treat a
+// parameter whose column is zero as not known. A fit with n <= p returns NaN.
+//
+// `neighbours` (optional, one list per residual of (other residual, kernel weight)) makes it the
+// heteroscedasticity-and-autocorrelation-consistent form (Newey and West 1987): the meat also sums
+// w_kl r_k r_l J_k^T J_l over neighbouring samples, because a misfit of the model is smooth from
+// dot to dot and its residuals are not independent.
+using Neighbours = std::vector<std::vector<std::pair<int, double>>>;
+
+inline Eigen::MatrixXd SandwichCovariance(const Eigen::MatrixXd& jacobian, const Eigen::VectorXd& residuals,
+                                          const Neighbours* neighbours = nullptr) {
+  const Eigen::Index n = jacobian.rows(), p = jacobian.cols();
+  if (n <= p) return Eigen::MatrixXd::Constant(p, p, std::numeric_limits<double>::quiet_NaN());
+  const Eigen::MatrixXd bread = (jacobian.transpose() * jacobian).completeOrthogonalDecomposition().pseudoInverse();
+  // Scores s_k = r_k J_k; meat = sum_k s_k (s_k + sum_l w_kl s_l)^T.
+  const Eigen::MatrixXd scores = residuals.asDiagonal() * jacobian;
+  Eigen::MatrixXd meat = scores.transpose() * scores;
+  if (neighbours && static_cast<Eigen::Index>(neighbours->size()) == n) {
+    Eigen::MatrixXd smoothed = Eigen::MatrixXd::Zero(n, p);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      for (const auto& [l, w] : (*neighbours)[k]) smoothed.row(k) += w * scores.row(l);
+    }
+    const Eigen::MatrixXd cross = scores.transpose() * smoothed;
+    meat += 0.5 * (cross + cross.transpose());
+  }
+  return static_cast<double>(n) / static_cast<double>(n - p) * bread * meat * bread;
+}
+
+// The neighbours of a slice's samples in the store's dot grid: dots within `radius` of each other
+// on the monitor, with the Bartlett weight 1 - distance / (radius + spacing). `dot_neighbours`
+// lists them per dot (computed once per store), `dots` is the slice's dot index per sample.
+inline Neighbours SampleNeighbours(const std::vector<std::vector<std::pair<int, double>>>& dot_neighbours,
+                                   const std::vector<int>& dots, std::vector<int>* sample_of_dot) {
+  Neighbours result(dots.size());
+  if (dot_neighbours.empty()) return result;
+  sample_of_dot->assign(dot_neighbours.size(), -1);
+  for (size_t k = 0; k < dots.size(); ++k) (*sample_of_dot)[dots[k]] = static_cast<int>(k);
+  for (size_t k = 0; k < dots.size(); ++k) {
+    for (const auto& [q, w] : dot_neighbours[dots[k]]) {
+      const int l = (*sample_of_dot)[q];
+      if (l >= 0) result[k].emplace_back(l, w);
+    }
+  }
+  return result;
+}
+
+// sqrt of a variance, NaN and negative round-off mapped to -1 (not known).
+inline double StandardError(double variance) {
+  return std::isfinite(variance) && variance >= 0 ? std::sqrt(variance) : -1.0;
+}
+
+// How far (in dot spacings) residuals count as correlated. A misfit spans the lobe, several dots;
+// noise does not reach past one. See docs/fitting.md, "Uncertainty".
+inline double NeighbourRadius() {
+  if (const char* text = std::getenv("SVBTDF_SE_RADIUS")) return std::atof(text);
+  return 3.0;
+}
+
+// Bartlett-weighted neighbours of points (any dimension) within radius spacings of each other, the
+// spacing the median nearest-neighbour distance; O(n^2), for one slice or one dot grid.
+template <typename Point>
+std::vector<std::vector<std::pair<int, double>>> PointNeighbours(const std::vector<Point>& points, double radius) {
+  const size_t n = points.size();
+  std::vector<std::vector<std::pair<int, double>>> result(n);
+  if (n < 2 || !(radius > 0)) return result;
+  std::vector<double> nearest(n, std::numeric_limits<double>::infinity());
+  for (size_t a = 0; a < n; ++a) {
+    for (size_t b = 0; b < n; ++b) {
+      if (a != b) nearest[a] = std::min(nearest[a], (points[a] - points[b]).norm());
+    }
+  }
+  std::vector<double> sorted = nearest;
+  std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.end());
+  const double spacing = sorted[n / 2];
+  if (!(spacing > 0) || !std::isfinite(spacing)) return result;
+  const double reach = radius * spacing * 1.01, bandwidth = (radius + 1.0) * spacing;
+  for (size_t a = 0; a < n; ++a) {
+    for (size_t b = 0; b < n; ++b) {
+      if (a == b) continue;
+      const double d = (points[a] - points[b]).norm();
+      if (d <= reach) result[a].emplace_back(static_cast<int>(b), 1.0 - d / bandwidth);
+    }
+  }
+  return result;
+}
+
+}  // namespace svbtdf::fit
