@@ -7,19 +7,49 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <fstream>
 #include <memory>
 
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
+#include "exr_header.h"
 #include "png_reader.h"
 
 namespace svbtdf::common {
 namespace fs = std::filesystem;
 namespace {
 
+bool HasExtension(const fs::path& path, std::string_view wanted) {
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return std::tolower(c); });
+  return extension == wanted;
+}
+
+std::string FirstBytes(const fs::path& path, size_t count) {
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes(count, '\0');
+  in.read(bytes.data(), static_cast<std::streamsize>(count));
+  bytes.resize(static_cast<size_t>(std::max<std::streamsize>(0, in.gcount())));
+  return bytes;
+}
+
+// OpenEXR files are checked against their own size before OpenEXR reads them (exr_header.h),
+// and read by OpenEXR alone: OpenImageIO would otherwise hand a damaged .exr to every other
+// reader it has in turn (DICOM, FITS, ...), each with its own way of failing.
 std::unique_ptr<OIIO::ImageInput> OpenForReading(const fs::path& path) {
   RequireExistingFile(path);
-  auto input = OIIO::ImageInput::open(path.string());
+  const bool exr = HasExrMagic(FirstBytes(path, 4));
+  if (!exr && HasExtension(path, ".exr")) {
+    ThrowFormatError(path.string(), "is named .exr but is not an OpenEXR file (it does not begin with EXR's magic number)",
+                     "the file is damaged, or another format was saved under this name");
+  }
+  if (exr) RequirePlausibleExrHeaders(path);
+  std::unique_ptr<OIIO::ImageInput> input =
+      exr ? OIIO::ImageInput::create("openexr") : OIIO::ImageInput::open(path.string());
+  if (input && exr) {
+    OIIO::ImageSpec ignored;
+    if (!input->open(path.string(), ignored)) input.reset();
+  }
   if (!input) {
     ThrowFormatError(path.string(), "cannot be decoded as an image: " + OIIO::geterror(),
                      "is the file complete and in a format OpenImageIO reads (PNG, TIFF, EXR)?");
@@ -29,11 +59,7 @@ std::unique_ptr<OIIO::ImageInput> OpenForReading(const fs::path& path) {
   return input;
 }
 
-bool IsPng(const fs::path& path) {
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return std::tolower(c); });
-  return extension == ".png";
-}
+bool IsPng(const fs::path& path) { return HasExtension(path, ".png"); }
 
 std::vector<std::string> ChannelNames(int channels) {
   if (channels == 1) return {"Y"};
@@ -128,9 +154,22 @@ void WriteRgb8Png(const fs::path& path, const std::vector<uint8_t>& pixels, int 
 FloatImage ReadFloatImage(const fs::path& path) {
   auto input = OpenForReading(path);
   const OIIO::ImageSpec& spec = input->spec();
-  FloatImage image(spec.width, spec.height, spec.nchannels);
-  if (!input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
-    ThrowFormatError(path.string(), "is truncated or corrupt: " + input->geterror());
+  FloatImage image;
+  image.width = spec.width;
+  image.height = spec.height;
+  image.channels = spec.nchannels;
+  // Strip by strip, so that memory follows what has been decoded and not what the header
+  // claims: a damaged file fails in its first strip, however large it says it is. 256 rows
+  // hold whole chunks for every EXR compression.
+  const size_t row_samples = static_cast<size_t>(spec.width) * spec.nchannels;
+  constexpr int kStripRows = 256;
+  for (int y = 0; y < spec.height; y += kStripRows) {
+    const int rows = std::min(kStripRows, spec.height - y);
+    image.pixels.resize(static_cast<size_t>(y + rows) * row_samples);
+    if (!input->read_scanlines(0, 0, spec.y + y, spec.y + y + rows, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT,
+                               image.pixels.data() + static_cast<size_t>(y) * row_samples)) {
+      ThrowFormatError(path.string(), "is truncated or corrupt: " + input->geterror());
+    }
   }
   return image;
 }

@@ -2,6 +2,7 @@
 // text, and nesting bounded before anything recursive can touch the value.
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <string>
 
 #include "expect_error.h"
@@ -44,6 +45,29 @@ TEST(Json, ReadJsonFileNamesThePath) {
   WriteTextAtomically(path, "{\"format\": \"svbtdf-material\"}");
   EXPECT_EQ(ReadJsonFile(path).at("format"), "svbtdf-material");
   svbtdf::testing::ExpectError(ErrorKind::kIo, "missing.json", [&] { ReadJsonFile(folder.path() / "missing.json"); });
+}
+
+// nlohmann's get<int>() of 4.9e111 is a C++ cast out of range, undefined behaviour (the material
+// fuzzer's finding); every integer a reader takes goes through IntegerValue instead.
+TEST(Json, IntegersAreReadOnlyWhenTheyAreIntegersTheTypeHolds) {
+  const nlohmann::json j = ParseJson(
+      R"({"width": 640, "huge": 4.9e111, "half": 1.5, "text": "3", "big": 1099511627776, "negative": -1,
+          "seed": 18446744073709551615, "list": [1, 2.5]})", "rig.json");
+  EXPECT_EQ(IntegerAt(j, "width", "rig.json"), 640);
+  EXPECT_EQ(IntegerAt<int64_t>(j, "big", "rig.json"), int64_t{1} << 40);
+  EXPECT_EQ(IntegerAt<uint64_t>(j, "seed", "rig.json"), ~uint64_t{0});
+  EXPECT_EQ(IntegerAt<int>(j, "negative", "rig.json"), -1);
+  for (const char* key : {"huge", "half", "text", "big"}) {
+    svbtdf::testing::ExpectError(ErrorKind::kFormat,
+                                 "rig.json: has a '" + std::string(key) + "' that is not an integer of a sensible size",
+                                 [&] { IntegerAt(j, key, "rig.json"); });
+  }
+  svbtdf::testing::ExpectError(ErrorKind::kFormat, "rig.json: has a 'negative'", [&] { IntegerAt<uint64_t>(j, "negative", "rig.json"); });
+  svbtdf::testing::ExpectError(ErrorKind::kFormat, "rig.json: has a 'seed'", [&] { IntegerAt<int64_t>(j, "seed", "rig.json"); });
+  svbtdf::testing::ExpectError(ErrorKind::kFormat, "rig.json: has a 'list' that is not an integer",
+                               [&] { IntegerArrayAt<int>(j, "list", "rig.json"); });
+  svbtdf::testing::ExpectError(ErrorKind::kFormat, "rig.json: has a 'width' that is not an array",
+                               [&] { IntegerArrayAt<int>(j, "width", "rig.json"); });
 }
 
 }  // namespace

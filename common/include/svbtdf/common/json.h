@@ -4,11 +4,14 @@
 // message naming the file, and so that nesting is bounded: nlohmann's parser is iterative, but
 // copying, comparing or dumping a value recurses, and 150,000 nested [] overflow the stack.
 
+#include <cstdint>
 #include <filesystem>
 #include <set>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -39,6 +42,43 @@ auto ParseJsonWith(std::string_view text, const std::string& subject, const std:
   } catch (const nlohmann::json::exception& e) {
     ThrowFormatError(subject, std::string("is malformed: ") + e.what(), hint);
   }
+}
+
+// `value` as an integer of type Int, for every integer a reader takes from a file. nlohmann's
+// get<int>() converts a JSON float with a C++ cast, which is undefined behaviour when the float is
+// out of range (the fuzzer's width of 4.9e111); here a float, a non-number or an integer Int
+// cannot hold is one common::Error(kFormat): "SOURCE: has a 'NAME' that is not an integer ...".
+template <class Int>
+Int IntegerValue(const nlohmann::json& value, std::string_view name, const std::string& source) {
+  static_assert(std::is_integral_v<Int>);
+  bool fits = false;
+  if (value.is_number_unsigned()) {
+    fits = std::in_range<Int>(value.get<uint64_t>());
+  } else if (value.is_number_integer()) {
+    fits = std::in_range<Int>(value.get<int64_t>());
+  }
+  if (!fits) {
+    ThrowFormatError(source, "has a '" + std::string(name) + "' that is not an integer of a sensible size: " +
+                                 value.dump().substr(0, 40));
+  }
+  return value.get<Int>();
+}
+
+// IntegerValue of object.at(key) (a missing key throws nlohmann's out_of_range, as at() does).
+template <class Int = int>
+Int IntegerAt(const nlohmann::json& object, const char* key, const std::string& source) {
+  return IntegerValue<Int>(object.at(key), key, source);
+}
+
+// An array of integers, each through IntegerValue.
+template <class Int>
+std::vector<Int> IntegerArrayAt(const nlohmann::json& object, const char* key, const std::string& source) {
+  const nlohmann::json& array = object.at(key);
+  if (!array.is_array()) ThrowFormatError(source, "has a '" + std::string(key) + "' that is not an array");
+  std::vector<Int> values;
+  values.reserve(array.size());
+  for (const nlohmann::json& value : array) values.push_back(IntegerValue<Int>(value, key, source));
+  return values;
 }
 
 // Typed, range-checked access to one JSON object of a file a user writes (a capture plan, a rig
