@@ -18,11 +18,11 @@ nlohmann::json ToJson(const Eigen::Vector2d& v) { return {v.x(), v.y()}; }
 model::Vec3 Vec3FromJson(const nlohmann::json& j) { return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()}; }
 Eigen::Vector2d Vec2FromJson(const nlohmann::json& j) { return {j.at(0).get<double>(), j.at(1).get<double>()}; }
 
-CalibrationReport CameraFromJson(const nlohmann::json& j) {
+CalibrationReport CameraFromJson(const nlohmann::json& j, const std::string& source) {
   CalibrationReport report;
   CameraModel& c = report.camera;
-  c.width = j.at("width").get<int>();
-  c.height = j.at("height").get<int>();
+  c.width = common::IntegerAt(j, "width", source);
+  c.height = common::IntegerAt(j, "height", source);
   c.fx = j.at("fx").get<double>();
   c.fy = j.at("fy").get<double>();
   c.cx = j.at("cx").get<double>();
@@ -118,13 +118,13 @@ SessionCalibration SessionCalibrationFromJson(const nlohmann::json& json, const 
   SessionCalibration c;
   try {
     if (json.at("format") != "svbtdf-calibration") common::ThrowFormatError(source, "is not an svbtdf calibration");
-    c.version = json.at("version").get<int>();
+    c.version = common::IntegerAt(json, "version", source);
     if (c.version != 1 && c.version != kCalibrationFormatVersion) {
       common::ThrowFormatError(source, "has calibration format version " + std::to_string(c.version) +
                                    "; this svbtdf reads versions 1 and " + std::to_string(kCalibrationFormatVersion),
                        "re-run 'svbtdf calibrate' on the session");
     }
-    c.camera = CameraFromJson(json.at("camera"));
+    c.camera = CameraFromJson(json.at("camera"), source);
     const nlohmann::json& plane = json.at("sample_plane");
     for (int r = 0; r < 3; ++r) {
       for (int k = 0; k < 3; ++k) c.sample_plane.rotation(r, k) = plane.at("rotation").at(r).at(k).get<double>();
@@ -159,7 +159,7 @@ SessionCalibration SessionCalibrationFromJson(const nlohmann::json& json, const 
     const nlohmann::json& r = json.at("radiometry");
     c.radiometry.response = r.at("response").get<std::string>();
     c.radiometry.inverse_response = r.value("inverse_response", std::vector<double>{});
-    c.radiometry.bit_depth = r.at("bit_depth").get<int>();
+    c.radiometry.bit_depth = common::IntegerAt(r, "bit_depth", source);
     c.radiometry.saturation_dn = r.at("saturation_dn").get<double>();
     c.radiometry.black_offset_dn = r.value("black_offset_dn", 0.0);
     c.provenance = json.value("provenance", nlohmann::json::object());

@@ -124,7 +124,7 @@ BaselineFitResult BaselineFromJson(const nlohmann::json& j) {
   return f;
 }
 
-TexelFitResult FitFromJson(const nlohmann::json& j) {
+TexelFitResult FitFromJson(const nlohmann::json& j, const std::string& source) {
   TexelFitResult f;
   f.alpha = j.at("alpha").get<double>();
   f.shadowing_roughness = j.at("shadowing_roughness").get<double>();
@@ -133,8 +133,8 @@ TexelFitResult FitFromJson(const nlohmann::json& j) {
   f.ln_d = j.at("ln_d").get<std::vector<double>>();
   f.log_rms = j.at("log_rms").get<double>();
   f.relative_rmse = j.at("relative_rmse").get<double>();
-  f.alternations = j.at("alternations").get<int>();
-  f.samples_used = j.at("samples_used").get<int>();
+  f.alternations = common::IntegerAt(j, "alternations", source);
+  f.samples_used = common::IntegerAt(j, "samples_used", source);
   // Journals written before the standard errors existed resume without them.
   f.shadowing_roughness_se = j.value("shadowing_roughness_se", -1.0);
   f.ndf_width = j.value("ndf_width", -1.0);
@@ -169,7 +169,7 @@ class Checkpoint {
     for (size_t n = 1; n < lines.size(); ++n) {
       try {  // a damaged line does not count: that representative is fitted again
         const nlohmann::json entry = common::ParseJson(lines[n], path.string());
-        done_[entry.at("representative").get<int>()] = entry.at("result");
+        done_[common::IntegerAt(entry, "representative", path.string())] = entry.at("result");
       } catch (const std::exception&) {  // common::Error or a json type error
       }
     }
@@ -268,7 +268,7 @@ class RepresentativeFits {
       return AssembleBaselineMaterial(width, height, eta, ndf_resolution, clustering, fits, store.rho_d());
     }
     std::vector<TexelFitResult> fits;
-    for (const nlohmann::json& j : results_) fits.push_back(FitFromJson(j));
+    for (const nlohmann::json& j : results_) fits.push_back(FitFromJson(j, "a representative fit in the checkpoint"));
     return AssembleMaterial(width, height, eta, ndf_resolution, clustering, fits, store.rho_d());
   }
 

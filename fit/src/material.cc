@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <string>
 
 #include "svbtdf/common/atomic_file.h"
@@ -69,18 +68,6 @@ MaterialModel ParseModel(const std::string& name, const std::string& source) {
   if (name == "dual-microfacet") return MaterialModel::kDualMicrofacet;
   if (name == "walter-ggx") return MaterialModel::kWalterGgx;
   common::ThrowFormatError(source, "has an unknown btdf '" + name + "' (expected dual-microfacet or walter-ggx)");
-}
-
-// An integer key that fits an int. nlohmann's get<int>() of a JSON float such as 4.9e111 converts
-// it out of range, which is undefined behaviour (a fuzz finding), so non-integers are refused.
-int IntegerAt(const nlohmann::json& object, const char* key, const std::string& source) {
-  const nlohmann::json& value = object.at(key);
-  if (!value.is_number_integer() || value.get<int64_t>() < std::numeric_limits<int>::min() ||
-      value.get<int64_t>() > std::numeric_limits<int>::max()) {
-    common::ThrowFormatError(source, std::string("has a '") + key + "' that is not an integer of a sensible size: " +
-                                         value.dump().substr(0, 40));
-  }
-  return value.get<int>();
 }
 
 // "WxH" or "WxHxC"; built with += because GCC 12 misreads a long chain of temporaries as an overflow.
@@ -308,21 +295,21 @@ Material ReadMaterial(const fs::path& folder) {
   bool uncertainty = false;
   try {
     if (manifest.at("format") != "svbtdf-material") common::ThrowFormatError(manifest_path.string(), "is not an svbtdf material");
-    version = IntegerAt(manifest, "version", manifest_path.string());
+    version = common::IntegerAt(manifest, "version", manifest_path.string());
     if (version < 1 || version > kMaterialFormatVersion) {
       common::ThrowFormatError(manifest_path.string(), "has material format version " + std::to_string(version) +
                                                    "; this svbtdf reads version " + std::to_string(kMaterialFormatVersion));
     }
     m.model = ParseModel(manifest.value("btdf", "dual-microfacet"), manifest_path.string());
     m.eta = manifest.at("eta").get<double>();
-    m.width = IntegerAt(manifest, "width", manifest_path.string());
-    m.height = IntegerAt(manifest, "height", manifest_path.string());
-    m.ndf_resolution = IntegerAt(manifest.at("ndf"), "resolution", manifest_path.string());
+    m.width = common::IntegerAt(manifest, "width", manifest_path.string());
+    m.height = common::IntegerAt(manifest, "height", manifest_path.string());
+    m.ndf_resolution = common::IntegerAt(manifest.at("ndf"), "resolution", manifest_path.string());
     if (manifest.contains("sample")) {
       m.width_m = manifest["sample"].at("width_m").get<double>();
       m.height_m = manifest["sample"].at("height_m").get<double>();
     }
-    m.representative_texels = manifest.at("representatives").at("texels").get<std::vector<int64_t>>();
+    m.representative_texels = common::IntegerArrayAt<int64_t>(manifest.at("representatives"), "texels", manifest_path.string());
     m.provenance = manifest.value("provenance", nlohmann::json::object());
     uncertainty = manifest.contains("maps") && manifest["maps"].is_object() && manifest["maps"].contains("alpha_se");
   } catch (const nlohmann::json::exception& e) {

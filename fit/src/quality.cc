@@ -217,7 +217,7 @@ std::vector<QualityWarning> QualityFromJson(const nlohmann::json& json, const st
   std::vector<QualityWarning> warnings;
   try {
     if (json.at("format") != "svbtdf-quality") common::ThrowFormatError(source, "is not an svbtdf quality file");
-    const int version = json.at("version").get<int>();
+    const int version = common::IntegerAt(json, "version", source);
     if (version < 1 || version > kQualityFormatVersion) {
       common::ThrowFormatError(source, "has quality format version " + std::to_string(version) + "; this svbtdf reads version " +
                                    std::to_string(kQualityFormatVersion));

@@ -60,7 +60,7 @@ SliceStore SliceStore::Open(const fs::path& folder) {
   SliceStore store;
   store.folder_ = folder;
   try {
-    store.info_ = InfoFromManifest(manifest);
+    store.info_ = InfoFromManifest(manifest, (folder / kManifest).string());
   } catch (const nlohmann::json::exception& e) {
     common::ThrowFormatError((folder / kManifest).string(), std::string("is malformed: ") + e.what());
   }

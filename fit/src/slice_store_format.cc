@@ -88,13 +88,13 @@ uint64_t TileBytes(const SliceStoreInfo& info) {
 
 uint64_t SliceBytes(const model::Hemicube& grid) { return static_cast<uint64_t>(grid.num_cells()) * sizeof(Half); }
 
-SliceStoreInfo InfoFromManifest(const nlohmann::json& j) {
+SliceStoreInfo InfoFromManifest(const nlohmann::json& j, const std::string& source) {
   SliceStoreInfo info;
-  info.texels_x = j.at("texels_x").get<int>();
-  info.texels_y = j.at("texels_y").get<int>();
-  info.num_dots = j.at("num_dots").get<int>();
-  info.light_resolution = j.at("light_resolution").get<int>();
-  info.tile_texels = j.at("tile_texels").get<int>();
+  info.texels_x = common::IntegerAt(j, "texels_x", source);
+  info.texels_y = common::IntegerAt(j, "texels_y", source);
+  info.num_dots = common::IntegerAt(j, "num_dots", source);
+  info.light_resolution = common::IntegerAt(j, "light_resolution", source);
+  info.tile_texels = common::IntegerAt(j, "tile_texels", source);
   info.eta = j.value("eta", 0.0);
   info.provenance = j.value("provenance", nlohmann::json::object());
   return info;
@@ -144,8 +144,8 @@ TexelGeometry GeometryFromManifest(const nlohmann::json& manifest, const std::st
   try {
     TexelGeometry g;
     const nlohmann::json& j = manifest.at("geometry");
-    g.texels_x = manifest.at("texels_x").get<int>();
-    g.texels_y = manifest.at("texels_y").get<int>();
+    g.texels_x = common::IntegerAt(manifest, "texels_x", source);
+    g.texels_y = common::IntegerAt(manifest, "texels_y", source);
     g.width_m = j.at("width_m").get<double>();
     g.height_m = j.at("height_m").get<double>();
     g.camera_centre = VectorFromJson(j.at("camera_centre"));

@@ -146,7 +146,7 @@ std::set<int> ReadProgress(const common::DurableLog& log) {
   std::set<int> done;
   for (const std::string& line : log.lines()) {
     try {
-      done.insert(common::ParseJson(line, log.path().string()).at("dot").get<int>());
+      done.insert(common::IntegerAt(common::ParseJson(line, log.path().string()), "dot", log.path().string()));
     } catch (const std::exception&) {  // common::Error or a json type error
     }
   }

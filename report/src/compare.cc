@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/common/progress.h"
 #include "svbtdf/common/statistics.h"
 #include "svbtdf/fit/ndf_error.h"
@@ -31,7 +32,7 @@ std::vector<bool> HeldOutDots(const fit::Material& material, const CompareOption
   const nlohmann::json& provenance = material.provenance;
   metrics.holdout_recorded = provenance.contains("holdout") && provenance["holdout"].contains("dots");
   if (metrics.holdout_recorded) {
-    dots = provenance["holdout"]["dots"].get<std::vector<int>>();
+    dots = common::IntegerArrayAt<int>(provenance["holdout"], "dots", "the material's provenance");
   } else {
     for (size_t q = 0; q < rig_dots; ++q) dots.push_back(static_cast<int>(q));
   }

@@ -180,7 +180,7 @@ MonteCarloTruth ReadMonteCarloTruth(const fs::path& folder) {
   const nlohmann::json manifest = ReadManifest(path);
   try {
     if (manifest.at("ndf").at("kind") != "montecarlo") common::ThrowFormatError(path.string(), "is not a Monte Carlo truth");
-    if (manifest.at("version").get<int>() != kMonteCarloTruthVersion) {
+    if (common::IntegerAt(manifest, "version", path.string()) != kMonteCarloTruthVersion) {
       common::ThrowFormatError(path.string(), "has version " + manifest.at("version").dump() + ", this build reads version " +
                                           std::to_string(kMonteCarloTruthVersion));
     }
@@ -188,14 +188,15 @@ MonteCarloTruth ReadMonteCarloTruth(const fs::path& folder) {
     for (const nlohmann::json& m : manifest.at("materials")) materials.push_back(MaterialFromJson(m));
     ViewGrid views;
     const nlohmann::json& grid = manifest.at("view_grid");
-    views.nx = grid.at("nx").get<int>();
-    views.ny = grid.at("ny").get<int>();
+    views.nx = common::IntegerAt(grid, "nx", path.string());
+    views.ny = common::IntegerAt(grid, "ny", path.string());
     views.x0 = grid.at("ox").at(0).get<double>();
     views.x1 = grid.at("ox").at(1).get<double>();
     views.y0 = grid.at("oy").at(0).get<double>();
     views.y1 = grid.at("oy").at(1).get<double>();
-    const int w = manifest.at("width").get<int>(), h = manifest.at("height").get<int>();
-    const int resolution = manifest.at("hemicube_resolution").get<int>();
+    const int w = common::IntegerAt(manifest, "width", path.string());
+    const int h = common::IntegerAt(manifest, "height", path.string());
+    const int resolution = common::IntegerAt(manifest, "hemicube_resolution", path.string());
     if (w < 1 || h < 1 || materials.empty() || views.nx < 2 || views.ny < 2 || resolution < 4 || resolution % 2) {
       common::ThrowFormatError(path.string(), "has an empty texel grid, no materials, a view grid under 2x2 or a bad "
                                       "hemicube resolution");
@@ -216,8 +217,9 @@ MonteCarloTruth ReadMonteCarloTruth(const fs::path& folder) {
                             IndexFromImage(index_image, materials_count, folder / "index.exr"), std::move(rho_d),
                             views, resolution, std::move(values), std::move(errors));
       const nlohmann::json& mc = manifest.at("monte_carlo");
-      truth.precision = {resolution, mc.at("paths_per_slice").get<int64_t>(), mc.at("max_interactions").get<int>()};
-      truth.seed = mc.at("seed").get<uint64_t>();
+      truth.precision = {resolution, common::IntegerAt<int64_t>(mc, "paths_per_slice", path.string()),
+                         common::IntegerAt(mc, "max_interactions", path.string())};
+      truth.seed = common::IntegerAt<uint64_t>(mc, "seed", path.string());
       const nlohmann::json& error = mc.at("dominant_relative_error_max");
       truth.dominant_relative_error = error.is_null() ? std::nan("") : error.get<double>();
       return truth;

@@ -131,7 +131,7 @@ RigTruth ReadRigTruth(const std::filesystem::path& path) {
     if (in.value("format", "") != "svbtdf-rig-truth") {
       common::ThrowFormatError(path.string(), "is not an svbtdf rig truth file (format key)");
     }
-    truth.version = in.at("version").get<int>();
+    truth.version = common::IntegerAt(in, "version", path.string());
     if (truth.version != kRigTruthVersion) {
       common::ThrowFormatError(path.string(), "has version " + std::to_string(truth.version) +
                        ", this build reads version " + std::to_string(kRigTruthVersion),

@@ -67,7 +67,7 @@ void WriteManifest(const std::filesystem::path& folder, const SliceStoreInfo& in
                    bool complete, const nlohmann::json& statistics);
 // The manifest, its format and version checked (svbtdf::Error naming the file otherwise).
 nlohmann::json ReadManifest(const std::filesystem::path& folder);
-SliceStoreInfo InfoFromManifest(const nlohmann::json& manifest);
+SliceStoreInfo InfoFromManifest(const nlohmann::json& manifest, const std::string& source);
 // `source` names the manifest in errors.
 TexelGeometry GeometryFromManifest(const nlohmann::json& manifest, const std::string& source);
 
