@@ -248,7 +248,9 @@ TEST_F(SdlOnXvfb, EveryDotIsWhereThePlanSaysAtItsSizeIntensityAndGamma) {
       EXPECT_TRUE(screen.red == expected)
           << "pattern kind " << static_cast<int>(pattern.kind) << " on the " << width << "x" << height << " screen";
       // Half intensity is gamma-encoded on screen: code 255 x 0.5^(1/2.2) = 186, not 128.
-      if (pattern.kind == Pattern::Kind::kFlatWhite) EXPECT_EQ(screen.red.at(0), 186);
+      if (pattern.kind == Pattern::Kind::kFlatWhite) {
+        EXPECT_EQ(screen.red.at(0), 186);
+      }
     }
   }
 }

@@ -74,7 +74,9 @@ TEST(TabulatedNdfBlend, SamplesItsVisibleNormalsWithTheDensityItReports) {
       EXPECT_LT(check.max_pdf_mismatch, 1e-9) << where;
       EXPECT_LT(check.max_weight_mismatch, 1e-9) << where;
       // Non-negative weights: exactly the blend's visible normals, whose weight is min(1, A/v.z).
-      if (blend == &positive) EXPECT_LE(check.max_weight, 1.0 + 1e-9) << where;
+      if (blend == &positive) {
+        EXPECT_LE(check.max_weight, 1.0 + 1e-9) << where;
+      }
     }
   }
 }

@@ -156,7 +156,9 @@ TEST(Ndf, EllipsoidWithoutSkewIsRotatedGgx) {
     const Vec3 h = SphericalDirection(1.5 * u(rng), kTwoPi * u(rng));
     const Vec3 v = SphericalDirection(1.5 * u(rng), kTwoPi * u(rng));
     EXPECT_NEAR(ellipsoid.D(h), ggx.D(rotate * h), 1e-12 * ggx.D(rotate * h));
-    if (v.dot(h) > 0) EXPECT_NEAR(ellipsoid.G1(v, h), ggx.G1(rotate * v, rotate * h), 1e-12);
+    if (v.dot(h) > 0) {
+      EXPECT_NEAR(ellipsoid.G1(v, h), ggx.G1(rotate * v, rotate * h), 1e-12);
+    }
   }
 }
 

@@ -164,7 +164,9 @@ TEST(SlabLobe, EnergyIsTheTransmittancesTimesTheMaskingAndTheLobeHoldsIt) {
     EXPECT_NEAR(smooth_sides.Energy(o), transmit * transmit, 1e-6);
     // Masking takes a share at grazing angles only (kappa 10 is Beckmann roughness 0.45).
     const SlabLobeModel very_rough({eta, 10.0, 10.0});
-    if (theta > 60) EXPECT_LT(very_rough.Energy(o), 0.95 * smooth_sides.Energy(o));
+    if (theta > 60) {
+      EXPECT_LT(very_rough.Energy(o), 0.95 * smooth_sides.Energy(o));
+    }
     EXPECT_LE(very_rough.Energy(o), smooth_sides.Energy(o));
     // The lobe carries Energy(o), less what lies beyond the horizon at grazing views.
     const SlabLobeModel rough({eta, 200.0, 60.0});
@@ -173,7 +175,9 @@ TEST(SlabLobe, EnergyIsTheTransmittancesTimesTheMaskingAndTheLobeHoldsIt) {
       const Vec3 i = FlipZ(grid.CellCenter(c));
       energy += rough.Rho(i, o) * std::abs(i.z()) * grid.CellSolidAngle(c);
     }
-    if (theta < 60) EXPECT_NEAR(energy / rough.Energy(o), 1.0, 0.01) << theta;
+    if (theta < 60) {
+      EXPECT_NEAR(energy / rough.Energy(o), 1.0, 0.01) << theta;
+    }
     EXPECT_LE(energy, rough.Energy(o) * 1.002) << theta;
   }
 }
