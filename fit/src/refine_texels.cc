@@ -406,8 +406,10 @@ std::array<double, 3> RhoDStandardError(const TexelSlice& slice, const std::vect
     if (n < 5) continue;
     const double mean = sum / n;
     const double variance = std::max(0.0, (sum_squared - n * mean * mean) / (n - 1)) / n;
-    // The floor samples' mean offset from the fitted model is rho_d's error as the fit sees it
-    // (the store's floor set and weights differ from these, and its clip lets tails in).
+    // The floor samples' mean offset from the fitted model: a second estimate of the floor (the
+    // fit's samples, unweighted, chosen by the fitted lobe) against the store's (its own clipped,
+    // weighted set); their disagreement counts as the store's error. (Moving rho_d by it made
+    // rho_d worse on `small`: the store's is the better of the two; docs/validation.md.)
     se[c] = std::sqrt(variance + (ModelErrorEnabled() ? mean * mean : 0.0));
   }
   return se;
