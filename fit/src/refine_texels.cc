@@ -329,6 +329,10 @@ struct RefineContext {
   bool refine_alpha = false;
   // Neighbouring dots (uncertainty.h, PointNeighbours over the store's dots).
   std::vector<std::vector<std::pair<int, double>>> dot_neighbours;
+  // Per texel: the model error's variances from its two fits (alpha, ln k_s R G B, NDF width; -1
+  // where not known), pooled over neighbouring texels afterwards (AddModelError). Each texel
+  // writes only its own.
+  std::vector<std::array<double, 5>>* model_variance = nullptr;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -401,7 +405,12 @@ std::array<double, 3> RhoDStandardError(const TexelSlice& slice, const std::vect
     }
     if (n < 5) continue;
     const double mean = sum / n;
-    se[c] = std::sqrt(std::max(0.0, (sum_squared - n * mean * mean) / (n - 1)) / n);
+    const double variance = std::max(0.0, (sum_squared - n * mean * mean) / (n - 1)) / n;
+    // The floor samples' mean offset from the fitted model: a second estimate of the floor (the
+    // fit's samples, unweighted, chosen by the fitted lobe) against the store's (its own clipped,
+    // weighted set); their disagreement counts as the store's error. (Moving rho_d by it made
+    // rho_d worse on `small`: the store's is the better of the two; docs/validation.md.)
+    se[c] = std::sqrt(variance + (ModelErrorEnabled() ? mean * mean : 0.0));
   }
   return se;
 }
@@ -489,16 +498,26 @@ std::optional<std::pair<double, double>> RefineTexel(const RefineContext& contex
   std::optional<ScalarRefiner> refitted_refiner;
   RepresentativeTerms terms;
   std::optional<TexelWeights> kept_weights;  // the refitted weights, when kept
+  // The two fits of the same samples with two NDFs (the cluster's blend and the refitted one), for
+  // the model error: how far alpha, k_s and the width move with D's choice (docs/fitting.md).
+  const bool uncertainty = context.options.uncertainty && material->has_uncertainty();
+  const bool dual_model = material->model == MaterialModel::kDualMicrofacet;
+  std::optional<RefinedScalars> other;
+  double width_blended = -1, width_refitted = -1;
   if (refit_weights) {
+    if (uncertainty && dual_model) width_blended = NdfWidth(grid, evaluator.TexelCellD(x, y));
     if (const auto refitted = RefitWeights(*material, evaluator, grid, blended, blended_weights, slice, &terms)) {
       WriteWeights(*refitted, x, y, material);
+      if (uncertainty && dual_model) width_refitted = NdfWidth(grid, evaluator.TexelCellD(x, y));
       refitted_refiner.emplace(evaluator.Texel(x, y), slice);
       const RefinedScalars with_refitted =
           RefineScalars(&*refitted_refiner, start_alpha, context.refine_alpha, tolerance);
       if (with_refitted.relative_rmse < best.relative_rmse) {
+        other = best;
         best = with_refitted;
         kept_weights = refitted;
       } else {
+        other = with_refitted;
         WriteWeights(blended_weights, x, y, material);
       }
     }
@@ -536,12 +555,32 @@ std::optional<std::pair<double, double>> RefineTexel(const RefineContext& contex
     const double profile_k_s = material->k_s.at(x, y) > 0 && material->k_s_se.at(x, y) >= 0
                                    ? material->k_s_se.at(x, y) / material->k_s.at(x, y)
                                    : 0.0;
+    // The model error from the two fits: the other fit's distance from the chosen one.
+    const bool alternative = other && ModelErrorEnabled();
+    const bool pooled = PoolRadius() > 0 && context.model_variance;
+    if (alternative && pooled) {
+      std::array<double, 5>& v = (*context.model_variance)[t];
+      v[0] = model::Square(other->alpha - best.alpha);
+      for (int c = 0; c < 3; ++c) {
+        v[1 + c] = other->k_s[c] > 0 && best.k_s[c] > 0 ? model::Square(std::log(other->k_s[c] / best.k_s[c])) : -1.0;
+      }
+      v[4] = width_blended > 0 && width_refitted > 0 ? model::Square(width_refitted - width_blended) : -1.0;
+    }
+    const double alpha_model = alternative && !pooled ? model::Square(other->alpha - best.alpha) : 0.0;
+    if (alternative && !pooled && width_blended > 0 && width_refitted > 0 && u.ndf_width_se >= 0) {
+      u.ndf_width_se = std::sqrt(model::Square(u.ndf_width_se) + model::Square(width_refitted - width_blended));
+    }
     material->alpha_se.at(x, y) = static_cast<float>(
-        u.alpha_se >= 0 ? std::sqrt(model::Square(u.alpha_se) + model::Square(std::max(0.0, profile_alpha))) : -1.0);
+        u.alpha_se >= 0 ? std::sqrt(model::Square(u.alpha_se) + model::Square(std::max(0.0, profile_alpha)) + alpha_model)
+                        : -1.0);
     for (int c = 0; c < 3; ++c) {
       const double relative = u.scale_se >= 0 && best.scale > 0 ? u.scale_se / best.scale : -1.0;
+      const double k_s_model = alternative && !pooled && other->k_s[c] > 0 && best.k_s[c] > 0
+                                   ? model::Square(std::log(other->k_s[c] / best.k_s[c]))
+                                   : 0.0;
       material->k_s_se.at(x, y, c) = static_cast<float>(
-          relative >= 0 ? best.k_s[c] * std::sqrt(model::Square(relative) + model::Square(profile_k_s)) : -1.0);
+          relative >= 0 ? best.k_s[c] * std::sqrt(model::Square(relative) + model::Square(profile_k_s) + k_s_model)
+                        : -1.0);
       material->rho_d_se.at(x, y, c) = static_cast<float>(u.rho_d_se[c]);
     }
     material->prediction_se.at(x, y) = static_cast<float>(u.prediction_se);
@@ -603,6 +642,44 @@ std::vector<std::pair<double, double>> RefineAll(const RefineContext& context, c
   return refined;
 }
 
+// The model error (docs/fitting.md, "Uncertainty"): what the data cannot tell apart is decided by
+// the NDF the texel is given, and each interpolated texel was fitted twice, with its cluster's
+// blend of the representatives' tables and with its own refitted blend. How far alpha, ln k_s and
+// the width moved between the two is one draw of that error; its square, averaged over the texels
+// within PoolRadius() on the grid (one draw alone makes an error bar with heavy tails; a
+// representative, fitted once, takes its neighbours'), is added to each texel's variance.
+void AddModelError(const std::vector<std::array<double, 5>>& model_variance, Material* material) {
+  const int64_t texels = static_cast<int64_t>(material->width) * material->height;
+  const auto add_to = [](float* se, double variance) {
+    if (*se < 0) return;
+    *se = static_cast<float>(std::sqrt(model::Square(*se) + variance));
+  };
+  // The two fits' variances pooled over the texels within PoolRadius() on the grid: one texel's
+  // difference is one draw, and an error bar from one draw has heavy tails.
+  const int radius = PoolRadius();
+  if (radius > 0 && static_cast<int64_t>(model_variance.size()) == texels) {
+    for (int y = 0; y < material->height; ++y) {
+      for (int x = 0; x < material->width; ++x) {
+        std::array<double, 5> sum{}, count{};
+        for (int dy = -radius; dy <= radius; ++dy) {
+          for (int dx = -radius; dx <= radius; ++dx) {
+            const int nx = x + dx, ny = y + dy;
+            if (nx < 0 || ny < 0 || nx >= material->width || ny >= material->height) continue;
+            const std::array<double, 5>& v = model_variance[static_cast<int64_t>(ny) * material->width + nx];
+            for (int p = 0; p < 5; ++p) {
+              if (v[p] >= 0) sum[p] += v[p], count[p] += 1;
+            }
+          }
+        }
+        const auto mean = [&](int p) { return count[p] > 0 ? sum[p] / count[p] : 0.0; };
+        add_to(&material->alpha_se.at(x, y), mean(0));
+        for (int c = 0; c < 3; ++c) add_to(&material->k_s_se.at(x, y, c), mean(1 + c) * model::Square(material->k_s.at(x, y, c)));
+        if (material->ndf_width.width > 0) add_to(&material->ndf_width_se.at(x, y), mean(4));
+      }
+    }
+  }
+}
+
 }  // namespace
 
 RefineStatistics RefineTexels(const SliceStore& store, const std::vector<bool>& use_dot,
@@ -625,7 +702,14 @@ RefineStatistics RefineTexels(const SliceStore& store, const std::vector<bool>& 
       representatives.push_back(t);  // the baseline's representatives have nothing to refine
     }
   }
-  RefineContext context{store, use_dot, options, options.refine_alpha && dual, {}};
+  std::vector<std::array<double, 5>> model_variance;
+  RefineContext context{store, use_dot, options, options.refine_alpha && dual, {}, nullptr};
+  if (options.uncertainty && material->has_uncertainty() && dual) {
+    std::array<double, 5> unknown;
+    unknown.fill(-1.0);
+    model_variance.assign(static_cast<size_t>(width) * material->height, unknown);
+    context.model_variance = &model_variance;
+  }
   if (options.uncertainty && material->has_uncertainty()) {
     context.dot_neighbours = PointNeighbours(store.geometry().dots, NeighbourRadius());
   }
@@ -641,6 +725,7 @@ RefineStatistics RefineTexels(const SliceStore& store, const std::vector<bool>& 
     before.push_back(b);
     after.push_back(a);
   }
+  if (options.uncertainty && material->has_uncertainty() && dual && ModelErrorEnabled()) AddModelError(model_variance, material);
   statistics.texels = static_cast<int64_t>(refined.size());
   statistics.median_rmse_blended = common::Median(before);
   statistics.median_rmse_refined = common::Median(after);

@@ -75,6 +75,19 @@ inline double NeighbourRadius() {
   return 3.0;
 }
 
+// Whether the model-error terms are added (docs/fitting.md, "Uncertainty"); SVBTDF_SE_MODEL=0
+// leaves them out, to measure what they add.
+inline bool ModelErrorEnabled() {
+  if (const char* text = std::getenv("SVBTDF_SE_MODEL")) return std::atoi(text) != 0;
+  return true;
+}
+
+// The model error's pooling radius in texels (SVBTDF_SE_POOL; 0 adds each texel's own draw).
+inline int PoolRadius() {
+  if (const char* text = std::getenv("SVBTDF_SE_POOL")) return std::atoi(text);
+  return 1;
+}
+
 // Bartlett-weighted neighbours of points (any dimension) within radius spacings of each other, the
 // spacing the median nearest-neighbour distance; O(n^2), for one slice or one dot grid.
 template <typename Point>
