@@ -183,7 +183,7 @@ double Linear(uint8_t code, double gamma) { return std::pow(code / 255.0, gamma)
 // centre (the linear-intensity centroid), size (its flux over pi r^2) and intensity (its flux
 // over the same disk at full white) where the plan puts them.
 TEST_F(SdlOnXvfb, EveryDotIsWhereThePlanSaysAtItsSizeIntensityAndGamma) {
-  for (const auto [width, height] : {std::pair{800, 600}, std::pair{600, 800}}) {
+  for (const auto& [width, height] : {std::pair{800, 600}, std::pair{600, 800}}) {
     XvfbServer server(*binary_, width, height);
     ASSERT_FALSE(server.display().empty()) << "Xvfb did not start";
     setenv("DISPLAY", server.display().c_str(), 1);
