@@ -112,10 +112,12 @@ TEST_F(ImageIo, EightBitPngsReadWithoutRescaling) {
   for (size_t k = 0; k < rgb.size(); ++k) EXPECT_EQ(read.pixels[k], rgb[k]);
 }
 
-// The message of the error ReadCameraImage throws for `path` (empty when it reads).
-std::string ReadFailure(const fs::path& path) {
+// The message of the error `read` (ReadCameraImage or ReadFloatImage) throws for `path`, empty
+// when it reads.
+template <class Reader>
+std::string ReadFailure(Reader read, const fs::path& path) {
   try {
-    ReadCameraImage(path);
+    read(path);
   } catch (const Error& e) {
     return e.what();
   }
@@ -136,12 +138,12 @@ TEST_F(ImageIo, DamagedPngsAreReportedInOneLineThatSaysWhatLibpngFound) {
   WriteTextAtomically(dir_ / "cut.png", bytes.substr(0, bytes.size() - 40));
   for (const char* name : {"bad_chunk.png", "cut.png"}) {
     ::testing::internal::CaptureStderr();
-    const std::string message = ReadFailure(dir_ / name);
+    const std::string message = ReadFailure(ReadCameraImage, dir_ / name);
     EXPECT_EQ(::testing::internal::GetCapturedStderr(), "") << name;
     EXPECT_NE(message.find((dir_ / name).string()), std::string::npos) << message;
     EXPECT_EQ(message.find('\n'), std::string::npos) << message;
   }
-  EXPECT_NE(ReadFailure(dir_ / "bad_chunk.png").find("invalid chunk type"), std::string::npos);
+  EXPECT_NE(ReadFailure(ReadCameraImage, dir_ / "bad_chunk.png").find("invalid chunk type"), std::string::npos);
 }
 
 TEST_F(ImageIo, NonFiniteValuesAreReportedWithTheirPixel) {
@@ -157,16 +159,6 @@ TEST_F(ImageIo, NonFiniteValuesAreReportedWithTheirPixel) {
   }
 }
 
-
-// The message of the error ReadFloatImage throws for `path` (empty when it reads).
-std::string FloatReadFailure(const fs::path& path) {
-  try {
-    ReadFloatImage(path);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return {};
-}
 
 // OpenEXR's byte layout, enough to state a header's claims: attributes are (name, type, size,
 // value) in little-endian, ended by an empty name.
@@ -258,7 +250,7 @@ TEST_F(ImageIo, ExrHeadersClaimingMoreThanTheFileHoldsAreRefusedBeforeOpenExrRea
     } else {
       c.bytes.WriteTo(file);
     }
-    const std::string message = FloatReadFailure(file);
+    const std::string message = ReadFailure(ReadFloatImage, file);
     EXPECT_NE(message.find(file.string()), std::string::npos) << c.name << ": " << message;
     EXPECT_NE(message.find(c.expected), std::string::npos) << c.name << ": " << message;
     EXPECT_EQ(message.find('\n'), std::string::npos) << message;
