@@ -74,6 +74,7 @@ class HeaderCursor {
 
   int64_t Remaining() const { return size_ - position_; }
   int64_t FileSize() const { return size_; }
+  const std::filesystem::path& path() const { return path_; }
 
   void Read(void* out, int64_t count, const char* what) {
     if (count > Remaining()) Fail(std::string("ends inside its header (in ") + what + ")");
@@ -218,14 +219,14 @@ bool ReadPartHeader(HeaderCursor& cursor, PartHeader& part) {
 // The least number of chunk offsets the part's table holds (its stated count, or the scanline
 // chunks or first-level tiles of its data window), after checking the sizes OpenEXR allocates
 // from: the image, and one chunk's buffer.
-int64_t LeastChunkCount(HeaderCursor& cursor, const std::filesystem::path& path, const PartHeader& part) {
+int64_t LeastChunkCount(HeaderCursor& cursor, const PartHeader& part) {
   if (!part.has_data_window) cursor.Fail("has no data window");
   if (part.width <= 0 || part.height <= 0) {
     cursor.Fail("has an empty or inverted data window (" + std::to_string(part.width) + " x " +
                 std::to_string(part.height) + ")");
   }
   const int channels = std::max(1, part.channels);
-  RequireSaneImageSize(path, part.width, part.height, channels);
+  RequireSaneImageSize(cursor.path(), part.width, part.height, channels);
   if (part.has_tiles && (part.tile_width <= 0 || part.tile_height <= 0)) cursor.Fail("has tiles of zero size");
   const int64_t chunk_pixels = part.has_tiles ? part.tile_width * part.tile_height
                                               : std::min(part.height, LinesPerChunk(part.compression)) * part.width;
@@ -281,7 +282,7 @@ void RequirePlausibleExrHeaders(const std::filesystem::path& path) {
 
   int64_t offsets = 0;
   for (const PartHeader& part : parts) {
-    offsets += LeastChunkCount(cursor, path, part);
+    offsets += LeastChunkCount(cursor, part);
     if (offsets * 8 > cursor.Remaining()) {
       cursor.Fail("claims " + std::to_string(offsets) + " chunks, whose offset table alone needs " +
                   std::to_string(offsets * 8) + " bytes, with " + std::to_string(cursor.Remaining()) + " left");
