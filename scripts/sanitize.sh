@@ -33,7 +33,7 @@ bash scripts/install-deps.sh
 # at a useful speed. (-O1, which AddressSanitizer's documentation suggests, was measured on a clean
 # clone: the build took as long and the checked tests 45% longer; docs/testing.md "Measured".)
 cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS=-gline-tables-only \
-  -DCMAKE_CXX_COMPILER=clang++-14 -DSVBTDF_SANITIZE=ON -DSVBTDF_FUZZ=ON \
+  -DCMAKE_CXX_COMPILER=clang++-14 -DSVBTDF_SANITIZE=ON -DSVBTDF_FUZZ=ON -DSVBTDF_PRECOMPILE_HEADERS=ON \
   -DSVBTDF_BUILD_BENCH=OFF -DSVBTDF_PYTHON=OFF >/dev/null
 # The labels the checked build runs are tests/CMakeLists.txt's (SVBTDF_CHECKED_LABELS).
 SANITIZED_LABELS=${SVBTDF_SANITIZED_LABELS:-$(cat "$BUILD_DIR/checked-labels.txt")}
