@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "run_command.h"
+#include "shared_test_data.h"
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/folder_lock.h"
 #include "svbtdf/common/image_io.h"
@@ -68,23 +69,26 @@ std::map<std::string, std::string> Contents(const fs::path& folder) {
 
 class Durability : public ::testing::Test {
  protected:
+  // The uninterrupted runs, made once for all of the program's tests (ctest runs each in a
+  // process of its own): tiny simulated, calibrated, processed and fitted.
   static void SetUpTestSuite() {
-    reference_ = new testing::TempFolder();
-    const fs::path tiny = reference_->path() / "tiny";
-    ASSERT_EQ(RunSvbtdf("-q simulate --preset tiny --out " + tiny.string()).exit_code, 0);
-    reference_images_ = new std::map<std::string, std::string>(Images(tiny / "session"));
-    // The calibrated session, its store and its material, for the walks of process and fit.
-    ASSERT_EQ(RunSvbtdf("-q calibrate " + (tiny / "session").string()).exit_code, 0);
-    ASSERT_EQ(RunSvbtdf("-q process " + (tiny / "session").string() + " --out " + Store().string()).exit_code, 0);
-    ASSERT_EQ(RunSvbtdf("-q fit " + Store().string() + " --out " + Material().string()).exit_code, 0);
+    reference_ = new fs::path(testing::SharedTestData("durability", "simulate, calibrate, process, fit tiny",
+                                                      [](const fs::path& shared) {
+      const fs::path tiny = shared / "tiny";
+      ASSERT_EQ(RunSvbtdf("-q simulate --preset tiny --out " + tiny.string()).exit_code, 0);
+      ASSERT_EQ(RunSvbtdf("-q calibrate " + (tiny / "session").string()).exit_code, 0);
+      ASSERT_EQ(RunSvbtdf("-q process " + (tiny / "session").string() + " --out " + (shared / "store").string()).exit_code, 0);
+      ASSERT_EQ(RunSvbtdf("-q fit " + (shared / "store").string() + " --out " + (shared / "material").string()).exit_code, 0);
+    }));
+    reference_images_ = new std::map<std::string, std::string>(Images(Session()));
   }
   static void TearDownTestSuite() {
     delete reference_images_;
     delete reference_;
   }
-  static fs::path Session() { return reference_->path() / "tiny" / "session"; }
-  static fs::path Store() { return reference_->path() / "store"; }
-  static fs::path Material() { return reference_->path() / "material"; }
+  static fs::path Session() { return *reference_ / "tiny" / "session"; }
+  static fs::path Store() { return *reference_ / "store"; }
+  static fs::path Material() { return *reference_ / "material"; }
 
   // Runs `svbtdf ARGUMENTS --out OUT` with the n-th durable operation failing as `action` says
   // (enospc or kill), then again without faults. Returns false when the run had fewer than n
@@ -122,11 +126,11 @@ class Durability : public ::testing::Test {
   }
 
   testing::TempFolder folder_;
-  static testing::TempFolder* reference_;
+  static fs::path* reference_;  // shared by the program's processes: read, never written
   static std::map<std::string, std::string>* reference_images_;
 };
 
-testing::TempFolder* Durability::reference_ = nullptr;
+fs::path* Durability::reference_ = nullptr;
 std::map<std::string, std::string>* Durability::reference_images_ = nullptr;
 
 // Every K-th operation to the end when SVBTDF_WALK_EVERY_OPERATION=K is set (K = 1: all; the
@@ -204,7 +208,7 @@ TEST_F(Durability, ASecondWriterOfAFolderIsRefused) {
   const fs::path out = folder_.path() / "busy";
   const common::FolderLock held = common::FolderLock::Acquire(out, "a test");
   for (const std::string& command : {"-q simulate --preset tiny --out " + out.string(),
-                                     "acquire --plan-preset tiny --camera sim:" + (reference_->path() / "tiny").string() +
+                                     "acquire --plan-preset tiny --camera sim:" + (*reference_ / "tiny").string() +
                                          " --display sim --out " + out.string(),
                                      "fit " + out.string() + ".store --out " + out.string()}) {
     const auto refused = RunSvbtdf(command);

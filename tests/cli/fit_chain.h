@@ -1,6 +1,6 @@
 #pragma once
 // Test fixture: a `small` simulated session calibrated with its true rig and processed once per
-// test program; FitAndCompare runs `svbtdf fit` and `svbtdf compare` on it.
+// build (SharedTestData); FitAndCompare runs `svbtdf fit` and `svbtdf compare` on it.
 // SVBTDF_FIT_CHAIN_SIMULATE="--preset demo" (or "--preset small --truth montecarlo") runs the same
 // fits on another session, for the one-off measurements in docs/validation.md; the tests' bounds
 // are stated for the default, "--preset small".
@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "run_command.h"
+#include "shared_test_data.h"
 #include "svbtdf/common/atomic_file.h"
 #include "temp_folder.h"
 #include "truth_calibration.h"
@@ -28,25 +29,33 @@ class FitChain : public ::testing::Test {
     folder_ = std::make_unique<testing::TempFolder>("fitchain");
     root_ = folder_->path();
     const char* simulation = std::getenv("SVBTDF_FIT_CHAIN_SIMULATE");
-    const auto simulated = RunSvbtdf("simulate " + std::string(simulation ? simulation : "--preset small") + " --out " +
-                                     (root_ / "sim").string());
-    ASSERT_EQ(simulated.exit_code, 0) << simulated.output;
-    calib::WriteSessionCalibration(root_ / "sim" / "session" / "calibration.json", CalibrationFromTruth(root_ / "sim"));
-    const auto processed = RunSvbtdf("process " + (root_ / "sim" / "session").string() + " --out " + Processed());
-    ASSERT_EQ(processed.exit_code, 0) << processed.output;
+    const std::string simulate = "simulate " + std::string(simulation ? simulation : "--preset small");
+    // Simulated, calibrated and processed once for all of the program's tests (ctest runs each in
+    // a process of its own).
+    session_ = testing::SharedTestData("fitchain", simulate, [&](const fs::path& shared) {
+      const auto simulated = RunSvbtdf(simulate + " --out " + (shared / "sim").string());
+      ASSERT_EQ(simulated.exit_code, 0) << simulated.output;
+      calib::WriteSessionCalibration(shared / "sim" / "session" / "calibration.json",
+                                     CalibrationFromTruth(shared / "sim"));
+      const auto processed = RunSvbtdf("process " + (shared / "sim" / "session").string() + " --out " +
+                                       (shared / "processed").string());
+      ASSERT_EQ(processed.exit_code, 0) << processed.output;
+    });
   }
-  // SVBTDF_KEEP_TEST_FILES=1 keeps the session, store and materials for a look afterwards.
+  // SVBTDF_KEEP_TEST_FILES=1 keeps the fitted materials for a look afterwards (the shared session
+  // and store stay in the test program's shared-test-data/ folder anyway).
   static void TearDownTestSuite() {
     if (std::getenv("SVBTDF_KEEP_TEST_FILES")) std::printf("kept %s\n", root_.c_str());
     folder_.reset();
   }
-  static std::string Processed() { return (root_ / "processed").string(); }
+  static std::string Processed() { return (session_ / "processed").string(); }
+  static fs::path Truth() { return session_ / "sim" / "truth"; }
 
   static nlohmann::json FitAndCompare(const std::string& name, const std::string& fit_options) {
     const auto fitted = RunSvbtdf("fit " + Processed() + " --out " + (root_ / name).string() + " " + fit_options);
     EXPECT_EQ(fitted.exit_code, 0) << fitted.output;
     const fs::path json = root_ / (name + ".json");
-    const auto compared = RunSvbtdf("compare " + (root_ / name).string() + " " + (root_ / "sim" / "truth").string() +
+    const auto compared = RunSvbtdf("compare " + (root_ / name).string() + " " + Truth().string() +
                                     " --json " + json.string());
     EXPECT_EQ(compared.exit_code, 0) << compared.output;
     const nlohmann::json metrics = nlohmann::json::parse(common::ReadTextFile(json));
@@ -55,7 +64,8 @@ class FitChain : public ::testing::Test {
   }
 
   static inline std::unique_ptr<testing::TempFolder> folder_;
-  static inline fs::path root_;
+  static inline fs::path root_;     // this process's outputs
+  static inline fs::path session_;  // the shared session and its store
 };
 
 }  // namespace svbtdf
