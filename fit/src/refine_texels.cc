@@ -390,7 +390,7 @@ struct TexelUncertainty {
 // floor estimate is their mean (docs/slice-store.md), whose standard error is their standard
 // deviation over sqrt(n). Not known with fewer than 5 such samples.
 std::array<double, 3> RhoDStandardError(const TexelSlice& slice, const std::vector<double>& shape,
-                                        const std::array<double, 3>& k_s, const model::Rgb& rho_d) {
+                                        const std::array<double, 3>& k_s, const model::Rgb& rho_d, bool model_error) {
   std::array<double, 3> se = {-1, -1, -1};
   if (slice.measured_rgb.size() != shape.size() || shape.empty()) return se;
   const double scale = (k_s[0] + k_s[1] + k_s[2]) / 3.0;
@@ -413,7 +413,7 @@ std::array<double, 3> RhoDStandardError(const TexelSlice& slice, const std::vect
     // fit's samples, unweighted, chosen by the fitted lobe) against the store's (its own clipped,
     // weighted set); their disagreement counts as the store's error. (Moving rho_d by it made
     // rho_d worse on `small`: the store's is the better of the two; docs/validation.md.)
-    se[c] = std::sqrt(variance + (ModelErrorEnabled() ? mean * mean : 0.0));
+    se[c] = std::sqrt(variance + (model_error ? mean * mean : 0.0));
   }
   return se;
 }
@@ -565,7 +565,8 @@ std::optional<std::pair<double, double>> RefineTexel(const RefineContext& contex
       ScalarUncertainty(&chosen, slice, best, context.refine_alpha, correlated, &u);
     }
     chosen.Shape(best.alpha);
-    u.rho_d_se = RhoDStandardError(slice, chosen.last_shape(), best.k_s, blended.params().rho_d);
+    u.rho_d_se = RhoDStandardError(slice, chosen.last_shape(), best.k_s, blended.params().rho_d,
+                                   context.options.standard_errors.model_error);
     // The assembly left the representatives' profile errors (what the data cannot tell apart)
     // in the maps; the texel's own statistical errors add to them.
     const double profile_alpha = material->alpha_se.at(x, y);
@@ -706,7 +707,7 @@ RefineStatistics RefineTexels(const SliceStore& store, const std::vector<bool>& 
   }
   std::vector<ModelVariance> model_variance;
   RefineContext context{store, use_dot, options, options.refine_alpha && dual, {}, nullptr};
-  const bool model_error = options.uncertainty && material->has_uncertainty() && dual && ModelErrorEnabled();
+  const bool model_error = options.uncertainty && material->has_uncertainty() && dual && options.standard_errors.model_error;
   if (model_error) {
     ModelVariance unknown;
     unknown.fill(-1.0);
@@ -714,7 +715,7 @@ RefineStatistics RefineTexels(const SliceStore& store, const std::vector<bool>& 
     context.model_variance = &model_variance;
   }
   if (options.uncertainty && material->has_uncertainty()) {
-    context.dot_neighbours = PointNeighbours(store.geometry().dots, NeighbourRadius());
+    context.dot_neighbours = PointNeighbours(store.geometry().dots, options.standard_errors.correlation_radius);
   }
   RefineStatistics statistics;
   // The representatives first (alpha and k_s only): the interpolated texels blend their D by the
@@ -728,7 +729,7 @@ RefineStatistics RefineTexels(const SliceStore& store, const std::vector<bool>& 
     before.push_back(b);
     after.push_back(a);
   }
-  if (model_error) AddModelError(model_variance, PoolRadius(), material);
+  if (model_error) AddModelError(model_variance, options.standard_errors.model_error_pool_radius, material);
   statistics.texels = static_cast<int64_t>(refined.size());
   statistics.median_rmse_blended = common::Median(before);
   statistics.median_rmse_refined = common::Median(after);
