@@ -41,6 +41,13 @@ void AddFitOptions(CLI::App* command, fit::FitMaterialOptions* options, std::str
                     "alpha, k_s and weights to its own samples");
   command->add_flag("!--no-uncertainty", options->uncertainty,
                     "do not compute the per-texel standard errors (a material of format version 1, as before)");
+  command->add_flag("!--no-model-error", options->standard_errors.model_error,
+                    "leave the model error (from each texel's two fits) out of the standard errors, to measure what "
+                    "it adds (docs/fitting.md, \"Uncertainty\")");
+  command->add_option("--model-error-pool", options->standard_errors.model_error_pool_radius,
+                      "radius in texels over which the model error's draws are averaged (1: the 3 x 3 window; 0: each "
+                      "texel's own)")
+      ->capture_default_str();
   command->add_flag("!--fixed-horizon", options->free_horizon,
                     "hold the NDF at its horizon to the paper's 1e-6 instead of leaving it to the smoothness "
                     "prior (which fits rough lobes, GGX roughness above about 0.3, far better)");

@@ -126,7 +126,7 @@ EmissionProfile ReadEmissionProfileFile(const std::filesystem::path& path) {
                              "give the file 'svbtdf calibrate-emission --out' wrote");
   }
   const nlohmann::json version = json.value("version", nlohmann::json());
-  if (!version.is_number_integer() || version.get<int64_t>() != kEmissionProfileFormatVersion) {
+  if (common::IntegerIfFits<int>(version) != kEmissionProfileFormatVersion) {
     common::ThrowFormatError(source, "has emission profile version " + version.dump() + "; this svbtdf reads version " +
                                          std::to_string(kEmissionProfileFormatVersion));
   }

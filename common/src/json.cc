@@ -61,9 +61,10 @@ double JsonFields::Number(const std::string& name, double lo, double hi) const {
 int JsonFields::Integer(const std::string& name, int lo, int hi) const {
   const nlohmann::json& value = Raw(name);
   if (!value.is_number_integer()) Fail(prefix_ + name, "must be an integer");
-  const int64_t v = value.get<int64_t>();
-  if (v < lo || v > hi) Fail(prefix_ + name, "must lie in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-  return static_cast<int>(v);
+  // An integer beyond int's range lies outside [lo, hi] too.
+  const std::optional<int> v = IntegerIfFits<int>(value);
+  if (!v || *v < lo || *v > hi) Fail(prefix_ + name, "must lie in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  return *v;
 }
 
 std::string JsonFields::Text(const std::string& name, const std::string& fallback) const {

@@ -37,6 +37,12 @@ void CheckOptions(const FitMaterialOptions& options, double eta) {
   }
   const int r = options.ndf_resolution;
   if (r < 4 || r > 128) common::ThrowInvalidInput("--ndf-resolution", "must be in [4, 128], got " + std::to_string(r));
+  const double correlation = options.standard_errors.correlation_radius;
+  if (!(correlation >= 0.0) || !std::isfinite(correlation)) {
+    common::ThrowInvalidInput("standard_errors.correlation_radius", "must be >= 0 dot spacings, got " + std::to_string(correlation));
+  }
+  const int pool = options.standard_errors.model_error_pool_radius;
+  if (pool < 0) common::ThrowInvalidInput("--model-error-pool", "must be >= 0 texels, got " + std::to_string(pool));
 }
 
 // The texels the fit can use (mask = 1).
@@ -278,6 +284,7 @@ class RepresentativeFits {
     fit_options.ndf_resolution = options.ndf_resolution;
     fit_options.free_horizon = options.free_horizon;
     fit_options.profile_uncertainty = options.uncertainty;
+    fit_options.standard_errors = options.standard_errors;
     return fit_options;
   }
 
@@ -388,6 +395,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
     refine_options.threads = options.threads;
     refine_options.progress = options.progress;
     refine_options.uncertainty = options.uncertainty;
+    refine_options.standard_errors = options.standard_errors;
     refined = RefineTexels(store, use_dot, valid, refine_options, &material);
   }
   if (!options.uncertainty) {

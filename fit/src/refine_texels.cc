@@ -322,6 +322,9 @@ std::optional<TexelWeights> RefitWeights(const Material& material, const Materia
   return refitted;
 }
 
+// The model error's variances of alpha, ln k_s (R, G, B) and the NDF width; -1 where not known.
+using ModelVariance = std::array<double, 5>;
+
 struct RefineContext {
   const SliceStore& store;
   const std::vector<bool>& use_dot;
@@ -329,10 +332,10 @@ struct RefineContext {
   bool refine_alpha = false;
   // Neighbouring dots (uncertainty.h, PointNeighbours over the store's dots).
   std::vector<std::vector<std::pair<int, double>>> dot_neighbours;
-  // Per texel: the model error's variances from its two fits (alpha, ln k_s R G B, NDF width; -1
-  // where not known), pooled over neighbouring texels afterwards (AddModelError). Each texel
-  // writes only its own.
-  std::vector<std::array<double, 5>>* model_variance = nullptr;
+  // Per texel: the model error's draw from its two fits (ModelErrorDraw), pooled over
+  // neighbouring texels afterwards (AddModelError); null when the model error is left out. Each
+  // texel writes only its own.
+  std::vector<ModelVariance>* model_variance = nullptr;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -387,7 +390,7 @@ struct TexelUncertainty {
 // floor estimate is their mean (docs/slice-store.md), whose standard error is their standard
 // deviation over sqrt(n). Not known with fewer than 5 such samples.
 std::array<double, 3> RhoDStandardError(const TexelSlice& slice, const std::vector<double>& shape,
-                                        const std::array<double, 3>& k_s, const model::Rgb& rho_d) {
+                                        const std::array<double, 3>& k_s, const model::Rgb& rho_d, bool model_error) {
   std::array<double, 3> se = {-1, -1, -1};
   if (slice.measured_rgb.size() != shape.size() || shape.empty()) return se;
   const double scale = (k_s[0] + k_s[1] + k_s[2]) / 3.0;
@@ -410,7 +413,7 @@ std::array<double, 3> RhoDStandardError(const TexelSlice& slice, const std::vect
     // fit's samples, unweighted, chosen by the fitted lobe) against the store's (its own clipped,
     // weighted set); their disagreement counts as the store's error. (Moving rho_d by it made
     // rho_d worse on `small`: the store's is the better of the two; docs/validation.md.)
-    se[c] = std::sqrt(variance + (ModelErrorEnabled() ? mean * mean : 0.0));
+    se[c] = std::sqrt(variance + (model_error ? mean * mean : 0.0));
   }
   return se;
 }
@@ -478,6 +481,20 @@ void BlendUncertainty(const RepresentativeTerms& terms, const TexelSlice& slice,
   const double tables = TablesVariance(weights.reps, amount, moments, width);
   const double from_weights = g.dot(c.topLeftCorner(m, m) * g);
   u->ndf_width_se = tables >= 0 ? StandardError(from_weights + tables) : -1.0;
+}
+
+// One draw of the model error (AddModelError): the squared distance of the other fit of the
+// texel's samples from the chosen one in alpha, ln k_s (R, G, B) and the NDF width; -1 where a
+// fit leaves it unknown.
+ModelVariance ModelErrorDraw(const RefinedScalars& other, const RefinedScalars& best, double width_blended,
+                             double width_refitted) {
+  ModelVariance v;
+  v[0] = model::Square(other.alpha - best.alpha);
+  for (int c = 0; c < 3; ++c) {
+    v[1 + c] = other.k_s[c] > 0 && best.k_s[c] > 0 ? model::Square(std::log(other.k_s[c] / best.k_s[c])) : -1.0;
+  }
+  v[4] = width_blended > 0 && width_refitted > 0 ? model::Square(width_refitted - width_blended) : -1.0;
+  return v;
 }
 
 // Refines one texel in place; returns its relative RMSE on its own samples before and after, or
@@ -548,39 +565,25 @@ std::optional<std::pair<double, double>> RefineTexel(const RefineContext& contex
       ScalarUncertainty(&chosen, slice, best, context.refine_alpha, correlated, &u);
     }
     chosen.Shape(best.alpha);
-    u.rho_d_se = RhoDStandardError(slice, chosen.last_shape(), best.k_s, blended.params().rho_d);
+    u.rho_d_se = RhoDStandardError(slice, chosen.last_shape(), best.k_s, blended.params().rho_d,
+                                   context.options.standard_errors.model_error);
     // The assembly left the representatives' profile errors (what the data cannot tell apart)
     // in the maps; the texel's own statistical errors add to them.
     const double profile_alpha = material->alpha_se.at(x, y);
     const double profile_k_s = material->k_s.at(x, y) > 0 && material->k_s_se.at(x, y) >= 0
                                    ? material->k_s_se.at(x, y) / material->k_s.at(x, y)
                                    : 0.0;
-    // The model error from the two fits: the other fit's distance from the chosen one.
-    const bool alternative = other && ModelErrorEnabled();
-    const bool pooled = PoolRadius() > 0 && context.model_variance;
-    if (alternative && pooled) {
-      std::array<double, 5>& v = (*context.model_variance)[t];
-      v[0] = model::Square(other->alpha - best.alpha);
-      for (int c = 0; c < 3; ++c) {
-        v[1 + c] = other->k_s[c] > 0 && best.k_s[c] > 0 ? model::Square(std::log(other->k_s[c] / best.k_s[c])) : -1.0;
-      }
-      v[4] = width_blended > 0 && width_refitted > 0 ? model::Square(width_refitted - width_blended) : -1.0;
-    }
-    const double alpha_model = alternative && !pooled ? model::Square(other->alpha - best.alpha) : 0.0;
-    if (alternative && !pooled && width_blended > 0 && width_refitted > 0 && u.ndf_width_se >= 0) {
-      u.ndf_width_se = std::sqrt(model::Square(u.ndf_width_se) + model::Square(width_refitted - width_blended));
+    // The model error is only recorded here: AddModelError adds it once every texel has its own
+    // draw, to pool them. The maps below hold the texel's statistical errors until then.
+    if (other && context.model_variance) {
+      (*context.model_variance)[t] = ModelErrorDraw(*other, best, width_blended, width_refitted);
     }
     material->alpha_se.at(x, y) = static_cast<float>(
-        u.alpha_se >= 0 ? std::sqrt(model::Square(u.alpha_se) + model::Square(std::max(0.0, profile_alpha)) + alpha_model)
-                        : -1.0);
+        u.alpha_se >= 0 ? std::sqrt(model::Square(u.alpha_se) + model::Square(std::max(0.0, profile_alpha))) : -1.0);
     for (int c = 0; c < 3; ++c) {
       const double relative = u.scale_se >= 0 && best.scale > 0 ? u.scale_se / best.scale : -1.0;
-      const double k_s_model = alternative && !pooled && other->k_s[c] > 0 && best.k_s[c] > 0
-                                   ? model::Square(std::log(other->k_s[c] / best.k_s[c]))
-                                   : 0.0;
       material->k_s_se.at(x, y, c) = static_cast<float>(
-          relative >= 0 ? best.k_s[c] * std::sqrt(model::Square(relative) + model::Square(profile_k_s) + k_s_model)
-                        : -1.0);
+          relative >= 0 ? best.k_s[c] * std::sqrt(model::Square(relative) + model::Square(profile_k_s)) : -1.0);
       material->rho_d_se.at(x, y, c) = static_cast<float>(u.rho_d_se[c]);
     }
     material->prediction_se.at(x, y) = static_cast<float>(u.prediction_se);
@@ -642,40 +645,40 @@ std::vector<std::pair<double, double>> RefineAll(const RefineContext& context, c
   return refined;
 }
 
+// The mean of the model error's draws over the texels within `radius` of (x, y) on the grid (0:
+// the texel's own), per parameter over the draws that are known; 0 where none is.
+ModelVariance PooledModelVariance(const std::vector<ModelVariance>& model_variance, const Material& material, int x,
+                                  int y, int radius) {
+  ModelVariance sum{}, count{};
+  for (int ny = std::max(0, y - radius); ny <= std::min(material.height - 1, y + radius); ++ny) {
+    for (int nx = std::max(0, x - radius); nx <= std::min(material.width - 1, x + radius); ++nx) {
+      const ModelVariance& v = model_variance[static_cast<int64_t>(ny) * material.width + nx];
+      for (int p = 0; p < 5; ++p) {
+        if (v[p] >= 0) sum[p] += v[p], count[p] += 1;
+      }
+    }
+  }
+  for (int p = 0; p < 5; ++p) sum[p] = count[p] > 0 ? sum[p] / count[p] : 0.0;
+  return sum;
+}
+
 // The model error (docs/fitting.md, "Uncertainty"): what the data cannot tell apart is decided by
 // the NDF the texel is given, and each interpolated texel was fitted twice, with its cluster's
 // blend of the representatives' tables and with its own refitted blend. How far alpha, ln k_s and
 // the width moved between the two is one draw of that error; its square, averaged over the texels
-// within PoolRadius() on the grid (one draw alone makes an error bar with heavy tails; a
+// within `radius` on the grid (one draw alone makes an error bar with heavy tails; a
 // representative, fitted once, takes its neighbours'), is added to each texel's variance.
-void AddModelError(const std::vector<std::array<double, 5>>& model_variance, Material* material) {
-  const int64_t texels = static_cast<int64_t>(material->width) * material->height;
+void AddModelError(const std::vector<ModelVariance>& model_variance, int radius, Material* material) {
   const auto add_to = [](float* se, double variance) {
     if (*se < 0) return;
     *se = static_cast<float>(std::sqrt(model::Square(*se) + variance));
   };
-  // The two fits' variances pooled over the texels within PoolRadius() on the grid: one texel's
-  // difference is one draw, and an error bar from one draw has heavy tails.
-  const int radius = PoolRadius();
-  if (radius > 0 && static_cast<int64_t>(model_variance.size()) == texels) {
-    for (int y = 0; y < material->height; ++y) {
-      for (int x = 0; x < material->width; ++x) {
-        std::array<double, 5> sum{}, count{};
-        for (int dy = -radius; dy <= radius; ++dy) {
-          for (int dx = -radius; dx <= radius; ++dx) {
-            const int nx = x + dx, ny = y + dy;
-            if (nx < 0 || ny < 0 || nx >= material->width || ny >= material->height) continue;
-            const std::array<double, 5>& v = model_variance[static_cast<int64_t>(ny) * material->width + nx];
-            for (int p = 0; p < 5; ++p) {
-              if (v[p] >= 0) sum[p] += v[p], count[p] += 1;
-            }
-          }
-        }
-        const auto mean = [&](int p) { return count[p] > 0 ? sum[p] / count[p] : 0.0; };
-        add_to(&material->alpha_se.at(x, y), mean(0));
-        for (int c = 0; c < 3; ++c) add_to(&material->k_s_se.at(x, y, c), mean(1 + c) * model::Square(material->k_s.at(x, y, c)));
-        if (material->ndf_width.width > 0) add_to(&material->ndf_width_se.at(x, y), mean(4));
-      }
+  for (int y = 0; y < material->height; ++y) {
+    for (int x = 0; x < material->width; ++x) {
+      const ModelVariance mean = PooledModelVariance(model_variance, *material, x, y, radius);
+      add_to(&material->alpha_se.at(x, y), mean[0]);
+      for (int c = 0; c < 3; ++c) add_to(&material->k_s_se.at(x, y, c), mean[1 + c] * model::Square(material->k_s.at(x, y, c)));
+      if (material->ndf_width.width > 0) add_to(&material->ndf_width_se.at(x, y), mean[4]);
     }
   }
 }
@@ -702,16 +705,17 @@ RefineStatistics RefineTexels(const SliceStore& store, const std::vector<bool>& 
       representatives.push_back(t);  // the baseline's representatives have nothing to refine
     }
   }
-  std::vector<std::array<double, 5>> model_variance;
+  std::vector<ModelVariance> model_variance;
   RefineContext context{store, use_dot, options, options.refine_alpha && dual, {}, nullptr};
-  if (options.uncertainty && material->has_uncertainty() && dual) {
-    std::array<double, 5> unknown;
+  const bool model_error = options.uncertainty && material->has_uncertainty() && dual && options.standard_errors.model_error;
+  if (model_error) {
+    ModelVariance unknown;
     unknown.fill(-1.0);
     model_variance.assign(static_cast<size_t>(width) * material->height, unknown);
     context.model_variance = &model_variance;
   }
   if (options.uncertainty && material->has_uncertainty()) {
-    context.dot_neighbours = PointNeighbours(store.geometry().dots, NeighbourRadius());
+    context.dot_neighbours = PointNeighbours(store.geometry().dots, options.standard_errors.correlation_radius);
   }
   RefineStatistics statistics;
   // The representatives first (alpha and k_s only): the interpolated texels blend their D by the
@@ -725,7 +729,7 @@ RefineStatistics RefineTexels(const SliceStore& store, const std::vector<bool>& 
     before.push_back(b);
     after.push_back(a);
   }
-  if (options.uncertainty && material->has_uncertainty() && dual && ModelErrorEnabled()) AddModelError(model_variance, material);
+  if (model_error) AddModelError(model_variance, options.standard_errors.model_error_pool_radius, material);
   statistics.texels = static_cast<int64_t>(refined.size());
   statistics.median_rmse_blended = common::Median(before);
   statistics.median_rmse_refined = common::Median(after);

@@ -513,7 +513,7 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
         const Eigen::VectorXd r = Eigen::Map<const Eigen::VectorXd>(residuals.data(), static_cast<Eigen::Index>(residuals.size()));
         std::vector<model::Vec3> lights;
         for (int k : rows) lights.push_back(samples[k].light);
-        const Neighbours neighbours = PointNeighbours(lights, NeighbourRadius());
+        const Neighbours neighbours = PointNeighbours(lights, options_.standard_errors.correlation_radius);
         result.shadowing_roughness_se = StandardError(SandwichCovariance(j, r, &neighbours)(0, 0));
       }
     }

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -66,26 +65,6 @@ inline Neighbours SampleNeighbours(const std::vector<std::vector<std::pair<int, 
 // sqrt of a variance, NaN and negative round-off mapped to -1 (not known).
 inline double StandardError(double variance) {
   return std::isfinite(variance) && variance >= 0 ? std::sqrt(variance) : -1.0;
-}
-
-// How far (in dot spacings) residuals count as correlated. A misfit spans the lobe, several dots;
-// noise does not reach past one. See docs/fitting.md, "Uncertainty".
-inline double NeighbourRadius() {
-  if (const char* text = std::getenv("SVBTDF_SE_RADIUS")) return std::atof(text);
-  return 3.0;
-}
-
-// Whether the model-error terms are added (docs/fitting.md, "Uncertainty"); SVBTDF_SE_MODEL=0
-// leaves them out, to measure what they add.
-inline bool ModelErrorEnabled() {
-  if (const char* text = std::getenv("SVBTDF_SE_MODEL")) return std::atoi(text) != 0;
-  return true;
-}
-
-// The model error's pooling radius in texels (SVBTDF_SE_POOL; 0 adds each texel's own draw).
-inline int PoolRadius() {
-  if (const char* text = std::getenv("SVBTDF_SE_POOL")) return std::atoi(text);
-  return 1;
 }
 
 // Bartlett-weighted neighbours of points (any dimension) within radius spacings of each other, the

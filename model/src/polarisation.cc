@@ -3,22 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
-namespace svbtdf::model {
+#include "svbtdf/model/fresnel.h"
 
-FresnelSP FresnelDielectricSP(double cos_theta_i, double eta) {
-  cos_theta_i = std::clamp(cos_theta_i, -1.0, 1.0);
-  if (cos_theta_i < 0) {
-    eta = 1.0 / eta;
-    cos_theta_i = -cos_theta_i;
-  }
-  const double sin2_theta_t = (1.0 - cos_theta_i * cos_theta_i) / (eta * eta);
-  if (sin2_theta_t >= 1.0) return {1.0, 1.0};
-  const double cos_theta_t = std::sqrt(1.0 - sin2_theta_t);
-  // The same amplitudes as FresnelDielectric (fresnel.cc), kept apart.
-  const double r_p = (eta * cos_theta_i - cos_theta_t) / (eta * cos_theta_i + cos_theta_t);
-  const double r_s = (cos_theta_i - eta * cos_theta_t) / (cos_theta_i + eta * cos_theta_t);
-  return {r_s * r_s, r_p * r_p};
-}
+namespace svbtdf::model {
 
 TransmittedBeam TransmitPolarised(const Vec3& travel, const Vec3& field, const Vec3& normal, double eta) {
   TransmittedBeam out;

@@ -41,7 +41,9 @@ TEST_F(FitCommand, BadArgumentsExitWithTwoNamingTheArgument) {
                {"--model walter", "--model"},
                {"--representatives 2", "--representatives"},
                {"--representatives some", "--representatives"},
-               {"--eta 0.9", "--eta"}};
+               {"--eta 0.9", "--eta"},
+               {"--model-error-pool -1", "--model-error-pool"},
+               {"--model-error-pool wide", "--model-error-pool"}};
   for (const auto& c : cases) {
     const auto result = RunSvbtdf(Fit("bad", c.options));
     EXPECT_EQ(result.exit_code, 2) << c.options << ": " << result.output;

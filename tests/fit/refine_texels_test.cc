@@ -73,6 +73,19 @@ Material PerturbedMaterial(const testing::AnalyticMaterial& truth, double alpha_
   return m;
 }
 
+// `material` with standard-error maps (all 0, as an assembly without profile errors would leave
+// them), so that the refinement writes its own.
+Material WithStandardErrorMaps(Material material) {
+  const int w = material.width, h = material.height;
+  for (common::FloatImage* map : {&material.alpha_se, &material.shadowing_roughness_se, &material.ndf_width_se,
+                                  &material.ndf_width, &material.prediction_se}) {
+    *map = common::FloatImage(w, h, 1, 0.0f);
+  }
+  material.k_s_se = common::FloatImage(w, h, 3, 0.0f);
+  material.rho_d_se = common::FloatImage(w, h, 3, 0.0f);
+  return material;
+}
+
 // A texel's relative RMSE on its own luminance samples, computed here from the evaluator (not
 // from what RefineTexels reports).
 double RelativeRmse(const Material& material, const SliceStore& store, int64_t t) {
@@ -201,6 +214,38 @@ TEST_F(RefineTexelsTest, LeavesTheOtherTexelsAlone) {
     EXPECT_EQ(material.k_s.at(x, y, 0), start.k_s.at(x, y, 0)) << "texel " << t;
     EXPECT_EQ(material.residual.at(x, y), -1.0f) << "texel " << t;
   }
+}
+
+// The model error (StandardErrorOptions) only widens the texels' statistical errors. Pooled
+// over 3 x 3 texels (the default) it reaches the representatives, which are fitted once; with
+// each texel's own draw (radius 0) it leaves them as they were.
+TEST_F(RefineTexelsTest, TheModelErrorWidensTheErrorsAndItsPoolingIsAnOption) {
+  const auto refined = [](const StandardErrorOptions& standard_errors) {
+    Material material = WithStandardErrorMaps(PerturbedMaterial(truth_, 0.25, 1.3));
+    RefineOptions options = Options();
+    options.standard_errors = standard_errors;
+    RefineTexels(*store_, {}, AllTexels(), options, &material);
+    return material;
+  };
+  StandardErrorOptions without_model_error, own_draw;
+  without_model_error.model_error = false;
+  own_draw.model_error_pool_radius = 0;
+  const Material statistical = refined(without_model_error), pooled = refined({}), unpooled = refined(own_draw);
+  int widened_representatives = 0, widened_blends = 0;
+  for (int64_t t : AllTexels()) {
+    const float base = statistical.alpha_se.pixels[t];
+    ASSERT_GT(base, 0.0f) << "texel " << t;
+    EXPECT_GE(pooled.alpha_se.pixels[t], base) << "texel " << t;
+    EXPECT_GE(unpooled.alpha_se.pixels[t], base) << "texel " << t;
+    if (IsRepresentative(pooled, t)) {
+      EXPECT_EQ(unpooled.alpha_se.pixels[t], base) << "texel " << t;
+      widened_representatives += pooled.alpha_se.pixels[t] > base;
+    } else {
+      widened_blends += unpooled.alpha_se.pixels[t] > base;
+    }
+  }
+  EXPECT_GT(widened_representatives, 0);
+  EXPECT_GT(widened_blends, 0);
 }
 
 TEST_F(RefineTexelsTest, AnInterruptStopsItWithAnInterruptedError) {

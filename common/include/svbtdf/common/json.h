@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <set>
 #include <string>
 #include <string_view>
@@ -44,24 +45,29 @@ auto ParseJsonWith(std::string_view text, const std::string& subject, const std:
   }
 }
 
-// `value` as an integer of type Int, for every integer a reader takes from a file. nlohmann's
-// get<int>() converts a JSON float with a C++ cast, which is undefined behaviour when the float is
-// out of range (the fuzzer's width of 4.9e111); here a float, a non-number or an integer Int
-// cannot hold is one common::Error(kFormat): "SOURCE: has a 'NAME' that is not an integer ...".
+// `value` as an Int when it is a JSON integer that Int can hold; nothing for a float, a
+// non-number or an integer out of Int's range. The one test behind every integer a reader takes
+// from a file: nlohmann's get<int>() converts a JSON float with a C++ cast, which is undefined
+// behaviour when the float is out of range (the fuzzer's width of 4.9e111).
+template <class Int>
+std::optional<Int> IntegerIfFits(const nlohmann::json& value) {
+  static_assert(std::is_integral_v<Int>);
+  const bool fits = value.is_number_unsigned()  ? std::in_range<Int>(value.get<uint64_t>())
+                    : value.is_number_integer() ? std::in_range<Int>(value.get<int64_t>())
+                                                : false;
+  if (!fits) return std::nullopt;
+  return value.get<Int>();
+}
+
+// IntegerIfFits, or one common::Error(kFormat): "SOURCE: has a 'NAME' that is not an integer ...".
 template <class Int>
 Int IntegerValue(const nlohmann::json& value, std::string_view name, const std::string& source) {
-  static_assert(std::is_integral_v<Int>);
-  bool fits = false;
-  if (value.is_number_unsigned()) {
-    fits = std::in_range<Int>(value.get<uint64_t>());
-  } else if (value.is_number_integer()) {
-    fits = std::in_range<Int>(value.get<int64_t>());
-  }
-  if (!fits) {
+  const std::optional<Int> integer = IntegerIfFits<Int>(value);
+  if (!integer) {
     ThrowFormatError(source, "has a '" + std::string(name) + "' that is not an integer of a sensible size: " +
                                  value.dump().substr(0, 40));
   }
-  return value.get<Int>();
+  return *integer;
 }
 
 // IntegerValue of object.at(key) (a missing key throws nlohmann's out_of_range, as at() does).

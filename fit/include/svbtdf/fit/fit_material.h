@@ -14,6 +14,7 @@
 
 #include "svbtdf/fit/material.h"
 #include "svbtdf/fit/slice_store.h"
+#include "svbtdf/fit/standard_error_options.h"
 
 namespace svbtdf::fit {
 
@@ -37,6 +38,7 @@ struct FitMaterialOptions {
   // Per-texel standard errors (docs/fitting.md, "Uncertainty"): the *_se maps of material format
   // version 3. false writes a material without them (version 1), as before.
   bool uncertainty = true;
+  StandardErrorOptions standard_errors;  // how they are estimated
 };
 
 // A representative whose fit fails (kNumerical) takes the fit of the nearest one that succeeded

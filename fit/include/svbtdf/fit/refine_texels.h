@@ -19,6 +19,7 @@
 
 #include "svbtdf/fit/material.h"
 #include "svbtdf/fit/slice_store.h"
+#include "svbtdf/fit/standard_error_options.h"
 
 namespace svbtdf::fit {
 
@@ -29,6 +30,7 @@ struct RefineOptions {
   // Standard errors of alpha, k_s, rho_d, the NDF width and the prediction (docs/fitting.md,
   // "Uncertainty"), written to the material's *_se maps when it has them.
   bool uncertainty = true;
+  StandardErrorOptions standard_errors;  // how they are estimated
   int threads = 0;                 // 0: all hardware threads
   bool progress = false;
 };

@@ -20,6 +20,7 @@
 #include <memory>
 #include <vector>
 
+#include "svbtdf/fit/standard_error_options.h"
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/hemicube.h"
 #include "svbtdf/model/tabulated_ndf.h"
@@ -68,6 +69,7 @@ struct TexelFitOptions {
   // Standard errors (docs/fitting.md, "Uncertainty"): of the shadowing roughness and the NDF
   // width, and alpha's profile (two more sparse solves).
   bool profile_uncertainty = true;
+  StandardErrorOptions standard_errors;  // the shadowing fit's: its correlation_radius
 };
 
 struct TexelFitResult {

@@ -14,21 +14,12 @@
 // beam stays linearly polarised and this is exact (no approximation beyond smooth facets):
 // the Mueller calculus gives the same powers (tests/model/polarisation_test.cc checks it with an
 // independent Stokes computation). Unpolarised light is the incoherent mean of any two
-// orthogonal linear states.
+// orthogonal linear states. The s and p reflectances of one interface are fresnel.h's
+// (FresnelDielectricSP).
 
 #include "svbtdf/model/vec.h"
 
 namespace svbtdf::model {
-
-// Power reflectances of the s (perpendicular) and p (parallel) fields for light arriving at an
-// interface with relative index eta = n_beyond / n_before, cos_theta_i >= 0 on the light's side
-// (a negative cosine swaps the media as FresnelDielectric does). Both 1 under total internal
-// reflection; (s + p) / 2 = FresnelDielectric(cos_theta_i, eta).
-struct FresnelSP {
-  double s = 1.0;
-  double p = 1.0;
-};
-FresnelSP FresnelDielectricSP(double cos_theta_i, double eta);
 
 // A beam after a smooth interface: where it travels and its field (squared length = power).
 struct TransmittedBeam {
