@@ -72,23 +72,20 @@ class Durability : public ::testing::Test {
   // The uninterrupted runs, made once for all of the program's tests (ctest runs each in a
   // process of its own): tiny simulated, calibrated, processed and fitted.
   static void SetUpTestSuite() {
-    reference_ = new fs::path(testing::SharedTestData("durability", "simulate, calibrate, process, fit tiny",
-                                                      [](const fs::path& shared) {
-      const fs::path tiny = shared / "tiny";
+    const std::string recipe = "simulate, calibrate, process, fit tiny";
+    reference_ = testing::SharedTestData("durability", recipe, [](const fs::path& shared) {
+      const fs::path tiny = shared / "tiny", store = shared / "store";
       ASSERT_EQ(RunSvbtdf("-q simulate --preset tiny --out " + tiny.string()).exit_code, 0);
       ASSERT_EQ(RunSvbtdf("-q calibrate " + (tiny / "session").string()).exit_code, 0);
-      ASSERT_EQ(RunSvbtdf("-q process " + (tiny / "session").string() + " --out " + (shared / "store").string()).exit_code, 0);
-      ASSERT_EQ(RunSvbtdf("-q fit " + (shared / "store").string() + " --out " + (shared / "material").string()).exit_code, 0);
-    }));
+      ASSERT_EQ(RunSvbtdf("-q process " + (tiny / "session").string() + " --out " + store.string()).exit_code, 0);
+      ASSERT_EQ(RunSvbtdf("-q fit " + store.string() + " --out " + (shared / "material").string()).exit_code, 0);
+    });
     reference_images_ = new std::map<std::string, std::string>(Images(Session()));
   }
-  static void TearDownTestSuite() {
-    delete reference_images_;
-    delete reference_;
-  }
-  static fs::path Session() { return *reference_ / "tiny" / "session"; }
-  static fs::path Store() { return *reference_ / "store"; }
-  static fs::path Material() { return *reference_ / "material"; }
+  static void TearDownTestSuite() { delete reference_images_; }
+  static fs::path Session() { return reference_ / "tiny" / "session"; }
+  static fs::path Store() { return reference_ / "store"; }
+  static fs::path Material() { return reference_ / "material"; }
 
   // Runs `svbtdf ARGUMENTS --out OUT` with the n-th durable operation failing as `action` says
   // (enospc or kill), then again without faults. Returns false when the run had fewer than n
@@ -126,11 +123,10 @@ class Durability : public ::testing::Test {
   }
 
   testing::TempFolder folder_;
-  static fs::path* reference_;  // shared by the program's processes: read, never written
+  static inline fs::path reference_;  // shared by the program's processes: read, never written
   static std::map<std::string, std::string>* reference_images_;
 };
 
-fs::path* Durability::reference_ = nullptr;
 std::map<std::string, std::string>* Durability::reference_images_ = nullptr;
 
 // Every K-th operation to the end when SVBTDF_WALK_EVERY_OPERATION=K is set (K = 1: all; the
@@ -208,7 +204,7 @@ TEST_F(Durability, ASecondWriterOfAFolderIsRefused) {
   const fs::path out = folder_.path() / "busy";
   const common::FolderLock held = common::FolderLock::Acquire(out, "a test");
   for (const std::string& command : {"-q simulate --preset tiny --out " + out.string(),
-                                     "acquire --plan-preset tiny --camera sim:" + (*reference_ / "tiny").string() +
+                                     "acquire --plan-preset tiny --camera sim:" + (reference_ / "tiny").string() +
                                          " --display sim --out " + out.string(),
                                      "fit " + out.string() + ".store --out " + out.string()}) {
     const auto refused = RunSvbtdf(command);

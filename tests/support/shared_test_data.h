@@ -19,11 +19,11 @@
 #include <unistd.h>
 
 #include <filesystem>
-#include <fstream>
 #include <functional>
-#include <iterator>
 #include <sstream>
 #include <string>
+
+#include "svbtdf/common/atomic_file.h"
 
 namespace svbtdf::testing {
 
@@ -42,11 +42,6 @@ inline std::string Key(const std::string& recipe, const fs::path& self) {
     key << program.string() << " " << size << " " << fs::last_write_time(program).time_since_epoch().count() << "\n";
   }
   return key.str();
-}
-
-inline std::string ReadKey(const fs::path& file) {
-  std::ifstream in(file);
-  return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 // Holds an exclusive flock on `file` for its lifetime.
@@ -80,13 +75,14 @@ inline std::filesystem::path SharedTestData(const std::string& name, const std::
   fs::create_directories(root);
   const ExclusiveLock lock(root / (name + ".lock"));
   const std::string key = Key(recipe, self);
-  if (ReadKey(folder / "recipe.txt") == key) return folder;
+  const fs::path finished = folder / "recipe.txt";
+  if (fs::exists(finished) && common::ReadTextFile(finished) == key) return folder;
 
   fs::remove_all(folder);
   fs::create_directories(folder);
   make(folder);
   if (::testing::Test::HasFailure()) return folder;  // unpublished: the next process makes it again
-  std::ofstream(folder / "recipe.txt") << key;      // written last: the folder is finished
+  common::WriteTextAtomically(finished, key);        // written last: the folder is finished
   return folder;
 }
 
