@@ -2,6 +2,7 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <algorithm>
@@ -87,11 +88,39 @@ double MinimumIncludingEnds(const std::function<double(double)>& f, double lo, d
 
 // ------------------------------------------------------------------------------------------------
 
+using Ldlt = Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<int>>;
+
+namespace {
+
+// A preconditioner for Eigen's ConjugateGradient that applies the factorisation of a nearby
+// matrix: the ln D system of the previous alpha (or of the previous texel of the same view). The
+// systems differ only in the data rows' weights, so a few iterations replace a factorisation.
+class FactorPreconditioner {
+ public:
+  void set_factor(const Ldlt* factor) { factor_ = factor; }
+  template <typename Matrix>
+  FactorPreconditioner& analyzePattern(const Matrix&) { return *this; }
+  template <typename Matrix>
+  FactorPreconditioner& factorize(const Matrix&) { return *this; }
+  template <typename Matrix>
+  FactorPreconditioner& compute(const Matrix&) { return *this; }
+  template <typename Rhs>
+  Eigen::VectorXd solve(const Rhs& b) const { return factor_->solve(b); }
+  Eigen::ComputationInfo info() const { return Eigen::Success; }
+
+ private:
+  const Ldlt* factor_ = nullptr;
+};
+
+}  // namespace
+
 struct FitWorkspace::State {
-  Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<int>> solver;
+  Ldlt solver;
+  bool factorized = false;        // `solver` holds a factorisation of the analysed pattern
   std::vector<int> outer, inner;  // the pattern the solver was analysed for
   int64_t factorizations = 0;
   int64_t symbolic_analyses = 0;
+  int64_t iterative_solves = 0;
 };
 
 FitWorkspace::FitWorkspace() : state_(std::make_unique<State>()) {}
@@ -100,18 +129,39 @@ FitWorkspace::FitWorkspace(FitWorkspace&&) noexcept = default;
 FitWorkspace& FitWorkspace::operator=(FitWorkspace&&) noexcept = default;
 int64_t FitWorkspace::factorizations() const { return state_->factorizations; }
 int64_t FitWorkspace::symbolic_analyses() const { return state_->symbolic_analyses; }
+int64_t FitWorkspace::iterative_solves() const { return state_->iterative_solves; }
 
 namespace {
 
-// Solves N x = b reusing the symbolic analysis when N's pattern is the one analysed last.
+// Conjugate gradients preconditioned by the last factorisation stop here: the relative residual
+// |b - N x| / |b| of a direct solve is ~1e-14, and ln D moves by less than 1e-9 between the two
+// (tests/fit/texel_fit_test.cc). A system the old factor no longer fits is factorised afresh.
+constexpr double kIterativeTolerance = 1e-9;
+constexpr int kMaxIterations = 40;
+
+// Solves N x = b, starting from `guess` (empty: zero): by conjugate gradients preconditioned with
+// the workspace's factorisation when it has one of N's pattern, else (or when they do not
+// converge) by factorising N, reusing the symbolic analysis when the pattern is the last one's.
 Eigen::VectorXd SolveNormalEquations(const SparseMatrix& normal, const Eigen::VectorXd& rhs,
-                                     FitWorkspace::State* state) {
+                                     const Eigen::VectorXd& guess, bool iterative, FitWorkspace::State* state) {
   const int n = static_cast<int>(normal.cols());
   const int nnz = static_cast<int>(normal.nonZeros());
   const bool same_pattern =
       static_cast<int>(state->outer.size()) == n + 1 && static_cast<int>(state->inner.size()) == nnz &&
       std::equal(state->outer.begin(), state->outer.end(), normal.outerIndexPtr()) &&
       std::equal(state->inner.begin(), state->inner.end(), normal.innerIndexPtr());
+  if (iterative && same_pattern && state->factorized) {
+    Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower | Eigen::Upper, FactorPreconditioner> cg;
+    cg.preconditioner().set_factor(&state->solver);
+    cg.setTolerance(kIterativeTolerance);
+    cg.setMaxIterations(kMaxIterations);
+    cg.compute(normal);
+    const Eigen::VectorXd x = cg.solveWithGuess(rhs, guess.size() == n ? guess : Eigen::VectorXd::Zero(n));
+    if (cg.info() == Eigen::Success && x.allFinite()) {
+      ++state->iterative_solves;
+      return x;
+    }
+  }
   if (!same_pattern) {
     state->solver.analyzePattern(normal);
     state->outer.assign(normal.outerIndexPtr(), normal.outerIndexPtr() + n + 1);
@@ -120,7 +170,8 @@ Eigen::VectorXd SolveNormalEquations(const SparseMatrix& normal, const Eigen::Ve
   }
   state->solver.factorize(normal);
   ++state->factorizations;
-  if (state->solver.info() != Eigen::Success) {
+  state->factorized = state->solver.info() == Eigen::Success;
+  if (!state->factorized) {
     throw common::Error(common::ErrorKind::kNumerical, "NDF solve", "the normal equations are singular",
                 "increase the smoothness weight");
   }
@@ -324,7 +375,8 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
   Eigen::VectorXd last_x;
   double last_data_ssr = 0.0;
   int last_data_rows = 0;
-  SparseRows last_data;                // the last solve's data rows ...
+  SparseMatrix last_normal;            // the last solve's normal matrix ...
+  SparseRows last_data;                // ... its data rows ...
   std::vector<int> last_row_sample;    // ... and the sample of each
   const auto solve_ln_d = [&](double alpha, bool with_symmetry) {
     SparseRows data;
@@ -359,7 +411,11 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
     rhs += system.smoothness_rhs;
     // Added with weight zero in the final pass so that both passes share one pattern.
     normal += (with_symmetry ? 1.0 : model::Square(options_.final_symmetry_weight)) * system.symmetry_normal;
-    const Eigen::VectorXd x = SolveNormalEquations(normal, rhs, state);
+    // Iterative only between alternations: a texel's first system is too far from the previous
+    // texel's final one, and the final pass (without the symmetry rows) too far from the
+    // alternations' for a few iterations; factorised, it serves the standard errors' solves below.
+    const bool iterative = options_.iterative_solves && with_symmetry && last_x.size() > 0;
+    const Eigen::VectorXd x = SolveNormalEquations(normal, rhs, last_x, iterative, state);
     std::vector<double> row_residual(data.rhs.size());
     for (size_t r = 0; r < data.rhs.size(); ++r) row_residual[r] = -data.rhs[r];
     for (const Triplet& t : data.triplets) row_residual[t.row()] += t.value() * x[t.col()];
@@ -367,6 +423,7 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
     for (double r : row_residual) last_data_ssr += r * r;
     last_data_rows = used;
     last_x = x;
+    last_normal = std::move(normal);
     last_data = std::move(data);
     last_row_sample = std::move(row_sample);
     std::vector<double> ln_d(grid_.num_cells(), options_.horizon_ln_d);
@@ -405,6 +462,7 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
   // The NDF's width and its standard error: var = s^2 g^T N^-1 g, with N the final pass's normal
   // matrix (still factorised in the workspace: one more solve), g the width's gradient in the
   // unknowns and s^2 the data rows' mean squared residual (docs/fitting.md, "Uncertainty").
+  const auto solve_final = [&](const Eigen::VectorXd& b) { return SolveNormalEquations(last_normal, b, {}, options_.iterative_solves, state); };
   if (options_.profile_uncertainty) {
     std::vector<double> d(grid_.num_cells());
     double mass = 0;
@@ -421,7 +479,7 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
         gradient[system.column[c]] =
             d[c] * z * grid_.CellSolidAngle(c) * (1.0 - z * z - width * width) / (2.0 * width * mass);
       }
-      const Eigen::VectorXd solved = state->solver.solve(gradient);
+      const Eigen::VectorXd solved = solve_final(gradient);
       const double s2 = last_data_ssr / std::max(1, last_data_rows - 1);
       result.ndf_width = width;
       result.ndf_width_se = StandardError(s2 * gradient.dot(solved));
@@ -452,9 +510,7 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
     SparseMatrix a(last_data.rows, system.num_unknowns);
     a.setFromTriplets(last_data.triplets.begin(), last_data.triplets.end());
     const Eigen::VectorXd u = a.transpose() * g;
-    // The factorisation is the final pass's unless the width's solve above replaced it (it did not:
-    // that was a solve, not a factorisation).
-    const Eigen::VectorXd z = state->solver.solve(u);
+    const Eigen::VectorXd z = solve_final(u);
     const double schur = g.squaredNorm() - u.dot(z);
     const double s2 = last_data_ssr / std::max(1, last_data_rows - 2);
     if (schur > 0 && s2 > 0) {
