@@ -51,11 +51,50 @@ double SumOfSquares(const std::vector<double>& v) {
   return sum;
 }
 
+// A texel's samples seen through the dual-microfacet model: each sample's two virtual
+// configurations, reduced to their factor and the hemicube weights of their half vectors. They
+// depend on the view, the dots and the shadowing but not on D, so every NDF the refinement tries
+// at a texel (the cluster's blend, each representative, the refitted blend) is looked up at the
+// same places, computed once.
+struct SampleLookups {
+  struct Lookup {
+    double factor = 0.0;  // 0 where the configuration does not exist
+    model::Hemicube::Weights weights{};
+    double LnD(const std::vector<double>& ln_d) const {
+      double ln = 0;
+      for (const auto& [cell, w] : weights) ln += w * ln_d[cell];
+      return ln;
+    }
+  };
+  std::vector<Lookup> entry, exit;
+};
+
+SampleLookups LookupsOf(const model::DualMicrofacetParams& params, const model::Hemicube& grid, const TexelSlice& slice) {
+  const model::DualMicrofacetModel btdf(params.eta, params.shadowing);
+  const auto lookup = [&](const model::VirtualConfiguration& c) {
+    SampleLookups::Lookup l;
+    if (!c.valid || !(c.factor > 0) || !(c.h.z() > 0)) return l;
+    l.factor = c.factor;
+    l.weights = grid.Interpolation(c.h);
+    return l;
+  };
+  SampleLookups lookups;
+  lookups.entry.reserve(slice.light.size());
+  lookups.exit.reserve(slice.light.size());
+  for (const model::Vec3& light : slice.light) {
+    lookups.entry.push_back(lookup(btdf.RoughEntry(light, slice.view)));
+    lookups.exit.push_back(lookup(btdf.RoughExit(light, slice.view)));
+  }
+  return lookups;
+}
+
 class ScalarRefiner {
  public:
   // The two virtual configurations do not depend on alpha (the model blends them in log space),
-  // so each sample costs two NDF lookups however long the search for alpha runs.
-  ScalarRefiner(const TexelBtdf& texel, const TexelSlice& slice) : slice_(slice), sum_rho_squared_(SumOfSquares(slice.rho)) {
+  // so each sample costs two NDF lookups however long the search for alpha runs. `lookups`: the
+  // texel's (LookupsOf), for the dual-microfacet model.
+  ScalarRefiner(const TexelBtdf& texel, const TexelSlice& slice, const SampleLookups* lookups)
+      : slice_(slice), sum_rho_squared_(SumOfSquares(slice.rho)) {
     const size_t n = slice_.light.size();
     if (texel.model() == MaterialModel::kWalterGgx) {
       model::DualMicrofacetParams unit = texel.params();
@@ -65,16 +104,24 @@ class ScalarRefiner {
       for (size_t k = 0; k < n; ++k) fixed_shape_.push_back(shape.Evaluate(slice_.light[k], slice_.view)[0]);
       return;
     }
-    const model::DualMicrofacetModel btdf(texel.params().eta, texel.params().shadowing);
+    const std::vector<double>& ln_d = texel.ndf().ln_d();
     rho_t_.resize(n);
     rho_b_.resize(n);
     ln_t_.resize(n);
     ln_b_.resize(n);
+    // rho = factor D(h), its logarithm taken before the exponential (0 where rho vanishes).
+    const auto evaluate = [&](const SampleLookups::Lookup& l, double* rho, double* ln) {
+      if (!(l.factor > 0)) {
+        *rho = *ln = 0.0;
+        return;
+      }
+      *ln = std::log(l.factor) + l.LnD(ln_d);
+      *rho = std::exp(*ln);
+      if (!(*rho > 0)) *ln = 0.0;
+    };
     for (size_t k = 0; k < n; ++k) {
-      rho_t_[k] = btdf.RhoT(texel.ndf(), slice_.light[k], slice_.view);
-      rho_b_[k] = btdf.RhoB(texel.ndf(), slice_.light[k], slice_.view);
-      ln_t_[k] = rho_t_[k] > 0 ? std::log(rho_t_[k]) : 0.0;
-      ln_b_[k] = rho_b_[k] > 0 ? std::log(rho_b_[k]) : 0.0;
+      evaluate(lookups->entry[k], &rho_t_[k], &ln_t_[k]);
+      evaluate(lookups->exit[k], &rho_b_[k], &ln_b_[k]);
     }
   }
 
@@ -172,27 +219,18 @@ struct RepresentativeTerms {
   std::vector<std::vector<double>> t, b;
 };
 
-RepresentativeTerms TermsOf(const Material& material, const model::Hemicube& grid, const std::vector<int>& reps,
-                            const model::DualMicrofacetModel& btdf, const TexelSlice& slice) {
+RepresentativeTerms TermsOf(const Material& material, const std::vector<int>& reps, const SampleLookups& lookups) {
+  const size_t n = lookups.entry.size();
   RepresentativeTerms terms;
-  terms.t.assign(reps.size(), std::vector<double>(slice.light.size(), 0.0));
+  terms.t.assign(reps.size(), std::vector<double>(n, 0.0));
   terms.b = terms.t;
-  for (size_t k = 0; k < slice.light.size(); ++k) {
-    // The configurations (half vector, factor) do not depend on D: one per sample for all.
-    const model::VirtualConfiguration entry = btdf.RoughEntry(slice.light[k], slice.view);
-    const model::VirtualConfiguration exit = btdf.RoughExit(slice.light[k], slice.view);
-    const auto add = [&](const model::VirtualConfiguration& c, std::vector<std::vector<double>>* into) {
-      if (!c.valid || c.factor <= 0) return;
-      const model::Hemicube::Weights weights = grid.Interpolation(c.h);
-      for (size_t j = 0; j < reps.size(); ++j) {
-        const std::vector<double>& ln_d = material.representative_ln_d[reps[j]];
-        double ln = 0;
-        for (const auto& [cell, w] : weights) ln += w * ln_d[cell];
-        (*into)[j][k] = c.factor * std::exp(ln);
-      }
-    };
-    add(entry, &terms.t);
-    add(exit, &terms.b);
+  const auto add = [&](const SampleLookups::Lookup& l, size_t k, std::vector<std::vector<double>>* into) {
+    if (!(l.factor > 0)) return;
+    for (size_t j = 0; j < reps.size(); ++j) (*into)[j][k] = l.factor * std::exp(l.LnD(material.representative_ln_d[reps[j]]));
+  };
+  for (size_t k = 0; k < n; ++k) {
+    add(lookups.entry[k], k, &terms.t);
+    add(lookups.exit[k], k, &terms.b);
   }
   return terms;
 }
@@ -279,7 +317,7 @@ constexpr double kExtrapolation = 3.0;
 // representatives, and alpha, to its samples, starting from the clustering's weights; returns the
 // weights w_j (sum 1) that make TexelNdf blend a_j D_j, or nothing when the fit does not run.
 std::optional<TexelWeights> RefitWeights(const Material& material, const MaterialEvaluator& evaluator,
-                                         const model::Hemicube& grid, const TexelBtdf& blended, const TexelWeights& start,
+                                         const SampleLookups& lookups, const TexelBtdf& blended, const TexelWeights& start,
                                          const TexelSlice& slice, RepresentativeTerms* terms_out) {
   const size_t m = start.reps.size();
   if (m < 2) return std::nullopt;
@@ -288,9 +326,8 @@ std::optional<TexelWeights> RefitWeights(const Material& material, const Materia
     scale[j] = evaluator.RepresentativeScale(start.reps[j]);
     if (!(scale[j] > 0)) return std::nullopt;
   }
-  const model::DualMicrofacetModel btdf(blended.params().eta, blended.params().shadowing);
   RepresentativeTerms& terms = *terms_out;
-  terms = TermsOf(material, grid, start.reps, btdf, slice);
+  terms = TermsOf(material, start.reps, lookups);
   // TexelNdf blends w_j s_j D_j; start there (negative weights clipped), at the texel's k_s.
   std::vector<double> amount(m);
   for (size_t j = 0; j < m; ++j) amount[j] = std::max(0.0, start.weights[j]) * scale[j];
@@ -508,7 +545,9 @@ std::optional<std::pair<double, double>> RefineTexel(const RefineContext& contex
   const TexelWeights blended_weights = ReadWeights(*material, x, y);
   const TexelBtdf blended = evaluator.Texel(x, y);
   const double start_alpha = blended.params().alpha;
-  ScalarRefiner refiner(blended, slice);
+  const bool dual_model = material->model == MaterialModel::kDualMicrofacet;
+  const SampleLookups lookups = dual_model ? LookupsOf(blended.params(), grid, slice) : SampleLookups();
+  ScalarRefiner refiner(blended, slice, &lookups);
   const double before = refiner.RelativeRmse(start_alpha, model::Luminance(blended.params().k_s));
   const double tolerance = context.options.alpha_tolerance;
   RefinedScalars best = RefineScalars(&refiner, start_alpha, context.refine_alpha, tolerance);
@@ -518,15 +557,14 @@ std::optional<std::pair<double, double>> RefineTexel(const RefineContext& contex
   // The two fits of the same samples with two NDFs (the cluster's blend and the refitted one), for
   // the model error: how far alpha, k_s and the width move with D's choice (docs/fitting.md).
   const bool uncertainty = context.options.uncertainty && material->has_uncertainty();
-  const bool dual_model = material->model == MaterialModel::kDualMicrofacet;
   std::optional<RefinedScalars> other;
   double width_blended = -1, width_refitted = -1;
   if (refit_weights) {
     if (uncertainty && dual_model) width_blended = NdfWidth(grid, evaluator.TexelCellD(x, y));
-    if (const auto refitted = RefitWeights(*material, evaluator, grid, blended, blended_weights, slice, &terms)) {
+    if (const auto refitted = RefitWeights(*material, evaluator, lookups, blended, blended_weights, slice, &terms)) {
       WriteWeights(*refitted, x, y, material);
       if (uncertainty && dual_model) width_refitted = NdfWidth(grid, evaluator.TexelCellD(x, y));
-      refitted_refiner.emplace(evaluator.Texel(x, y), slice);
+      refitted_refiner.emplace(evaluator.Texel(x, y), slice, &lookups);
       const RefinedScalars with_refitted =
           RefineScalars(&*refitted_refiner, start_alpha, context.refine_alpha, tolerance);
       if (with_refitted.relative_rmse < best.relative_rmse) {
