@@ -34,9 +34,12 @@ inline Eigen::MatrixXd SandwichCovariance(const Eigen::MatrixXd& jacobian, const
   const Eigen::MatrixXd scores = residuals.asDiagonal() * jacobian;
   Eigen::MatrixXd meat = scores.transpose() * scores;
   if (neighbours && static_cast<Eigen::Index>(neighbours->size()) == n) {
-    Eigen::MatrixXd smoothed = Eigen::MatrixXd::Zero(n, p);
+    // Row by row: row-major copies keep each sample's p scores together.
+    using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    const RowMajor score_rows = scores;
+    RowMajor smoothed = RowMajor::Zero(n, p);
     for (Eigen::Index k = 0; k < n; ++k) {
-      for (const auto& [l, w] : (*neighbours)[k]) smoothed.row(k) += w * scores.row(l);
+      for (const auto& [l, w] : (*neighbours)[k]) smoothed.row(k) += w * score_rows.row(l);
     }
     const Eigen::MatrixXd cross = scores.transpose() * smoothed;
     meat += 0.5 * (cross + cross.transpose());
