@@ -1,9 +1,10 @@
 #include "svbtdf/fit/refine_texels.h"
 
-#include <ceres/ceres.h>
+#include <Eigen/Dense>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <numeric>
 #include <optional>
@@ -15,7 +16,7 @@
 #include "svbtdf/common/progress.h"
 #include "svbtdf/common/statistics.h"
 #include "svbtdf/fit/ndf_error.h"
-#include "small_problem.h"
+#include "svbtdf/common/least_squares.h"
 #include "uncertainty.h"
 
 namespace svbtdf::fit {
@@ -213,76 +214,86 @@ RefinedScalars RefineScalars(ScalarRefiner* refiner, double start_alpha, bool re
 // ---------------------------------------------------------------------------------------------
 // The weights over the representatives, refitted to the texel's samples.
 
-// Each representative's two configurations at the texel's samples: T[j][k] and B[j][k] with
-// representative j's own (normalised) D, under the texel's shadowing.
+// Each representative's two configurations at the texel's samples: T(k, j) and B(k, j) with
+// representative j's own (normalised) D, under the texel's shadowing; a sample per row.
 struct RepresentativeTerms {
-  std::vector<std::vector<double>> t, b;
+  Eigen::MatrixXd t, b;
 };
 
 RepresentativeTerms TermsOf(const Material& material, const std::vector<int>& reps, const SampleLookups& lookups) {
-  const size_t n = lookups.entry.size();
+  const Eigen::Index n = static_cast<Eigen::Index>(lookups.entry.size()), m = static_cast<Eigen::Index>(reps.size());
   RepresentativeTerms terms;
-  terms.t.assign(reps.size(), std::vector<double>(n, 0.0));
-  terms.b = terms.t;
-  const auto add = [&](const SampleLookups::Lookup& l, size_t k, std::vector<std::vector<double>>* into) {
+  terms.t = Eigen::MatrixXd::Zero(n, m);
+  terms.b = Eigen::MatrixXd::Zero(n, m);
+  const auto add = [&](const SampleLookups::Lookup& l, Eigen::Index k, Eigen::MatrixXd* into) {
     if (!(l.factor > 0)) return;
-    for (size_t j = 0; j < reps.size(); ++j) (*into)[j][k] = l.factor * std::exp(l.LnD(material.representative_ln_d[reps[j]]));
+    for (Eigen::Index j = 0; j < m; ++j) (*into)(k, j) = l.factor * std::exp(l.LnD(material.representative_ln_d[reps[j]]));
   };
-  for (size_t k = 0; k < n; ++k) {
+  for (Eigen::Index k = 0; k < n; ++k) {
     add(lookups.entry[k], k, &terms.t);
     add(lookups.exit[k], k, &terms.b);
   }
   return terms;
 }
 
-// Residuals (S_T^alpha S_B^(1-alpha) - rho) / |rho| with S = sum_j a_j T_j (resp. B_j), for the
-// unnormalised blend amounts a (block 0) and alpha (block 1).
-class BlendCost final : public ceres::CostFunction {
+// The weights' least-squares problem: residuals (S_T^alpha S_B^(1-alpha) - rho) / |rho| with
+// S = sum_j a_j T_j (resp. B_j), over x = (a_1 .. a_m, alpha), the unnormalised blend amounts and
+// alpha (MinimizeInBox's interface). Evaluated over all samples at once: two products, then
+// Eigen's vectorised logarithms and exponentials.
+class BlendProblem {
  public:
-  BlendCost(const RepresentativeTerms& terms, const std::vector<double>& rho)
-      : terms_(terms), rho_(rho), inverse_norm_(1.0 / std::sqrt(std::max(SumOfSquares(rho), 1e-300))) {
-    set_num_residuals(static_cast<int>(rho.size()));
-    mutable_parameter_block_sizes()->push_back(static_cast<int>(terms.t.size()));
-    mutable_parameter_block_sizes()->push_back(1);
+  BlendProblem(const RepresentativeTerms& terms, const std::vector<double>& rho)
+      : terms_(terms),
+        rho_(Eigen::Map<const Eigen::ArrayXd>(rho.data(), static_cast<Eigen::Index>(rho.size()))),
+        inverse_norm_(1.0 / std::sqrt(std::max(rho_.square().sum(), 1e-300))) {}
+
+  Eigen::Index num_parameters() const { return terms_.t.cols() + 1; }
+
+  // The residuals at x, and with `jacobian` their derivatives (a sample per row, a parameter per
+  // column). Where a configuration is empty the blend is flat zero: no gradient to follow.
+  void Evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* residuals, Eigen::MatrixXd* jacobian) const {
+    const Eigen::Index m = terms_.t.cols();
+    const double alpha = x[m];
+    const Eigen::ArrayXd st = (terms_.t * x.head(m)).array(), sb = (terms_.b * x.head(m)).array();
+    const Eigen::Array<bool, Eigen::Dynamic, 1> smooth = st > 0 && sb > 0;
+    // LogBlend, with the logarithms kept for the derivative in alpha (1 where not smooth, so
+    // that they stay finite; those samples take the branches below).
+    const Eigen::ArrayXd ln_st = smooth.select(st, 1.0).log(), ln_sb = smooth.select(sb, 1.0).log();
+    Eigen::ArrayXd shape;
+    if (alpha >= 1.0 || alpha <= 0.0) {
+      shape = (alpha >= 1.0 ? st : sb).max(0.0);
+    } else {
+      shape = smooth.select((alpha * ln_st + (1.0 - alpha) * ln_sb).exp(), 0.0);
+    }
+    *residuals = ((shape - rho_) * inverse_norm_).matrix();
+    if (!jacobian) return;
+    const Eigen::ArrayXd scaled = smooth.select(shape * inverse_norm_, 0.0);
+    jacobian->resize(st.size(), m + 1);
+    jacobian->leftCols(m) = (scaled * alpha / smooth.select(st, 1.0)).matrix().asDiagonal() * terms_.t +
+                            (scaled * (1.0 - alpha) / smooth.select(sb, 1.0)).matrix().asDiagonal() * terms_.b;
+    jacobian->col(m) = (scaled * (ln_st - ln_sb)).matrix();
   }
 
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
-    const double* a = parameters[0];
-    const double alpha = parameters[1][0];
-    const size_t m = terms_.t.size();
-    for (size_t k = 0; k < rho_.size(); ++k) {
-      double st = 0, sb = 0;
-      for (size_t j = 0; j < m; ++j) {
-        st += a[j] * terms_.t[j][k];
-        sb += a[j] * terms_.b[j][k];
-      }
-      // LogBlend, with the logarithms kept for the derivative in alpha.
-      const bool smooth = st > 0 && sb > 0;
-      const double ln_st = smooth ? std::log(st) : 0.0, ln_sb = smooth ? std::log(sb) : 0.0;
-      double shape = 0.0;
-      if (alpha >= 1.0 || alpha <= 0.0) {
-        shape = std::max(alpha >= 1.0 ? st : sb, 0.0);
-      } else if (smooth) {
-        shape = std::exp(alpha * ln_st + (1.0 - alpha) * ln_sb);
-      }
-      residuals[k] = (shape - rho_[k]) * inverse_norm_;
-      // Where a configuration is empty the blend is flat zero: no gradient to follow.
-      if (!jacobians) continue;
-      if (jacobians[0]) {
-        for (size_t j = 0; j < m; ++j) {
-          jacobians[0][k * m + j] =
-              smooth ? shape * (alpha * terms_.t[j][k] / st + (1 - alpha) * terms_.b[j][k] / sb) * inverse_norm_ : 0.0;
-        }
-      }
-      if (jacobians[1]) jacobians[1][k] = smooth ? shape * (ln_st - ln_sb) * inverse_norm_ : 0.0;
-    }
-    return true;
+  double Cost(const Eigen::VectorXd& x) const {
+    Evaluate(x, &residuals_, nullptr);
+    return 0.5 * residuals_.squaredNorm();
+  }
+
+  double Linearize(const Eigen::VectorXd& x, Eigen::MatrixXd* jtj, Eigen::VectorXd* jtr) const {
+    Evaluate(x, &residuals_, &jacobian_);
+    jtj->setZero();
+    jtj->selfadjointView<Eigen::Lower>().rankUpdate(jacobian_.transpose());
+    *jtj = jtj->selfadjointView<Eigen::Lower>();
+    *jtr = jacobian_.transpose() * residuals_;
+    return 0.5 * residuals_.squaredNorm();
   }
 
  private:
   const RepresentativeTerms& terms_;
-  const std::vector<double>& rho_;
+  Eigen::ArrayXd rho_;
   double inverse_norm_;
+  mutable Eigen::VectorXd residuals_;  // scratch
+  mutable Eigen::MatrixXd jacobian_;
 };
 
 // The texel's representatives and weights as stored (terms with weight 0 are unused slots).
@@ -335,18 +346,18 @@ std::optional<TexelWeights> RefitWeights(const Material& material, const Materia
   if (!(total > 0)) return std::nullopt;
   const double total_amount = model::Luminance(blended.params().k_s);
   for (double& a : amount) a *= total_amount / total;
-  double alpha = blended.params().alpha;
-
-  ceres::Problem problem;
-  problem.AddResidualBlock(new BlendCost(terms, slice.rho), nullptr, amount.data(), &alpha);
-  const double floor = -kExtrapolation * total_amount;
-  for (size_t j = 0; j < m; ++j) problem.SetParameterLowerBound(amount.data(), static_cast<int>(j), floor);
-  problem.SetParameterLowerBound(&alpha, 0, 0.0);
-  problem.SetParameterUpperBound(&alpha, 0, 1.0);
-  const ceres::Solver::Options options = SmallProblemOptions(25);
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  if (!summary.IsSolutionUsable()) return std::nullopt;
+  const Eigen::Index p = static_cast<Eigen::Index>(m) + 1;
+  Eigen::VectorXd x(p), lower(p), upper(p);
+  x << Eigen::Map<const Eigen::VectorXd>(amount.data(), p - 1), blended.params().alpha;
+  lower.setConstant(-kExtrapolation * total_amount);
+  upper.setConstant(std::numeric_limits<double>::infinity());
+  lower[p - 1] = 0.0;
+  upper[p - 1] = 1.0;
+  const BlendProblem problem(terms, slice.rho);
+  common::BoxLevenbergMarquardtOptions options;
+  options.max_iterations = 25;
+  if (!common::MinimizeInBox(problem, lower, upper, &x, options).usable) return std::nullopt;
+  for (size_t j = 0; j < m; ++j) amount[j] = x[static_cast<Eigen::Index>(j)];
 
   TexelWeights refitted = start;
   total = 0;
@@ -478,30 +489,24 @@ void ScalarUncertainty(ScalarRefiner* refiner, const TexelSlice& slice, const Re
 }
 
 // alpha and the blend amounts a_j of the representatives' NDFs (whose sum is the scale), at the
-// refined texel, from the weights' own system (BlendCost): the NDF's freedom the weights give is
+// refined texel, from the weights' own system (BlendProblem): the NDF's freedom the weights give is
 // then counted in alpha's and the scale's errors, and the width's error is the weights'.
 void BlendUncertainty(const RepresentativeTerms& terms, const TexelSlice& slice, const TexelWeights& weights,
                       const std::vector<double>& rep_scale, const RefinedScalars& best,
                       const std::vector<RepresentativeMoments>& moments, double width, const Neighbours* neighbours,
                       TexelUncertainty* u) {
-  const size_t m = weights.reps.size(), n = slice.rho.size();
+  const size_t m = weights.reps.size();
   std::vector<double> amount(m);
   double total = 0;
   for (size_t j = 0; j < m; ++j) total += weights.weights[j] * rep_scale[j];
   if (!(total != 0)) return;
   for (size_t j = 0; j < m; ++j) amount[j] = best.scale * weights.weights[j] * rep_scale[j] / total;
-  double alpha = best.alpha;
-  const BlendCost cost(terms, slice.rho);
-  std::vector<double> residuals(n), jacobian_a(n * m), jacobian_alpha(n);
-  const double* parameters[2] = {amount.data(), &alpha};
-  double* jacobians[2] = {jacobian_a.data(), jacobian_alpha.data()};
-  if (!cost.Evaluate(parameters, residuals.data(), jacobians)) return;
-  Eigen::MatrixXd j(n, m + 1);
-  for (size_t k = 0; k < n; ++k) {
-    for (size_t i = 0; i < m; ++i) j(k, i) = jacobian_a[k * m + i];
-    j(k, m) = jacobian_alpha[k];
-  }
-  const Eigen::VectorXd r = Eigen::Map<const Eigen::VectorXd>(residuals.data(), static_cast<Eigen::Index>(n));
+  Eigen::VectorXd x(static_cast<Eigen::Index>(m) + 1);
+  for (size_t i = 0; i < m; ++i) x[static_cast<Eigen::Index>(i)] = amount[i];
+  x[static_cast<Eigen::Index>(m)] = best.alpha;
+  Eigen::VectorXd r;
+  Eigen::MatrixXd j;
+  BlendProblem(terms, slice.rho).Evaluate(x, &r, &j);
   const Eigen::MatrixXd c = SandwichCovariance(j, r, neighbours);
   u->alpha_se = StandardError(c(m, m));
   u->scale_se = StandardError(c.topLeftCorner(m, m).sum());
