@@ -97,16 +97,18 @@ double TabulatedNdf::D(const Vec3& h) const {
 double TabulatedNdf::ProjectedIntegral() const {
   // The nodes, their interpolation weights and h.z w depend only on the resolution; fits and
   // material evaluation normalise many thousands of tables of one size (the refinement two per
-  // texel), so only the interpolation of ln D and its exp are left. Both run in single precision:
-  // the nodes' cells and weights as four separate arrays each (half the bytes of
-  // Hemicube::Weights, which are streamed from memory at every call: 49k nodes at 32^2), ln D as
-  // floats (a table that stays in L1), and the exp over all nodes at once, which Eigen vectorises
-  // (four lanes per SSE instruction). Each node is then good to about 1e-7 relative and their
-  // sum, accumulated in double, as well: far below the table's own interpolation error.
+  // texel), so only the interpolation of ln D and its exp are left, and the loop over the nodes
+  // is arranged for the fewest loads: the nodes are grouped by the four cells they interpolate
+  // (a quarter of a cell's nodes share them), so each group reads its four ln D once and each
+  // node only its own four weights. Single precision throughout (ln D relative to its largest,
+  // a table that stays in L1; Eigen's vectorised exp over all nodes at once): each node is good
+  // to about 1e-7 relative and their sum, accumulated in double, as well, far below the table's
+  // own interpolation error.
   struct Nodes {
     int resolution = 0;
-    std::array<std::vector<int32_t>, 4> cell;
-    std::array<Eigen::ArrayXf, 4> weight;
+    std::vector<std::array<int32_t, 4>> group_cells;
+    std::vector<int32_t> group_end;              // one past each group's last node
+    std::vector<std::array<float, 4>> weight;    // per node, in its group's cell order
     Eigen::ArrayXf projected_weight;
     std::vector<float> table;  // scratch: ln D per cell, relative to its largest
     Eigen::ArrayXf ln_d;       // scratch: the same at each node
@@ -114,42 +116,70 @@ double TabulatedNdf::ProjectedIntegral() const {
   static thread_local Nodes nodes;
   if (nodes.resolution != grid_.resolution()) {
     const Quadrature quadrature = CellQuadrature(grid_, kSubCells);
-    std::vector<Hemicube::Weights> interpolation;
-    std::vector<float> weights;
+    struct Node {
+      std::array<int32_t, 4> cells;
+      std::array<float, 4> weights;
+      float projected_weight;
+    };
+    std::vector<Node> list;
     for (size_t k = 0; k < quadrature.directions.size(); ++k) {
       if (quadrature.directions[k].z() <= 0) continue;  // D is 0 there
-      interpolation.push_back(grid_.Interpolation(quadrature.directions[k]));
-      weights.push_back(static_cast<float>(quadrature.directions[k].z() * quadrature.weights[k]));
-    }
-    const Eigen::Index n = static_cast<Eigen::Index>(interpolation.size());
-    for (int i = 0; i < 4; ++i) {
-      nodes.cell[i].resize(interpolation.size());
-      nodes.weight[i].resize(n);
-      for (Eigen::Index k = 0; k < n; ++k) {
-        nodes.cell[i][k] = interpolation[k][i].first;
-        nodes.weight[i][k] = static_cast<float>(interpolation[k][i].second);
+      const Hemicube::Weights interpolation = grid_.Interpolation(quadrature.directions[k]);
+      Node node;
+      for (int i = 0; i < 4; ++i) {
+        node.cells[i] = interpolation[i].first;
+        node.weights[i] = static_cast<float>(interpolation[i].second);
       }
+      node.projected_weight = static_cast<float>(quadrature.directions[k].z() * quadrature.weights[k]);
+      list.push_back(node);
     }
-    nodes.projected_weight = Eigen::Map<const Eigen::ArrayXf>(weights.data(), n);
-    nodes.ln_d.resize(n);
+    std::stable_sort(list.begin(), list.end(), [](const Node& a, const Node& b) { return a.cells < b.cells; });
+    nodes.group_cells.clear();
+    nodes.group_end.clear();
+    nodes.weight.resize(list.size());
+    nodes.projected_weight.resize(static_cast<Eigen::Index>(list.size()));
+    for (size_t k = 0; k < list.size(); ++k) {
+      if (k == 0 || list[k].cells != list[k - 1].cells) {
+        if (k > 0) nodes.group_end.push_back(static_cast<int32_t>(k));
+        nodes.group_cells.push_back(list[k].cells);
+      }
+      nodes.weight[k] = list[k].weights;
+      nodes.projected_weight[static_cast<Eigen::Index>(k)] = list[k].projected_weight;
+    }
+    nodes.group_end.push_back(static_cast<int32_t>(list.size()));
+    nodes.ln_d.resize(static_cast<Eigen::Index>(list.size()));
     nodes.resolution = grid_.resolution();
   }
   // Relative to the largest ln D, so that no table (however dark or sharp) leaves float's range.
   const double shift = ln_d_.empty() ? 0.0 : *std::max_element(ln_d_.begin(), ln_d_.end());
   nodes.table.resize(ln_d_.size());
   for (size_t c = 0; c < ln_d_.size(); ++c) nodes.table[c] = static_cast<float>(ln_d_[c] - shift);
-  const float* table = nodes.table.data();
-  const int32_t *c0 = nodes.cell[0].data(), *c1 = nodes.cell[1].data(), *c2 = nodes.cell[2].data(),
-                *c3 = nodes.cell[3].data();
-  const float *w0 = nodes.weight[0].data(), *w1 = nodes.weight[1].data(), *w2 = nodes.weight[2].data(),
-              *w3 = nodes.weight[3].data();
   float* ln = nodes.ln_d.data();
-  for (Eigen::Index k = 0; k < nodes.ln_d.size(); ++k) {
-    ln[k] = w0[k] * table[c0[k]] + w1[k] * table[c1[k]] + w2[k] * table[c2[k]] + w3[k] * table[c3[k]];
+  int32_t k = 0;
+  for (size_t g = 0; g < nodes.group_cells.size(); ++g) {
+    const std::array<int32_t, 4>& cells = nodes.group_cells[g];
+    const float v0 = nodes.table[cells[0]], v1 = nodes.table[cells[1]], v2 = nodes.table[cells[2]],
+                v3 = nodes.table[cells[3]];
+    for (; k < nodes.group_end[g]; ++k) {
+      const std::array<float, 4>& w = nodes.weight[k];
+      ln[k] = w[0] * v0 + w[1] * v1 + w[2] * v2 + w[3] * v3;
+    }
   }
   // Evaluated into floats first: fused with the cast to double, Eigen falls back to scalar expf.
   nodes.ln_d = nodes.ln_d.exp() * nodes.projected_weight;
-  return std::exp(shift) * nodes.ln_d.cast<double>().sum();
+  // Summed in double over eight independent partial sums: one running sum waits on each
+  // addition's latency, a quarter of the whole call.
+  const float* term = nodes.ln_d.data();
+  const Eigen::Index n = nodes.ln_d.size();
+  double partial[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+  Eigen::Index k8 = 0;
+  for (; k8 + 8 <= n; k8 += 8) {
+    for (int lane = 0; lane < 8; ++lane) partial[lane] += term[k8 + lane];
+  }
+  for (; k8 < n; ++k8) partial[0] += term[k8];
+  double sum = 0;
+  for (double p : partial) sum += p;
+  return std::exp(shift) * sum;
 }
 
 double TabulatedNdf::Normalize() {
