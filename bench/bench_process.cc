@@ -6,7 +6,10 @@
 // true calibration. Reports both times, their ratio, and the process's peak resident memory.
 //
 //   svbtdf simulate --preset rice-paper --out SIM
-//   bench_process SIM [THREADS] [TEXELS_X TEXELS_Y]
+//   bench_process SIM [THREADS] [TEXELS_X TEXELS_Y] [--keep STORE]
+//
+// --keep: the processed store is kept in STORE (a new folder) for a fit to time afterwards
+// (bench/paper_scale.py), rather than removed.
 
 #include <sys/resource.h>
 
@@ -14,6 +17,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <string>
 
 #include "svbtdf/common/error.h"
 #include "svbtdf/session/session.h"
@@ -35,11 +39,16 @@ double PeakResidentMegabytes() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  namespace fs = std::filesystem;
+  fs::path keep;
+  if (argc >= 3 && std::string(argv[argc - 2]) == "--keep") {
+    keep = argv[argc - 1];
+    argc -= 2;
+  }
   if (argc < 2) {
-    std::fprintf(stderr, "usage: bench_process SIMULATION_FOLDER [THREADS] [TEXELS_X TEXELS_Y]\n");
+    std::fprintf(stderr, "usage: bench_process SIMULATION_FOLDER [THREADS] [TEXELS_X TEXELS_Y] [--keep STORE]\n");
     return 2;
   }
-  namespace fs = std::filesystem;
   try {
     const fs::path simulation = argv[1];
     const svbtdf::session::Session session = svbtdf::session::Session::Open(simulation / "session");
@@ -49,7 +58,7 @@ int main(int argc, char** argv) {
     const double baseline = Seconds(start);
     const double baseline_peak = PeakResidentMegabytes();
 
-    const fs::path out = simulation / ("bench-processed-" + std::to_string(::getpid()));
+    const fs::path out = keep.empty() ? simulation / ("bench-processed-" + std::to_string(::getpid())) : keep;
     svbtdf::process::ProcessOptions options;
     options.threads = argc > 2 ? std::atoi(argv[2]) : 0;
     if (argc > 4) {
@@ -65,7 +74,7 @@ int main(int argc, char** argv) {
     std::printf("process:                           %.1f s\n", measured);
     std::printf("ratio measured / baseline:         %.2f\n", measured / baseline);
     std::printf("peak resident memory:              %.0f MB\n", PeakResidentMegabytes());
-    fs::remove_all(out);
+    if (keep.empty()) fs::remove_all(out);
   } catch (const svbtdf::common::Error& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;
