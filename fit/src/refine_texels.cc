@@ -238,16 +238,14 @@ RepresentativeTerms TermsOf(const Material& material, const std::vector<int>& re
 
 // The weights' least-squares problem: residuals (S_T^alpha S_B^(1-alpha) - rho) / |rho| with
 // S = sum_j a_j T_j (resp. B_j), over x = (a_1 .. a_m, alpha), the unnormalised blend amounts and
-// alpha (MinimizeInBox's interface). Evaluated over all samples at once: two products, then
-// Eigen's vectorised logarithms and exponentials.
+// alpha (MinimizeInBox's interface). Evaluated over all samples at once: two matrix-vector
+// products, then the logarithms and exponentials as arrays.
 class BlendProblem {
  public:
   BlendProblem(const RepresentativeTerms& terms, const std::vector<double>& rho)
       : terms_(terms),
         rho_(Eigen::Map<const Eigen::ArrayXd>(rho.data(), static_cast<Eigen::Index>(rho.size()))),
         inverse_norm_(1.0 / std::sqrt(std::max(rho_.square().sum(), 1e-300))) {}
-
-  Eigen::Index num_parameters() const { return terms_.t.cols() + 1; }
 
   // The residuals at x, and with `jacobian` their derivatives (a sample per row, a parameter per
   // column). Where a configuration is empty the blend is flat zero: no gradient to follow.

@@ -111,7 +111,7 @@ double TabulatedNdf::ProjectedIntegral() const {
     std::vector<std::array<float, 4>> weight;    // per node, in its group's cell order
     Eigen::ArrayXf projected_weight;
     std::vector<float> table;  // scratch: ln D per cell, relative to its largest
-    Eigen::ArrayXf ln_d;       // scratch: the same at each node
+    Eigen::ArrayXf ln_d;       // scratch: the same at each node, then its term exp(ln D) h.z w
   };
   static thread_local Nodes nodes;
   if (nodes.resolution != grid_.resolution()) {

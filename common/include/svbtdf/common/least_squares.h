@@ -62,6 +62,11 @@ BoxLevenbergMarquardtSummary MinimizeInBox(const Problem& problem, const Eigen::
   summary.usable = true;
 
   double radius = options.initial_radius, decrease_factor = 2.0;
+  // A step refused: damp harder, twice as fast each time in a row (Ceres' rule).
+  const auto shrink = [&] {
+    radius /= decrease_factor;
+    decrease_factor *= 2.0;
+  };
   // The projected gradient: zero in a component where the box stops the descent.
   const auto converged_by_gradient = [&] {
     return (*x - project(*x - jtr)).cwiseAbs().maxCoeff() <= options.gradient_tolerance;
@@ -78,15 +83,13 @@ BoxLevenbergMarquardtSummary MinimizeInBox(const Problem& problem, const Eigen::
     // A parameter on a bound that the gradient pushes outward stays there, and the step is solved
     // for the others alone (projected Newton): solving for all and projecting afterwards would
     // aim the free ones at a point the bound one cannot reach, and stall against the bound.
+    Eigen::VectorXd rhs = -jtr;
     for (Eigen::Index i = 0; i < p; ++i) {
       if (!HeldByBound((*x)[i], jtr[i], lower[i], upper[i])) continue;
       damped.row(i).setZero();
       damped.col(i).setZero();
       damped(i, i) = 1.0;
-    }
-    Eigen::VectorXd rhs = -jtr;
-    for (Eigen::Index i = 0; i < p; ++i) {
-      if (HeldByBound((*x)[i], jtr[i], lower[i], upper[i])) rhs[i] = 0.0;
+      rhs[i] = 0.0;
     }
     const Eigen::VectorXd delta = damped.ldlt().solve(rhs);
     const Eigen::VectorXd candidate = project(*x + delta);
@@ -94,8 +97,7 @@ BoxLevenbergMarquardtSummary MinimizeInBox(const Problem& problem, const Eigen::
     // The decrease the linearisation predicts for the step actually taken (after the box).
     const double model_decrease = -(jtr.dot(step) + 0.5 * step.dot(jtj * step));
     if (!delta.allFinite() || !(model_decrease > 0)) {
-      radius /= decrease_factor;
-      decrease_factor *= 2.0;
+      shrink();
       continue;
     }
     if (step.norm() <= options.parameter_tolerance * (x->norm() + options.parameter_tolerance)) {
@@ -106,8 +108,7 @@ BoxLevenbergMarquardtSummary MinimizeInBox(const Problem& problem, const Eigen::
     ++summary.evaluations;
     const double relative_decrease = (cost - candidate_cost) / model_decrease;
     if (!std::isfinite(candidate_cost) || !(relative_decrease > options.min_relative_decrease)) {
-      radius /= decrease_factor;
-      decrease_factor *= 2.0;
+      shrink();
       continue;
     }
     // Taken: grow the radius by how well the model predicted (Nielsen's rule, as Ceres).
