@@ -228,8 +228,10 @@ int64_t LeastChunkCount(HeaderCursor& cursor, const PartHeader& part) {
   const int channels = std::max(1, part.channels);
   RequireSaneImageSize(cursor.path(), part.width, part.height, channels);
   if (part.has_tiles && (part.tile_width <= 0 || part.tile_height <= 0)) cursor.Fail("has tiles of zero size");
-  const int64_t chunk_pixels = part.has_tiles ? part.tile_width * part.tile_height
-                                              : std::min(part.height, LinesPerChunk(part.compression)) * part.width;
+  // OpenEXR sizes its line buffers for the compression's whole chunk even when the image has
+  // fewer lines: a one-row DWAB file gets buffers of 256 rows, several of them at open.
+  const int64_t chunk_pixels =
+      part.has_tiles ? part.tile_width * part.tile_height : LinesPerChunk(part.compression) * part.width;
   if (chunk_pixels * channels > kMaxChunkSamples) {
     cursor.Fail("has chunks of " + std::to_string(chunk_pixels * channels) + " samples, more than svbtdf reads (" +
                 std::to_string(kMaxChunkSamples) + ")");

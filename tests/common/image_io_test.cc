@@ -1,7 +1,12 @@
 // Round trips and error reporting of the image files users hand in and get back.
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -190,10 +195,23 @@ class ExrBytes {
     bytes_ += std::string(count, '\0');
     return *this;
   }
+  ExrBytes& Raw(const std::string& bytes) {
+    bytes_ += bytes;
+    return *this;
+  }
+  size_t size() const { return bytes_.size(); }
   void WriteTo(const fs::path& path) const { WriteTextAtomically(path, bytes_); }
-  static std::string Le(int32_t value) {
-    std::string out(4, '\0');
-    for (int b = 0; b < 4; ++b) out[b] = static_cast<char>((static_cast<uint32_t>(value) >> (8 * b)) & 0xff);
+  static std::string Le(int32_t value) { return LittleEndian(static_cast<uint32_t>(value), 4); }
+  static std::string Le64(uint64_t value) { return LittleEndian(value, 8); }
+  static std::string Half(uint16_t bits) { return LittleEndian(bits, 2); }
+  static std::string Float(float value) {
+    uint32_t bits = 0;
+    std::memcpy(&bits, &value, sizeof bits);
+    return LittleEndian(bits, 4);
+  }
+  static std::string LittleEndian(uint64_t value, int bytes) {
+    std::string out(bytes, '\0');
+    for (int b = 0; b < bytes; ++b) out[b] = static_cast<char>((value >> (8 * b)) & 0xff);
     return out;
   }
 
@@ -238,6 +256,11 @@ TEST_F(ImageIo, ExrHeadersClaimingMoreThanTheFileHoldsAreRefusedBeforeOpenExrRea
            .DataWindow(983041, 32).Attribute("compression", "compression", std::string(1, '\3'))
            .EndHeader().Zeros(2300),
        "can decode to (at most 1032 to 1"},
+      // OpenEXR gives a one-row DWAB image line buffers of 256 rows.
+      {"one-row.exr",
+       ExrBytes().OneHalfChannel().DataWindow(70000, 1).Attribute("compression", "compression", std::string(1, '\11'))
+           .EndHeader().Zeros(64),
+       "chunks of 17920000 samples"},
       {"window.exr", ExrBytes().OneHalfChannel().DataWindow(60000, 60000).EndHeader().Zeros(64), "2^30"},
       {"inverted.exr", ExrBytes().OneHalfChannel().DataWindow(-5, 10).EndHeader(), "inverted data window"},
       {"cut.exr", ExrBytes().OneHalfChannel().Attribute("dataWi", "", "", 0), "ends inside its header"},
@@ -268,6 +291,108 @@ TEST_F(ImageIo, ExrMapsTallerThanAReadStripRoundTripExactly) {
   EXPECT_EQ(read.height, 700);
   EXPECT_EQ(read.channels, 2);
   EXPECT_EQ(read.pixels, map.pixels);
+}
+
+// A file whose channels are of different types (here half and float) is read in its own layout,
+// each channel converted on its own. Written byte by byte: an uncompressed 2 x 2 scanline EXR
+// with the attributes OpenEXR requires, channels sorted by name.
+TEST_F(ImageIo, ExrChannelsOfMixedTypesAreEachConvertedToFloat) {
+  using B = ExrBytes;
+  const std::string channels = std::string("U\0", 2) + B::Le(1) + B::Le(0) + B::Le(1) + B::Le(1) +  // half
+                               std::string("V\0", 2) + B::Le(2) + B::Le(0) + B::Le(1) + B::Le(1) + '\0';  // float
+  ExrBytes exr;
+  exr.Attribute("channels", "chlist", channels)
+      .Attribute("compression", "compression", std::string(1, '\0'))
+      .DataWindow(2, 2)
+      .Attribute("displayWindow", "box2i", B::Le(0) + B::Le(0) + B::Le(1) + B::Le(1))
+      .Attribute("lineOrder", "lineOrder", std::string(1, '\0'))
+      .Attribute("pixelAspectRatio", "float", B::Float(1))
+      .Attribute("screenWindowCenter", "v2f", B::Float(0) + B::Float(0))
+      .Attribute("screenWindowWidth", "float", B::Float(1))
+      .EndHeader();
+  // Each scanline's chunk: its y, its byte count, then each channel's pixels in turn.
+  const std::vector<std::string> lines = {
+      B::Half(0x3e00) + B::Half(0xc000) + B::Float(0.1f) + B::Float(-7.25f),  // U = 1.5, -2
+      B::Half(0x3400) + B::Half(0x4200) + B::Float(1e6f) + B::Float(3.0f),    // U = 0.25, 3
+  };
+  uint64_t offset = exr.size() + 8 * lines.size();
+  for (const std::string& line : lines) {
+    exr.Raw(B::Le64(offset));
+    offset += 8 + line.size();
+  }
+  for (int y = 0; y < 2; ++y) exr.Raw(B::Le(y) + B::Le(static_cast<int32_t>(lines[y].size())) + lines[y]);
+  exr.WriteTo(dir_ / "mixed.exr");
+
+  const FloatImage read = ReadFloatImage(dir_ / "mixed.exr");
+  ASSERT_EQ(read.channels, 2);
+  ASSERT_EQ(read.width, 2);
+  ASSERT_EQ(read.height, 2);
+  EXPECT_EQ(read.pixels, (std::vector<float>{1.5f, 0.1f, -2.0f, -7.25f, 0.25f, 1e6f, 3.0f, 3.0f}));
+}
+
+// Lets this process's address space grow by `bytes` more than it has now (a death test's child).
+void LimitAddressSpaceGrowth(uint64_t bytes) {
+  std::ifstream statm("/proc/self/statm");
+  uint64_t pages = 0;
+  statm >> pages;
+  const rlim_t limit = pages * static_cast<uint64_t>(sysconf(_SC_PAGESIZE)) + bytes;
+  const rlimit both{limit, limit};
+  if (!statm || setrlimit(RLIMIT_AS, &both) != 0) std::_Exit(10);
+}
+
+using ImageIoDeathTest = ImageIo;
+
+// Asked for floats, OpenImageIO converts through a buffer of at least 256 scanlines whatever the
+// image's height: CI's fuzzing found a 4 kB one-row file whose 8.6 MB scanline made it allocate
+// 2.2 GB. ReadFloatImage converts strips read in the file's own types, so a one-row map costs
+// about its own size: a good 4 MiB row is read and a damaged 16 MiB one refused in a line naming
+// it, in a child whose address space may grow by 512 MiB (the conversion buffers would take 1 and
+// 4 GiB).
+TEST_F(ImageIoDeathTest, AOneRowExrCostsAboutItsOwnSizeToRead) {
+  // The child starts afresh: a fork would lack OpenImageIO's worker threads and could wait on them.
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  FloatImage wide(1 << 18, 1, 4, 0.0f);  // 4 MiB a row
+  for (int x = 0; x < wide.width; x += 997) wide.at(x, 0, x % 4) = static_cast<float>(x);
+  WriteFloatImage(dir_ / "wide.exr", wide, /*half_precision=*/false);
+  // 1048576 x 1 RGBA floats (16 MiB) in one-line zip chunks: one chunk of 17 kB of zeros.
+  const std::string rgba = std::string("A\0", 2) + ExrBytes::Le(2) + ExrBytes::Le(0) + ExrBytes::Le(1) +
+                           ExrBytes::Le(1) + std::string("B\0", 2) + ExrBytes::Le(2) + ExrBytes::Le(0) +
+                           ExrBytes::Le(1) + ExrBytes::Le(1) + std::string("G\0", 2) + ExrBytes::Le(2) +
+                           ExrBytes::Le(0) + ExrBytes::Le(1) + ExrBytes::Le(1) + std::string("R\0", 2) +
+                           ExrBytes::Le(2) + ExrBytes::Le(0) + ExrBytes::Le(1) + ExrBytes::Le(1) + '\0';
+  ExrBytes damaged_bytes;
+  damaged_bytes.Attribute("channels", "chlist", rgba).DataWindow(1 << 20, 1)
+      .Attribute("compression", "compression", std::string(1, '\2')).EndHeader();
+  constexpr int32_t kChunkBytes = 17000;  // zeros, which zlib refuses
+  damaged_bytes.Raw(ExrBytes::Le64(damaged_bytes.size() + 8) + ExrBytes::Le(0) + ExrBytes::Le(kChunkBytes))
+      .Zeros(kChunkBytes);
+  const fs::path damaged = dir_ / "damaged.exr";
+  damaged_bytes.WriteTo(damaged);
+  // One OpenEXR line buffer, not two for each core: the budget must not depend on the machine.
+  setenv("OPENIMAGEIO_OPTIONS", "exr_threads=-1", 1);
+
+  EXPECT_EXIT(
+      {
+        LimitAddressSpaceGrowth(uint64_t{512} << 20);
+        try {
+          if (ReadFloatImage(dir_ / "wide.exr").pixels != wide.pixels) std::_Exit(2);
+          try {
+            ReadFloatImage(damaged);
+            std::_Exit(3);
+          } catch (const Error& e) {
+            const std::string message = e.what();
+            if (message.find(damaged.string()) == std::string::npos || message.find('\n') != std::string::npos) {
+              std::_Exit(4);
+            }
+          }
+        } catch (const std::exception& e) {  // std::bad_alloc, or an Error about the good file
+          std::fprintf(stderr, "%s\n", e.what());
+          std::_Exit(5);
+        }
+        std::_Exit(0);
+      },
+      ::testing::ExitedWithCode(0), "");
+  unsetenv("OPENIMAGEIO_OPTIONS");
 }
 
 }  // namespace
