@@ -116,8 +116,10 @@ void RequireExistingFile(const std::filesystem::path& path) {
 void RequireSaneImageSize(const std::filesystem::path& path, int64_t width, int64_t height, int channels) {
   // A header is a claim, not a fact: a few damaged bytes can claim 60000 x 60000 pixels, which
   // would end in "out of memory" without naming the file.
+  // Compared by division: an EXR data window can claim 2^32 x 2^32 pixels, whose product
+  // overflows int64_t.
   constexpr int64_t kMaxSamples = int64_t{1} << 30;
-  if (width <= 0 || height <= 0 || width * height * std::max(1, channels) > kMaxSamples) {
+  if (width <= 0 || height <= 0 || width > kMaxSamples / height / std::max(1, channels)) {
     ThrowFormatError(path.string(), "claims " + std::to_string(width) + " x " + std::to_string(height) + " x " +
                                         std::to_string(channels) + " samples, more than svbtdf reads (2^30)",
                      "the file is damaged or not an image of this rig");

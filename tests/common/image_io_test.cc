@@ -184,8 +184,9 @@ class ExrBytes {
     return *this;
   }
   ExrBytes& OneHalfChannel() { return Attribute("channels", "chlist", std::string("Y\0", 2) + Le(1) + Le(0) + Le(1) + Le(1) + '\0'); }
-  ExrBytes& DataWindow(int32_t width, int32_t height) {
-    return Attribute("dataWindow", "box2i", Le(0) + Le(0) + Le(width - 1) + Le(height - 1));
+  ExrBytes& DataWindow(int32_t width, int32_t height) { return DataWindow(0, 0, width - 1, height - 1); }
+  ExrBytes& DataWindow(int32_t x_min, int32_t y_min, int32_t x_max, int32_t y_max) {
+    return Attribute("dataWindow", "box2i", Le(x_min) + Le(y_min) + Le(x_max) + Le(y_max));
   }
   ExrBytes& EndHeader() {
     bytes_ += '\0';
@@ -229,6 +230,7 @@ TEST_F(ImageIo, ExrHeadersClaimingMoreThanTheFileHoldsAreRefusedBeforeOpenExrRea
     ExrBytes bytes;
     const char* expected;
   };
+  constexpr int32_t kLeast = std::numeric_limits<int32_t>::min(), kMost = std::numeric_limits<int32_t>::max();
   const std::vector<Case> cases = {
       // The fuzzer's finding, byte for byte: a string attribute claiming 842 MB.
       {"string.exr", ExrBytes().Attribute("capDate", "string", "\x36\x00\x3a", 0x32300000).EndHeader(),
@@ -262,6 +264,10 @@ TEST_F(ImageIo, ExrHeadersClaimingMoreThanTheFileHoldsAreRefusedBeforeOpenExrRea
            .EndHeader().Zeros(64),
        "chunks of 17920000 samples"},
       {"window.exr", ExrBytes().OneHalfChannel().DataWindow(60000, 60000).EndHeader().Zeros(64), "2^30"},
+      // 2^32 x 2^32 pixels: the product overflows int64_t (the checked build's fuzzer, 2026-12-04).
+      {"widest-window.exr",
+       ExrBytes().OneHalfChannel().DataWindow(kLeast, kLeast, kMost, kMost).EndHeader().Zeros(64),
+       "claims 4294967296 x 4294967296"},
       {"inverted.exr", ExrBytes().OneHalfChannel().DataWindow(-5, 10).EndHeader(), "inverted data window"},
       {"cut.exr", ExrBytes().OneHalfChannel().Attribute("dataWi", "", "", 0), "ends inside its header"},
       {"not-exr.exr", ExrBytes(), "not an OpenEXR file"},
