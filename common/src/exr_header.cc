@@ -148,7 +148,10 @@ void CheckPreview(HeaderCursor& cursor, int64_t size) {
   if (size < 8) cursor.Fail("has a preview attribute shorter than its own dimensions");
   const int64_t width = cursor.ReadU32("the preview");
   const int64_t height = cursor.ReadU32("the preview");
-  if (width * height * 4 != size - 8) {
+  // Bounded by division first: two dimensions of up to 2^32 - 1 overflow their product.
+  const int64_t pixel_bytes = size - 8;
+  const bool bounded = width == 0 || height <= pixel_bytes / 4 / width;
+  if (!bounded || width * height * 4 != pixel_bytes) {
     cursor.Fail("has a preview claiming " + std::to_string(width) + " x " + std::to_string(height) +
                 " pixels in " + std::to_string(size - 8) + " bytes");
   }
@@ -230,11 +233,13 @@ int64_t LeastChunkCount(HeaderCursor& cursor, const PartHeader& part) {
   if (part.has_tiles && (part.tile_width <= 0 || part.tile_height <= 0)) cursor.Fail("has tiles of zero size");
   // OpenEXR sizes its line buffers for the compression's whole chunk even when the image has
   // fewer lines: a one-row DWAB file gets buffers of 256 rows, several of them at open.
-  const int64_t chunk_pixels =
-      part.has_tiles ? part.tile_width * part.tile_height : LinesPerChunk(part.compression) * part.width;
-  if (chunk_pixels * channels > kMaxChunkSamples) {
-    cursor.Fail("has chunks of " + std::to_string(chunk_pixels * channels) + " samples, more than svbtdf reads (" +
-                std::to_string(kMaxChunkSamples) + ")");
+  // Compared by division: a tile may claim 2^32 - 1 pixels on each side.
+  const int64_t chunk_width = part.has_tiles ? part.tile_width : part.width;
+  const int64_t chunk_rows = part.has_tiles ? part.tile_height : LinesPerChunk(part.compression);
+  if (chunk_width > kMaxChunkSamples / chunk_rows / channels) {
+    cursor.Fail("has chunks of " + std::to_string(chunk_width) + " x " + std::to_string(chunk_rows) + " pixels of " +
+                std::to_string(channels) + " channels, more than svbtdf reads (" + std::to_string(kMaxChunkSamples) +
+                " samples)");
   }
   if (part.chunk_count >= 0) return part.chunk_count;
   if (part.has_tiles) return CeilDivide(part.width, part.tile_width) * CeilDivide(part.height, part.tile_height);

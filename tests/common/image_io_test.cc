@@ -238,6 +238,10 @@ TEST_F(ImageIo, ExrHeadersClaimingMoreThanTheFileHoldsAreRefusedBeforeOpenExrRea
       {"preview.exr",
        ExrBytes().Attribute("preview", "preview", ExrBytes::Le(60000) + ExrBytes::Le(60000)).EndHeader(),
        "preview claiming 60000 x 60000"},
+      // Each dimension at 2^32 - 1: their product overflows int64_t (the checked build's fuzzer).
+      {"preview-overflow.exr",
+       ExrBytes().Attribute("preview", "preview", ExrBytes::Le(-1) + ExrBytes::Le(-1)).EndHeader(),
+       "preview claiming 4294967295 x 4294967295"},
       {"stringvector.exr",
        ExrBytes().Attribute("names", "stringvector", ExrBytes::Le(1 << 30) + "abc").EndHeader(),
        "string vector element"},
@@ -250,7 +254,12 @@ TEST_F(ImageIo, ExrHeadersClaimingMoreThanTheFileHoldsAreRefusedBeforeOpenExrRea
        ExrBytes(0x200).OneHalfChannel().DataWindow(64, 64)
            .Attribute("tiles", "tiledesc", ExrBytes::Le(65536) + ExrBytes::Le(65536) + std::string(1, '\0'))
            .EndHeader().Zeros(64),
-       "chunks of 4294967296 samples"},
+       "chunks of 65536 x 65536 pixels"},
+      {"tiles-overflow.exr",
+       ExrBytes(0x200).OneHalfChannel().DataWindow(64, 64)
+           .Attribute("tiles", "tiledesc", ExrBytes::Le(-1) + ExrBytes::Le(-1) + std::string(1, '\0'))
+           .EndHeader().Zeros(64),
+       "chunks of 4294967295 x 4294967295 pixels"},
       // The fuzzer's 13-second input: 983041 x 32 zipped floats from 2.4 kB (deflate stops at 1032:1).
       {"ratio.exr",
        ExrBytes().Attribute("channels", "chlist", std::string("Y\0", 2) + ExrBytes::Le(2) + ExrBytes::Le(0) + ExrBytes::Le(1) +
@@ -262,7 +271,7 @@ TEST_F(ImageIo, ExrHeadersClaimingMoreThanTheFileHoldsAreRefusedBeforeOpenExrRea
       {"one-row.exr",
        ExrBytes().OneHalfChannel().DataWindow(70000, 1).Attribute("compression", "compression", std::string(1, '\11'))
            .EndHeader().Zeros(64),
-       "chunks of 17920000 samples"},
+       "chunks of 70000 x 256 pixels"},
       {"window.exr", ExrBytes().OneHalfChannel().DataWindow(60000, 60000).EndHeader().Zeros(64), "2^30"},
       // 2^32 x 2^32 pixels: the product overflows int64_t (the checked build's fuzzer, 2026-12-04).
       {"widest-window.exr",
