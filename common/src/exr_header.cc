@@ -4,6 +4,7 @@
 #include <array>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -171,8 +172,44 @@ void CheckStringVector(HeaderCursor& cursor, int64_t size) {
   }
 }
 
+// The bytes OpenEXR 3.1 reads for a value of a fixed-size type, whatever the attribute's stated
+// size (TypedAttribute<T>::readValueFrom); 0 for the types whose stated size it uses.
+int64_t FixedValueBytes(const std::string& type) {
+  static const std::map<std::string, int64_t> kBytes = {
+      {"box2f", 16},   {"box2i", 16}, {"chromaticities", 32}, {"compression", 1}, {"deepImageState", 1},
+      {"double", 8},   {"envmap", 1}, {"float", 4},           {"int", 4},         {"keycode", 28},
+      {"lineOrder", 1}, {"m33d", 72}, {"m33f", 36},           {"m44d", 128},      {"m44f", 64},
+      {"rational", 8}, {"tiledesc", 9}, {"timecode", 8},      {"v2d", 16},        {"v2f", 8},
+      {"v2i", 8},      {"v3d", 24},   {"v3f", 12},            {"v3i", 12}};
+  const auto found = kBytes.find(type);
+  return found == kBytes.end() ? 0 : found->second;
+}
+
+// OpenEXR reads a known type's value its own way: a stated size that differs from what it reads
+// would leave this check and OpenEXR reading the rest of the header at different places (the
+// checked build's fuzzer: a lineOrder of 257 bytes, after which OpenEXR took later bytes for a
+// string attribute claiming 442 MB). Returns the bytes OpenEXR reads.
+int64_t BytesOpenExrReads(HeaderCursor& cursor, const std::string& name, const std::string& type, int64_t size) {
+  const std::string attribute = "a '" + type + "' attribute '" + name + "' of " + std::to_string(size) + " bytes";
+  if (const int64_t fixed = FixedValueBytes(type); fixed > 0 && size != fixed) {
+    cursor.Fail("has " + attribute + "; the type holds " + std::to_string(fixed));
+  }
+  if (type == "floatvector" && size % 4 != 0) cursor.Fail("has " + attribute + ", not a whole number of floats");
+  if (type == "idmanifest") {
+    // Its 8-byte uncompressed size comes before size - 4 compressed bytes.
+    if (size < 4) cursor.Fail("has " + attribute + ", shorter than its own header");
+    return size + 4;
+  }
+  return size;
+}
+
 void ReadAttributeValue(HeaderCursor& cursor, const std::string& name, const std::string& type, int64_t size,
                         PartHeader& part) {
+  if (size >= 0) size = BytesOpenExrReads(cursor, name, type, size);
+  if (size < 0 || size > cursor.Remaining()) {
+    cursor.Fail("has an attribute '" + name + "' claiming " + std::to_string(size) + " bytes with " +
+                std::to_string(cursor.Remaining()) + " left in the file");
+  }
   if (name == "dataWindow" && type == "box2i" && size == 16) {
     const int64_t x_min = cursor.ReadI32("the data window");
     const int64_t y_min = cursor.ReadI32("the data window");
@@ -210,12 +247,7 @@ bool ReadPartHeader(HeaderCursor& cursor, PartHeader& part) {
     if (name.empty()) return any;
     any = true;
     const std::string type = cursor.ReadName("an attribute type");
-    const int64_t size = cursor.ReadI32("an attribute size");
-    if (size < 0 || size > cursor.Remaining()) {
-      cursor.Fail("has an attribute '" + name + "' claiming " + std::to_string(size) + " bytes with " +
-                  std::to_string(cursor.Remaining()) + " left in the file");
-    }
-    ReadAttributeValue(cursor, name, type, size, part);
+    ReadAttributeValue(cursor, name, type, cursor.ReadI32("an attribute size"), part);
   }
 }
 
