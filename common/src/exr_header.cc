@@ -132,8 +132,9 @@ void ReadChannels(HeaderCursor& cursor, int64_t size, PartHeader& part) {
   const int64_t end = cursor.Remaining() - size;
   part.channels = 0;
   part.bytes_per_pixel = 0;
-  while (cursor.Remaining() > end) {
-    if (cursor.ReadName("the channel list").empty()) break;
+  // To the empty name, as OpenEXR reads it whatever the stated size (a list cut before its empty
+  // name had OpenEXR read one byte more than this check: the checked build's fuzzer).
+  while (!cursor.ReadName("the channel list").empty()) {
     const int32_t type = cursor.ReadI32("the channel list");
     cursor.Skip(4, "the channel list");
     const int64_t x_sampling = std::max(1, cursor.ReadI32("the channel list"));

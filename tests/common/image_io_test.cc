@@ -247,6 +247,13 @@ TEST_F(ImageIo, ExrHeadersClaimingMoreThanTheFileHoldsAreRefusedBeforeOpenExrRea
       {"line-order.exr",
        ExrBytes().Attribute("lineOrder", "lineOrder", std::string(257, '\1')).EndHeader(),
        "'lineOrder' attribute 'lineOrder' of 257 bytes; the type holds 1"},
+      // A channel list whose stated size ends before its closing empty name: OpenEXR reads on to
+      // the name, here the header's own end.
+      {"channels.exr",
+       ExrBytes().Attribute("channels", "chlist", std::string("Y\0", 2) + ExrBytes::Le(1) + ExrBytes::Le(0) +
+                                                      ExrBytes::Le(1) + ExrBytes::Le(1))
+           .DataWindow(4, 4).EndHeader().Zeros(64),
+       "channel list that does not match its stated size"},
       {"floats.exr", ExrBytes().Attribute("weights", "floatvector", std::string(6, '\0')).EndHeader(),
        "not a whole number of floats"},
       {"stringvector.exr",
