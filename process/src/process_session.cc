@@ -71,13 +71,17 @@ CapturePlan ParsePlan(const session::Session& session, int num_dots) {
 
 // The rectification: each texel's value is the mean of k x k points inset in the texel, each
 // interpolated bilinearly in the image, so pixels straddling a texel edge barely contribute.
+// A point is kept as its 2 x 2 pixel block and its position in it (12 bytes rather than four
+// 12-byte taps): the rectification of every image streams these points, and at paper scale
+// (360,000 texels, 9 points each) their size set its speed.
 class Rectifier {
  public:
-  Rectifier(const calib::SessionCalibration& calibration, const TexelGeometry& geometry, int samples) {
+  Rectifier(const calib::SessionCalibration& calibration, const TexelGeometry& geometry, int samples)
+      : points_per_texel_(samples * samples) {
     const int64_t texels = geometry.num_texels();
     const double pitch_x = geometry.width_m / geometry.texels_x, pitch_y = geometry.height_m / geometry.texels_y;
     std::vector<model::Vec3> points;
-    points.reserve(texels * samples * samples);
+    points.reserve(texels * points_per_texel_);
     for (int64_t t = 0; t < texels; ++t) {
       const model::Vec3 centre = geometry.TexelCentre(t);
       for (int a = 0; a < samples; ++a) {
@@ -92,63 +96,81 @@ class Rectifier {
     const std::vector<Eigen::Vector2d> image = ProjectToImage(calibration, points);
     width_ = calibration.camera.camera.width;
     height_ = calibration.camera.camera.height;
-    const float weight = 1.0f / (samples * samples);
-    begin_.assign(texels + 1, 0);
+    covered_.assign(texels, 0);
+    points_.resize(image.size());
     for (int64_t t = 0; t < texels; ++t) {
       bool inside = true;
-      for (int s = 0; s < samples * samples && inside; ++s) {
-        const Eigen::Vector2d& p = image[t * samples * samples + s];
+      for (int s = 0; s < points_per_texel_ && inside; ++s) {
+        const Eigen::Vector2d& p = image[t * points_per_texel_ + s];
         inside = p.x() >= 0 && p.y() >= 0 && p.x() <= width_ - 1 && p.y() <= height_ - 1;
       }
-      if (inside) {
-        for (int s = 0; s < samples * samples; ++s) AddBilinearTaps(image[t * samples * samples + s], weight);
-      }
-      begin_[t + 1] = static_cast<int64_t>(pixel_.size());
+      if (!inside) continue;
+      covered_[t] = 1;
+      for (int s = 0; s < points_per_texel_; ++s) points_[t * points_per_texel_ + s] = BilinearPoint(image[t * points_per_texel_ + s]);
     }
   }
 
-  int64_t texels() const { return static_cast<int64_t>(begin_.size()) - 1; }
-  bool Covers(int64_t texel) const { return begin_[texel + 1] > begin_[texel]; }
+  int64_t texels() const { return static_cast<int64_t>(covered_.size()); }
+  bool Covers(int64_t texel) const { return covered_[texel] != 0; }
 
-  // out[3 t + c] = rectified linear value; saturated[t] when any tap touches a saturated pixel.
+  // out[3 t + c] = rectified linear value; saturated[t] when any pixel with a non-zero weight in
+  // one of the texel's points is saturated. A grey image gives c = 0, 1, 2 the same value.
   void Apply(const std::vector<float>& linear, const std::vector<uint8_t>& saturated_pixel, int channels, int threads,
              std::vector<float>* out, std::vector<uint8_t>* saturated) const {
     out->assign(3 * texels(), kNaN);
     saturated->assign(texels(), 0);
+    // The first three channels of colour images (an alpha channel is ignored), the first of others.
+    if (channels >= 3) {
+      ApplyTo<3>(linear, saturated_pixel, channels, threads, out, saturated);
+    } else {
+      ApplyTo<1>(linear, saturated_pixel, channels, threads, out, saturated);
+    }
+  }
+
+ private:
+  // The top-left pixel of a point's 2 x 2 block and the point's position in it.
+  struct BilinearPointTaps {
+    int32_t pixel;  // y0 * width + x0; images are at most kMaxSamples pixels (image_io), so it fits
+    float fx, fy;
+  };
+
+  BilinearPointTaps BilinearPoint(const Eigen::Vector2d& p) const {
+    const int x0 = std::min(static_cast<int>(p.x()), width_ - 2), y0 = std::min(static_cast<int>(p.y()), height_ - 2);
+    return {static_cast<int32_t>(y0 * width_ + x0), static_cast<float>(p.x() - x0), static_cast<float>(p.y() - y0)};
+  }
+
+  template <int Channels>
+  void ApplyTo(const std::vector<float>& linear, const std::vector<uint8_t>& saturated_pixel, int stride, int threads,
+               std::vector<float>* out, std::vector<uint8_t>* saturated) const {
+    const float weight = 1.0f / static_cast<float>(points_per_texel_);
+    const int64_t row = width_;
     common::ParallelFor(texels(), threads, 4096, [&](int64_t a, int64_t b) {
       for (int64_t t = a; t < b; ++t) {
         if (!Covers(t)) continue;
-        double sum[3] = {0, 0, 0};
+        float sum[Channels] = {};
         uint8_t any_saturated = 0;
-        for (int64_t k = begin_[t]; k < begin_[t + 1]; ++k) {
-          const int64_t p = pixel_[k];
-          any_saturated |= saturated_pixel[p];
-          for (int c = 0; c < 3; ++c) sum[c] += weight_[k] * linear[p * channels + std::min(c, channels - 1)];
+        for (int s = 0; s < points_per_texel_; ++s) {
+          const BilinearPointTaps& point = points_[t * points_per_texel_ + s];
+          const int64_t corner[4] = {point.pixel, point.pixel + 1, point.pixel + row, point.pixel + row + 1};
+          const float w[4] = {(1 - point.fx) * (1 - point.fy), point.fx * (1 - point.fy), (1 - point.fx) * point.fy,
+                              point.fx * point.fy};
+          for (int k = 0; k < 4; ++k) {
+            // Without a branch: the block lies inside the image, and its values are finite. A
+            // point on a pixel's edge does not reach past it, nor does its saturation.
+            any_saturated |= static_cast<uint8_t>(w[k] > 0) & saturated_pixel[corner[k]];
+            for (int c = 0; c < Channels; ++c) sum[c] += w[k] * linear[corner[k] * stride + c];
+          }
         }
-        for (int c = 0; c < 3; ++c) (*out)[3 * t + c] = static_cast<float>(sum[c]);
+        for (int c = 0; c < 3; ++c) (*out)[3 * t + c] = weight * sum[std::min(c, Channels - 1)];
         (*saturated)[t] = any_saturated;
       }
     });
   }
 
- private:
-  void AddBilinearTaps(const Eigen::Vector2d& p, float weight) {
-    const int x0 = std::min(static_cast<int>(p.x()), width_ - 2), y0 = std::min(static_cast<int>(p.y()), height_ - 2);
-    const float fx = static_cast<float>(p.x() - x0), fy = static_cast<float>(p.y() - y0);
-    const float w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
-    const int64_t pixel[4] = {static_cast<int64_t>(y0) * width_ + x0, static_cast<int64_t>(y0) * width_ + x0 + 1,
-                              static_cast<int64_t>(y0 + 1) * width_ + x0, static_cast<int64_t>(y0 + 1) * width_ + x0 + 1};
-    for (int k = 0; k < 4; ++k) {
-      if (w[k] <= 0) continue;
-      pixel_.push_back(pixel[k]);
-      weight_.push_back(weight * w[k]);
-    }
-  }
-
   int width_ = 0, height_ = 0;
-  std::vector<int64_t> begin_;
-  std::vector<int64_t> pixel_;
-  std::vector<float> weight_;
+  int points_per_texel_ = 1;
+  std::vector<uint8_t> covered_;
+  std::vector<BilinearPointTaps> points_;  // points_per_texel_ a texel, row-major over texels
 };
 
 // Reads session images and turns them into linear values (dark-subtracted) with saturation flags.
