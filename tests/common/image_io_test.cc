@@ -183,7 +183,7 @@ class ExrBytes {
     bytes_ += value;
     return *this;
   }
-  ExrBytes& OneHalfChannel() { return Attribute("channels", "chlist", std::string("Y\0", 2) + Le(1) + Le(0) + Le(1) + Le(1) + '\0'); }
+  ExrBytes& OneHalfChannel() { return Attribute("channels", "chlist", Channel("Y", kHalf) + '\0'); }
   ExrBytes& DataWindow(int32_t width, int32_t height) { return DataWindow(0, 0, width - 1, height - 1); }
   ExrBytes& DataWindow(int32_t x_min, int32_t y_min, int32_t x_max, int32_t y_max) {
     return Attribute("dataWindow", "box2i", Le(x_min) + Le(y_min) + Le(x_max) + Le(y_max));
@@ -203,6 +203,12 @@ class ExrBytes {
   size_t size() const { return bytes_.size(); }
   void WriteTo(const fs::path& path) const { WriteTextAtomically(path, bytes_); }
   static std::string Le(int32_t value) { return LittleEndian(static_cast<uint32_t>(value), 4); }
+  // One entry of a channel list: name, pixel type, pLinear and 3 reserved bytes, x and y sampling
+  // of 1. A list ends with an empty name ('\0').
+  static constexpr int32_t kHalf = 1, kFloat = 2;
+  static std::string Channel(const std::string& name, int32_t pixel_type) {
+    return name + '\0' + Le(pixel_type) + Le(0) + Le(1) + Le(1);
+  }
   static std::string Le64(uint64_t value) { return LittleEndian(value, 8); }
   static std::string Half(uint16_t bits) { return LittleEndian(bits, 2); }
   static std::string Float(float value) {
@@ -250,8 +256,7 @@ TEST_F(ImageIo, ExrHeadersClaimingMoreThanTheFileHoldsAreRefusedBeforeOpenExrRea
       // A channel list whose stated size ends before its closing empty name: OpenEXR reads on to
       // the name, here the header's own end.
       {"channels.exr",
-       ExrBytes().Attribute("channels", "chlist", std::string("Y\0", 2) + ExrBytes::Le(1) + ExrBytes::Le(0) +
-                                                      ExrBytes::Le(1) + ExrBytes::Le(1))
+       ExrBytes().Attribute("channels", "chlist", ExrBytes::Channel("Y", ExrBytes::kHalf))
            .DataWindow(4, 4).EndHeader().Zeros(64),
        "channel list that does not match its stated size"},
       {"floats.exr", ExrBytes().Attribute("weights", "floatvector", std::string(6, '\0')).EndHeader(),
@@ -276,8 +281,7 @@ TEST_F(ImageIo, ExrHeadersClaimingMoreThanTheFileHoldsAreRefusedBeforeOpenExrRea
        "chunks of 4294967295 x 4294967295 pixels"},
       // The fuzzer's 13-second input: 983041 x 32 zipped floats from 2.4 kB (deflate stops at 1032:1).
       {"ratio.exr",
-       ExrBytes().Attribute("channels", "chlist", std::string("Y\0", 2) + ExrBytes::Le(2) + ExrBytes::Le(0) + ExrBytes::Le(1) +
-                                                      ExrBytes::Le(1) + '\0')
+       ExrBytes().Attribute("channels", "chlist", ExrBytes::Channel("Y", ExrBytes::kFloat) + '\0')
            .DataWindow(983041, 32).Attribute("compression", "compression", std::string(1, '\3'))
            .EndHeader().Zeros(2300),
        "can decode to (at most 1032 to 1"},
@@ -327,8 +331,7 @@ TEST_F(ImageIo, ExrMapsTallerThanAReadStripRoundTripExactly) {
 // with the attributes OpenEXR requires, channels sorted by name.
 TEST_F(ImageIo, ExrChannelsOfMixedTypesAreEachConvertedToFloat) {
   using B = ExrBytes;
-  const std::string channels = std::string("U\0", 2) + B::Le(1) + B::Le(0) + B::Le(1) + B::Le(1) +  // half
-                               std::string("V\0", 2) + B::Le(2) + B::Le(0) + B::Le(1) + B::Le(1) + '\0';  // float
+  const std::string channels = B::Channel("U", B::kHalf) + B::Channel("V", B::kFloat) + '\0';
   ExrBytes exr;
   exr.Attribute("channels", "chlist", channels)
       .Attribute("compression", "compression", std::string(1, '\0'))
@@ -384,11 +387,9 @@ TEST_F(ImageIoDeathTest, AOneRowExrCostsAboutItsOwnSizeToRead) {
   for (int x = 0; x < wide.width; x += 997) wide.at(x, 0, x % 4) = static_cast<float>(x);
   WriteFloatImage(dir_ / "wide.exr", wide, /*half_precision=*/false);
   // 1048576 x 1 RGBA floats (16 MiB) in one-line zip chunks: one chunk of 17 kB of zeros.
-  const std::string rgba = std::string("A\0", 2) + ExrBytes::Le(2) + ExrBytes::Le(0) + ExrBytes::Le(1) +
-                           ExrBytes::Le(1) + std::string("B\0", 2) + ExrBytes::Le(2) + ExrBytes::Le(0) +
-                           ExrBytes::Le(1) + ExrBytes::Le(1) + std::string("G\0", 2) + ExrBytes::Le(2) +
-                           ExrBytes::Le(0) + ExrBytes::Le(1) + ExrBytes::Le(1) + std::string("R\0", 2) +
-                           ExrBytes::Le(2) + ExrBytes::Le(0) + ExrBytes::Le(1) + ExrBytes::Le(1) + '\0';
+  std::string rgba;
+  for (const char* name : {"A", "B", "G", "R"}) rgba += ExrBytes::Channel(name, ExrBytes::kFloat);
+  rgba += '\0';
   ExrBytes damaged_bytes;
   damaged_bytes.Attribute("channels", "chlist", rgba).DataWindow(1 << 20, 1)
       .Attribute("compression", "compression", std::string(1, '\2')).EndHeader();
