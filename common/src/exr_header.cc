@@ -206,12 +206,13 @@ int64_t BytesOpenExrReads(HeaderCursor& cursor, const std::string& name, const s
 
 void ReadAttributeValue(HeaderCursor& cursor, const std::string& name, const std::string& type, int64_t size,
                         PartHeader& part) {
+  // From here on, a value of a fixed-size type (box2i, compression, ...) has that type's size.
   if (size >= 0) size = BytesOpenExrReads(cursor, name, type, size);
   if (size < 0 || size > cursor.Remaining()) {
     cursor.Fail("has an attribute '" + name + "' claiming " + std::to_string(size) + " bytes with " +
                 std::to_string(cursor.Remaining()) + " left in the file");
   }
-  if (name == "dataWindow" && type == "box2i" && size == 16) {
+  if (name == "dataWindow" && type == "box2i") {
     const int64_t x_min = cursor.ReadI32("the data window");
     const int64_t y_min = cursor.ReadI32("the data window");
     const int64_t x_max = cursor.ReadI32("the data window");
@@ -219,14 +220,14 @@ void ReadAttributeValue(HeaderCursor& cursor, const std::string& name, const std
     part.has_data_window = true;
     part.width = x_max - x_min + 1;
     part.height = y_max - y_min + 1;
-  } else if (name == "compression" && type == "compression" && size == 1) {
+  } else if (name == "compression" && type == "compression") {
     part.compression = cursor.ReadU8("the compression");
-  } else if (name == "tiles" && type == "tiledesc" && size == 9) {
+  } else if (name == "tiles" && type == "tiledesc") {
     part.has_tiles = true;
     part.tile_width = cursor.ReadU32("the tile description");
     part.tile_height = cursor.ReadU32("the tile description");
     cursor.Skip(1, "the tile description");
-  } else if (name == "chunkCount" && type == "int" && size == 4) {
+  } else if (name == "chunkCount" && type == "int") {
     part.chunk_count = cursor.ReadI32("the chunk count");
   } else if (type == "chlist") {
     ReadChannels(cursor, size, part);
