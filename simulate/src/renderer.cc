@@ -27,22 +27,10 @@ class PixelRandom {
   PixelRandom(uint64_t seed, uint64_t stream, uint64_t pixel)
       : state_(common::SplitMix64(common::SplitMix64(common::SplitMix64(seed) ^ stream) ^ pixel)) {}
 
-  double Uniform() {
-    state_ += 0x9e3779b97f4a7c15ULL;
-    return static_cast<double>(common::SplitMix64(state_) >> 11) * 0x1.0p-53;
-  }
-  // Box-Muller, both of its outputs used.
+  uint64_t NextBits() { return common::SplitMix64(state_ += 0x9e3779b97f4a7c15ULL); }
+  double Uniform() { return common::UnitInterval(NextBits()); }
   double Gaussian() {
-    if (has_spare_) {
-      has_spare_ = false;
-      return spare_;
-    }
-    const double u1 = 1.0 - Uniform();  // (0, 1]
-    const double u2 = Uniform();
-    const double radius = std::sqrt(-2.0 * std::log(u1));
-    spare_ = radius * std::sin(model::kTwoPi * u2);
-    has_spare_ = true;
-    return radius * std::cos(model::kTwoPi * u2);
+    return common::StandardNormal([this] { return NextBits(); });
   }
   // Poisson(mean): exact multiplication method for small means, the normal approximation with
   // the exact variance above 64 electrons (its error is far below the read noise there).
@@ -61,8 +49,6 @@ class PixelRandom {
 
  private:
   uint64_t state_;
-  double spare_ = 0.0;
-  bool has_spare_ = false;
 };
 
 double SrgbEncode(double v) {
@@ -92,7 +78,11 @@ double SubSample(int k, int n) { return (k + 0.5) / n - 0.5; }
 
 
 RigRenderer::RigRenderer(const Rig& rig, const SpatialBtdf* material, int threads)
-    : rig_(rig), material_(material), threads_(threads) {
+    : rig_(rig),
+      material_(material),
+      threads_(threads),
+      vignetting_per_r2_(rig.config().sensor.vignetting /
+                         (0.25 * (model::Square(rig.config().intrinsics.width) + model::Square(rig.config().intrinsics.height)))) {
   if (material_) {
     const SampleConfig& s = rig_.config().sample;
     if (material_->texels_x() != s.texels_x || material_->texels_y() != s.texels_y) {
@@ -481,11 +471,10 @@ std::vector<BoardPose> RigRenderer::ZhangBoardPoses(int views, uint64_t seed) co
   return poses;
 }
 
+// 1 / (1 + v r^2), r the distance from the principal point over the half diagonal.
 double RigRenderer::Vignetting(const model::Vec2& pixel) const {
   const CameraIntrinsics& k = rig_.config().intrinsics;
-  const double half_diagonal = 0.5 * std::hypot(k.width, k.height);
-  const double r2 = (model::Square(pixel.x() - k.cx) + model::Square(pixel.y() - k.cy)) / model::Square(half_diagonal);
-  return 1.0 / (1.0 + rig_.config().sensor.vignetting * r2);
+  return 1.0 / (1.0 + vignetting_per_r2_ * (model::Square(pixel.x() - k.cx) + model::Square(pixel.y() - k.cy)));
 }
 
 double RigRenderer::MeanElectrons(double radiance, const model::Vec2& pixel, double exposure_s) const {
@@ -523,8 +512,8 @@ common::CameraImage RigRenderer::Expose(const common::FloatImage& radiance, doub
           electrons += s.read_noise * random.Gaussian();
           const double linear = std::clamp(electrons / s.full_well, 0.0, 1.0);
           const double encoded = (srgb ? SrgbEncode(linear) : linear) + s.black_offset;
-          out.pixels[pixel * radiance.channels + c] =
-              static_cast<uint16_t>(std::lround(std::min(encoded, 1.0) * max_value));
+          // Round half up (the value is not negative).
+          out.pixels[pixel * radiance.channels + c] = static_cast<uint16_t>(std::min(encoded, 1.0) * max_value + 0.5);
         }
       }
     }

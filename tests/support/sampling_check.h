@@ -10,6 +10,7 @@
 #include <random>
 #include <vector>
 
+#include "chi_square.h"
 #include "svbtdf/model/bsdf.h"
 #include "svbtdf/model/hemicube.h"
 #include "svbtdf/model/ndf.h"
@@ -23,8 +24,7 @@ struct SamplerCheck {
   double max_weight = 0;        // largest sample weight
   double max_pdf_mismatch = 0;  // largest |pdf - VisibleNormalPdf| / pdf over the samples
   double max_weight_mismatch = 0;  // largest |weight - G1 (v.h) D / (v.z pdf)|
-  // p < 1e-4 for a chi-square with bins - 1 degrees of freedom is about mean + 4.5 sigma.
-  bool Passes() const { return bins > 20 && chi2 < (bins - 1) + 4.5 * std::sqrt(2.0 * (bins - 1)); }
+  bool Passes() const { return bins > 20 && chi2 < svbtdf::testing::ChiSquareBound(bins); }
 };
 
 // The integral of `density(direction)` over every cell of `grid`: sub x sub points per cell,
@@ -48,34 +48,6 @@ std::vector<double> CellIntegrals(const Hemicube& grid, const Density& density, 
   return integrals;
 }
 
-struct ChiSquareStatistic {
-  double chi2 = 0;
-  int bins = 0;
-};
-
-// Pearson's chi-square of observed against expected counts. Bins expected to hold fewer than 20
-// are pooled into one bin, which starts with `pooled_observed` and `pooled_expected` (a mass
-// that has no cell, such as the draws a sampler failed).
-inline ChiSquareStatistic PooledChiSquare(const std::vector<double>& observed, const std::vector<double>& expected,
-                                          double pooled_observed = 0, double pooled_expected = 0) {
-  ChiSquareStatistic result;
-  for (size_t c = 0; c < observed.size(); ++c) {
-    const double e = expected[c];
-    if (e < 20) {
-      pooled_observed += observed[c];
-      pooled_expected += e;
-      continue;
-    }
-    result.chi2 += (observed[c] - e) * (observed[c] - e) / e;
-    ++result.bins;
-  }
-  if (pooled_expected > 20) {
-    result.chi2 += (pooled_observed - pooled_expected) * (pooled_observed - pooled_expected) / pooled_expected;
-    ++result.bins;
-  }
-  return result;
-}
-
 inline SamplerCheck CheckSampler(const Ndf& ndf, const Vec3& v, int samples, uint64_t seed, int resolution = 16) {
   const Hemicube grid(resolution);
   std::vector<double> expected = CellIntegrals(grid, [&](const Vec3& h) { return ndf.VisibleNormalPdf(v, h); });
@@ -94,7 +66,7 @@ inline SamplerCheck CheckSampler(const Ndf& ndf, const Vec3& v, int samples, uin
     check.max_weight_mismatch = std::max(check.max_weight_mismatch, std::abs(s.weight - expected_weight));
   }
   for (double& e : expected) e = e / check.pdf_integral * samples;
-  const ChiSquareStatistic statistic = PooledChiSquare(observed, expected);
+  const svbtdf::testing::ChiSquareStatistic statistic = svbtdf::testing::PooledChiSquare(observed, expected);
   check.chi2 = statistic.chi2;
   check.bins = statistic.bins;
   return check;
@@ -114,7 +86,7 @@ struct BsdfSamplerCheck {
   double mean_weight = 0;          // channel-mean weight, failures counted as 0: the energy
   double weight_standard_error = 0;
   // Mean + 4.5 sigma of a chi-square with bins - 1 degrees of freedom (p about 1e-5).
-  bool Passes() const { return bins > 20 && chi2 < (bins - 1) + 4.5 * std::sqrt(2.0 * (bins - 1)); }
+  bool Passes() const { return bins > 20 && chi2 < svbtdf::testing::ChiSquareBound(bins); }
 };
 
 inline Vec3 Folded(const Vec3& d) { return {d.x(), d.y(), std::abs(d.z())}; }
@@ -156,8 +128,8 @@ inline BsdfSamplerCheck CheckBsdf(const Bsdf& bsdf, const Vec3& wo, int samples,
   check.weight_standard_error =
       std::sqrt(std::max(0.0, weight_square_sum / samples - check.mean_weight * check.mean_weight) / samples);
   for (double& e : expected) e *= samples;
-  const ChiSquareStatistic statistic =
-      PooledChiSquare(observed, expected, failures, std::max(0.0, 1.0 - check.pdf_integral) * samples);
+  const svbtdf::testing::ChiSquareStatistic statistic =
+      svbtdf::testing::PooledChiSquare(observed, expected, failures, std::max(0.0, 1.0 - check.pdf_integral) * samples);
   check.chi2 = statistic.chi2;
   check.bins = statistic.bins;
   return check;

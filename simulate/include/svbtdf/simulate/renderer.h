@@ -102,6 +102,7 @@ class RigRenderer {
   const Rig& rig_;
   const SpatialBtdf* material_;
   int threads_;
+  double vignetting_per_r2_;  // the vignetting coefficient over the squared half diagonal
   std::vector<Group> groups_;
   std::vector<size_t> row_begin_;         // groups_ index of each image row's first group
   std::vector<float> background_;         // black-level glow per group (RGB), when enabled
