@@ -79,11 +79,17 @@ void DurableLog::RepairTail() {
   }
 }
 
-void DurableLog::Append(std::string_view line) {
-  if (line.find('\n') != std::string_view::npos) ThrowInvalidInput(path_.string(), "a log line may not contain a newline");
+void DurableLog::Append(std::string_view line) { Append(std::vector<std::string>{std::string(line)}); }
+
+void DurableLog::Append(const std::vector<std::string>& lines) {
+  if (lines.empty()) return;
+  std::string bytes;
+  for (const std::string& line : lines) {
+    if (line.find('\n') != std::string::npos) ThrowInvalidInput(path_.string(), "a log line may not contain a newline");
+    bytes += line;
+    bytes += '\n';
+  }
   RepairTail();
-  std::string bytes(line);
-  bytes += '\n';
   AppendBytesDurably(path_, bytes);
 }
 

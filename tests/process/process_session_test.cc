@@ -18,12 +18,14 @@
 #include "svbtdf/calib/calibrate_session.h"
 #include "svbtdf/calib/session_calibration.h"
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/fault_injection.h"
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/common/progress.h"
 #include "svbtdf/session/session.h"
 #include "svbtdf/common/statistics.h"
 #include "svbtdf/process/process_session.h"
 #include "svbtdf/fit/slice_store.h"
+#include "svbtdf/fit/slice_store_format.h"
 #include "svbtdf/process/diffuse_separation.h"
 #include "svbtdf/process/slice_store_writer.h"
 #include "svbtdf/acquire/simulated_session.h"
@@ -192,6 +194,28 @@ TEST(ProcessSession, DefaultNoiseWithinThreePercentAndResumesWhereItStopped) {
   EXPECT_EQ(second.dots_resumed, 20);
   EXPECT_EQ(FileBytes(resumed / "samples.f16"), FileBytes(out / "samples.f16"));
   EXPECT_EQ(FileBytes(resumed / "slices.f16"), FileBytes(out / "slices.f16"));
+
+  // Dots are journalled in groups (a commit a second, and when the writer goes away); a run that
+  // fails midway through the dots (a full disk at the write of the middle dot's first tile) keeps
+  // the dots written before the failure, and the next run resumes after them.
+  const fs::path failed = sim.folder / "failed";
+  const int64_t before = common::DurableOperationCount();
+  common::SetInterruptRequested(true);  // counts the operations that create the store
+  EXPECT_THROW(ProcessSession(session, sim.calibration, failed, QuietOptions()), common::Error);
+  common::SetInterruptRequested(false);
+  const int64_t creation = common::DurableOperationCount() - before;
+  fs::remove_all(failed);
+  const SliceStoreInfo info = SliceStore::Open(out).info();
+  const int64_t dot_writes = fit::store::NumTiles(info);  // one write per tile per dot
+  common::InjectFaultForTesting(creation + info.num_dots / 2 * dot_writes + 1, common::FaultAction::kFail);
+  EXPECT_THROW(ProcessSession(session, sim.calibration, failed, QuietOptions()), common::Error);
+  common::InjectFaultForTesting(0, common::FaultAction::kProceed);
+  const ProcessReport after_failure = ProcessSession(session, sim.calibration, failed, QuietOptions());
+  // (Each commit that ran takes two operations: the failure then comes that much earlier.)
+  EXPECT_GE(after_failure.dots_resumed, info.num_dots / 4);
+  EXPECT_LE(after_failure.dots_resumed, info.num_dots / 2);
+  EXPECT_EQ(FileBytes(failed / "samples.f16"), FileBytes(out / "samples.f16"));
+  EXPECT_EQ(FileBytes(failed / "slices.f16"), FileBytes(out / "slices.f16"));
 }
 
 TEST(ProcessSession, ErrorsNameTheFile) {

@@ -14,7 +14,9 @@
 namespace svbtdf::process {
 
 // Writes PROCESSED/ dot by dot (the order images are read in), resumably: a dot counts as written
-// once its values are on disk and recorded in PROCESSED/progress.jsonl.
+// once its values are on disk and recorded in PROCESSED/progress.jsonl. Written dots are made
+// durable together, about once a second (a group commit), and when the writer finishes or is
+// destroyed; a crash loses at most the last second's dots, which the next run processes again.
 class SliceStoreWriter {
  public:
   // Creates PROCESSED/ (new or empty folder), or resumes it when it holds an unfinished store
@@ -28,8 +30,11 @@ class SliceStoreWriter {
   // The folder holds this very store, complete: there is nothing to write.
   bool finished() const;
   bool HasDot(int dot) const;
-  // Dot q's R for every texel: rgb[3 * texel + c], NaN where not measured.
+  // Dot q's R for every texel: rgb[3 * texel + c], NaN where not measured. HasDot(dot) is true
+  // from then on; the dot is durable after the next Commit.
   void WriteDot(int dot, const std::vector<float>& rgb);
+  // Makes every written dot durable: fsyncs the samples, then records the dots in the journal.
+  void Commit();
 
   struct FinishOptions {
     double diffuse_threshold = 0.05;  // dots whose 1 / s_q (EstimateDiffuse) is below this fraction of the texel's largest do not count for rho_d
