@@ -6,6 +6,7 @@
 #include <cmath>
 #include <random>
 
+#include "chi_square.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/model/ggx.h"
 #include "svbtdf/model/tabulated_ndf.h"
@@ -130,26 +131,11 @@ TEST(TabulatedNdf, SamplerMatchesItsPdfAndWeightsAreAtMostOne) {
     ++observed[grid.CellOf(s.h)];
   }
   // Pearson chi-square over cells with enough expected samples, the rest pooled.
-  double chi2 = 0, pooled_observed = 0, pooled_expected = 0;
-  int bins = 0;
-  for (int c = 0; c < grid.num_cells(); ++c) {
-    const double e = expected[c] / expected_total * kSamples;
-    if (e < 20) {
-      pooled_observed += observed[c];
-      pooled_expected += e;
-      continue;
-    }
-    chi2 += Square(observed[c] - e) / e;
-    ++bins;
-  }
-  if (pooled_expected > 20) {
-    chi2 += Square(pooled_observed - pooled_expected) / pooled_expected;
-    ++bins;
-  }
-  // p < 1e-4 for chi-square with `bins - 1` degrees of freedom is roughly mean + 4.5 sigma.
-  const double dof = bins - 1;
-  EXPECT_LT(chi2, dof + 4.5 * std::sqrt(2 * dof)) << "bins " << bins;
-  EXPECT_GT(bins, 50);
+  std::vector<double> expected_counts(grid.num_cells());
+  for (int c = 0; c < grid.num_cells(); ++c) expected_counts[c] = expected[c] / expected_total * kSamples;
+  const svbtdf::testing::ChiSquareStatistic statistic = svbtdf::testing::PooledChiSquare(observed, expected_counts);
+  EXPECT_LT(statistic.chi2, svbtdf::testing::ChiSquareBound(statistic.bins)) << "bins " << statistic.bins;
+  EXPECT_GT(statistic.bins, 50);
 }
 
 TEST(TabulatedNdf, RejectsTablesOfTheWrongSize) {
