@@ -145,10 +145,6 @@ namespace {
 // at paper scale; a commit a second bounds that below 3% and what a crash loses to a second's work.
 constexpr std::chrono::milliseconds kCommitInterval{1000};
 
-}  // namespace
-
-namespace {
-
 bool FolderIsEmpty(const fs::path& folder) { return fs::is_directory(folder) && fs::is_empty(folder); }
 
 // The dots whose samples are on disk. A line torn by a crash is left out and cut off before the
