@@ -7,10 +7,13 @@
 #include <cstdio>
 #include <string>
 
+#include <Eigen/Eigenvalues>
+
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/json.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/image_io.h"
+#include "svbtdf/fit/slice_store.h"
 
 namespace svbtdf::fit {
 namespace fs = std::filesystem;
@@ -32,6 +35,40 @@ std::string TexelName(int64_t texel, int width) {
   return FormatFigures("(%lld, %lld)", static_cast<long long>(texel % width), static_cast<long long>(texel / width));
 }
 
+// Lobes narrower than the dot spacing, on a sample of the store's texels (DotsAcrossLobe).
+void CheckLobeSampling(const fs::path& processed, std::vector<QualityWarning>* warnings) {
+  const SliceStore store = SliceStore::Open(processed);
+  const int64_t texels = store.geometry().num_texels();
+  const int tile_texels = store.info().tile_texels;
+  const int64_t tiles = (texels + tile_texels - 1) / tile_texels;
+  const int64_t checked_tiles = std::min<int64_t>(tiles, kLobeCheckTiles);
+  const int64_t stride = std::max<int64_t>(1, checked_tiles * tile_texels / kLobeCheckTexels);
+  std::vector<float> samples;
+  std::vector<double> across;
+  for (int64_t i = 0; i < checked_tiles; ++i) {
+    const int64_t tile = checked_tiles > 1 ? i * (tiles - 1) / (checked_tiles - 1) : 0;
+    store.ReadTile(tile, &samples);
+    for (int64_t t = tile * tile_texels; t < std::min(texels, (tile + 1) * tile_texels); t += stride) {
+      if (!(store.mask().pixels[static_cast<size_t>(t) * store.mask().channels] > 0.5f)) continue;
+      const double a = DotsAcrossLobe(store.MakeTexelSlice(t, samples));
+      if (a > 0) across.push_back(a);
+    }
+  }
+  const auto under = std::count_if(across.begin(), across.end(), [](double a) { return a < kMinDotsAcrossLobe; });
+  if (across.empty() || under <= kMaxUndersampledLobeFraction * static_cast<double>(across.size())) return;
+  std::nth_element(across.begin(), across.begin() + across.size() / 2, across.end());
+  warnings->push_back(
+      {"process", (processed / "samples.f16").string(), "lobe-undersampled", "the dots are too sparse for the lobes",
+       FormatFigures("%lld of %lld texels checked (%.1f%%; limit %.0f%%) have fewer than %.0f dots across the half "
+                     "maximum of their lobe; median %.2f",
+                     static_cast<long long>(under), static_cast<long long>(across.size()),
+                     Percent(under, static_cast<int64_t>(across.size())), 100 * kMaxUndersampledLobeFraction,
+                     kMinDotsAcrossLobe, across[across.size() / 2]),
+       "the material's lobes are narrower than the dot spacing: alpha and the NDF's width across the lobe are "
+       "not determined by these samples; capture again with denser dots (svbtdf plan --roughness shows the "
+       "spacing a lobe needs)"});
+}
+
 }  // namespace
 
 std::string QualityWarning::Line() const {
@@ -40,6 +77,39 @@ std::string QualityWarning::Line() const {
   if (!likely_cause.empty()) line += "; likely cause: " + likely_cause;
   return line;
 }
+
+double DotsAcrossLobe(const TexelSlice& slice) {
+  const size_t n = std::min(slice.light.size(), slice.rho.size());
+  size_t peak = n;
+  for (size_t k = 0; k < n; ++k) {
+    if (slice.rho[k] > 0 && (peak == n || slice.rho[k] > slice.rho[peak])) peak = k;
+  }
+  if (peak == n) return 0.0;
+  // Coordinates in the plane perpendicular to the brightest dot's direction (angles, for the
+  // small offsets that matter here).
+  const model::Vec3 centre = slice.light[peak].normalized();
+  const model::Vec3 any = std::abs(centre.x()) < 0.9 ? model::Vec3::UnitX() : model::Vec3::UnitY();
+  const model::Vec3 e1 = centre.cross(any).normalized(), e2 = centre.cross(e1);
+  double spacing = HUGE_VAL;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d second = Eigen::Matrix2d::Zero();
+  int bright = 0;
+  for (size_t k = 0; k < n; ++k) {
+    const model::Vec3 d = slice.light[k].normalized();
+    if (k != peak) spacing = std::min(spacing, std::acos(std::clamp(d.dot(centre), -1.0, 1.0)));
+    if (!(slice.rho[k] >= 0.5 * slice.rho[peak])) continue;
+    const Eigen::Vector2d x(d.dot(e1), d.dot(e2));
+    mean += x;
+    second += x * x.transpose();
+    ++bright;
+  }
+  if (bright < 2 || !(spacing > 0) || !std::isfinite(spacing)) return 1.0;
+  mean /= bright;
+  const Eigen::Matrix2d covariance = second / bright - mean * mean.transpose();
+  const double narrowest = std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(covariance).eigenvalues()[0]);
+  return std::sqrt(1.0 + 12.0 * narrowest / (spacing * spacing));
+}
+
 
 std::vector<QualityWarning> CheckSliceStore(const fs::path& processed) {
   std::vector<QualityWarning> warnings;
@@ -86,6 +156,7 @@ std::vector<QualityWarning> CheckSliceStore(const fs::path& processed) {
                         "the dots do not reach beneath the sample: widen the dot grid (rig.dots) past the sample's "
                         "edges; those texels' lobe peaks are never sampled and their fits extrapolate"});
   }
+  if (fs::exists(processed / "samples.f16")) CheckLobeSampling(processed, &warnings);
   return warnings;
 }
 
@@ -208,7 +279,9 @@ nlohmann::json QualityToJson(const std::vector<QualityWarning>& warnings) {
         {"bad_residual_fraction", kMaxBadResidualFraction},
         {"k_s_max", kMaxPlausibleKs},
         {"alpha_at_bound_fraction", kMaxAlphaAtBoundFraction},
-        {"failed_fit_fraction", kMaxFailedFitFraction}}},
+        {"failed_fit_fraction", kMaxFailedFitFraction},
+        {"min_dots_across_lobe", kMinDotsAcrossLobe},
+        {"undersampled_lobe_fraction", kMaxUndersampledLobeFraction}}},
       {"warnings", list},
   };
 }

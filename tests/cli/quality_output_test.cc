@@ -32,13 +32,15 @@ std::string ReadPage(const fs::path& report) {
 }
 
 // Each test runs in its own process (gtest_discover_tests): every one that needs the session
-// simulates it (about 7 s for `tiny`) and calibrates it.
+// simulates it (about 7 s for `tiny`, 20 s for `small`) and calibrates it.
 class QualityCommand : public ::testing::Test {
  protected:
   fs::path Session() const { return root_ / "sim" / "session"; }
-  // Simulates the tiny session and runs `calibrate --strict` on it.
-  testing::CommandResult SimulateAndCalibrate() const {
-    const auto simulated = RunSvbtdf("-q simulate --preset tiny --out " + (root_ / "sim").string());
+  // Simulates the session and runs `calibrate --strict` on it. `tiny`'s 6 x 6 dots are 15 degrees
+  // apart, too sparse for its lobes (the process stage's lobe-undersampled warning); `small`'s 20 x 20
+  // sample them.
+  testing::CommandResult SimulateAndCalibrate(const std::string& preset = "tiny") const {
+    const auto simulated = RunSvbtdf("-q simulate --preset " + preset + " --out " + (root_ / "sim").string());
     EXPECT_EQ(simulated.exit_code, 0) << simulated.output;
     return RunSvbtdf("-q calibrate --strict " + Session().string());
   }
@@ -75,8 +77,8 @@ class QualityCommand : public ::testing::Test {
   const fs::path root_ = folder_.path();
 };
 
-TEST_F(QualityCommand, AGoodTinySessionDrawsNoWarningAndRunStrictExitsZero) {
-  const auto calibrated = SimulateAndCalibrate();
+TEST_F(QualityCommand, AGoodSmallSessionDrawsNoWarningAndRunStrictExitsZero) {
+  const auto calibrated = SimulateAndCalibrate("small");
   ASSERT_EQ(calibrated.exit_code, 0) << calibrated.output;
   EXPECT_EQ(calibrated.output.find("warning:"), std::string::npos) << calibrated.output;
   const auto run = RunSvbtdf("-q run --strict " + Session().string() + " --out " + (root_ / "good").string());
@@ -145,7 +147,7 @@ TEST_F(QualityCommand, AReportOfAMaterialWithoutQualityJsonChecksTheMaterialItse
 
 TEST_F(QualityCommand, FitStrictChecksTheStoreItIsGivenAndRecordsEveryStage) {
   // A store synthesised from a known material (no images): its calibration and maps are good.
-  ::svbtdf::testing::WriteAnalyticStore(root_ / "processed", ::svbtdf::testing::AnalyticMaterial{6, 6}, 16, 0.01);
+  ::svbtdf::testing::WriteAnalyticStore(root_ / "processed", ::svbtdf::testing::AnalyticMaterial{6, 6}, 24, 0.01);
   const auto fitted = RunSvbtdf("-q fit --strict --representatives 0.25 " + (root_ / "processed").string() + " --out " +
                                 (root_ / "material").string());
   ASSERT_EQ(fitted.exit_code, 0) << fitted.output;

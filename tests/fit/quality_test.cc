@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <string>
 
+#include "analytic_store.h"
 #include "quality_warnings.h"
 #include "small_material.h"
 #include "svbtdf/common/atomic_file.h"
@@ -68,6 +69,57 @@ TEST_F(StoreCheck, TheManifestsCountServesWhenThereIsNoReachMap) {
   EXPECT_TRUE(CheckSliceStore(dir_).empty());
 }
 
+// A slice seen from above, its dots on a square grid 2 degrees apart (21 x 21): rho = 0.8 where
+// `lit(column, row)`, 1 at the lobe's peak (the centre dot, when lit) and 0.01 elsewhere.
+template <typename Lit>
+TexelSlice GridSlice(Lit lit) {
+  TexelSlice slice;
+  const double step = std::tan(2.0 * model::kPi / 180.0);
+  for (int row = -10; row <= 10; ++row) {
+    for (int column = -10; column <= 10; ++column) {
+      slice.light.push_back(model::Vec3(column * step, row * step, -1.0).normalized());
+      slice.rho.push_back(lit(column, row) ? (row == 0 && column == 0 ? 1.0 : 0.8) : 0.01);
+    }
+  }
+  return slice;
+}
+
+TEST(DotsAcrossLobe, CountsTheRowsOfDotsAboveHalfMaximumAcrossTheLobesNarrowestDirection) {
+  // One column of lit dots, straight or diagonal: one dot across, however long.
+  EXPECT_NEAR(DotsAcrossLobe(GridSlice([](int c, int r) { return c == 0 && std::abs(r) <= 6; })), 1.0, 1e-6);
+  EXPECT_NEAR(DotsAcrossLobe(GridSlice([](int c, int r) { return c == r && std::abs(r) <= 6; })), 1.0, 1e-6);
+  EXPECT_NEAR(DotsAcrossLobe(GridSlice([](int, int r) { return r == 0; })), 1.0, 1e-6);
+  // Two and three columns (the grid's projection onto the tangent plane bends it by < 1%).
+  EXPECT_NEAR(DotsAcrossLobe(GridSlice([](int c, int r) { return (c == 0 || c == 1) && std::abs(r) <= 6; })), 2.0, 0.02);
+  EXPECT_NEAR(DotsAcrossLobe(GridSlice([](int c, int r) { return std::abs(c) <= 1 && std::abs(r) <= 6; })), 3.0, 0.03);
+  // A round lobe 7 dots across: its disk's variance, r^2 / 4 for r = 3.5 dots, gives about 6.
+  const double disk = DotsAcrossLobe(GridSlice([](int c, int r) { return c * c + r * r <= 12; }));
+  EXPECT_GT(disk, 5.5);
+  EXPECT_LT(disk, 7.0);
+  // A single bright dot; no positive sample at all.
+  EXPECT_EQ(DotsAcrossLobe(GridSlice([](int c, int r) { return c == 4 && r == -2; })), 1.0);
+  TexelSlice dark = GridSlice([](int, int) { return false; });
+  for (double& rho : dark.rho) rho = 0.0;
+  EXPECT_EQ(DotsAcrossLobe(dark), 0.0);
+}
+
+// Stores synthesised from a GGX material 0.16-0.28 rough (tests/support/analytic_store.h): its
+// lobes span one dot or less on most texels of a 12 x 12 grid (83%) and 2.5 or more on every
+// texel of a 24 x 24 one.
+TEST(StoreLobeCheck, LobesNarrowerThanTwoDotsAcrossAreAWarningAndDenserDotsClearIt) {
+  const svbtdf::testing::TempFolder folder;
+  const svbtdf::testing::AnalyticMaterial material{8, 8};
+  svbtdf::testing::WriteAnalyticStore(folder.path() / "sparse", material, 12, 0.01);
+  const auto sparse = CheckSliceStore(folder.path() / "sparse");
+  ASSERT_EQ(Checks(sparse), std::vector<std::string>{"lobe-undersampled"});
+  EXPECT_EQ(sparse[0].stage, "process");
+  EXPECT_EQ(sparse[0].file, (folder.path() / "sparse" / "samples.f16").string());
+  EXPECT_NE(sparse[0].figures.find("of 64 texels checked"), std::string::npos) << sparse[0].figures;
+  EXPECT_NE(sparse[0].likely_cause.find("denser dots"), std::string::npos);
+  svbtdf::testing::WriteAnalyticStore(folder.path() / "dense", material, 24, 0.01);
+  EXPECT_TRUE(CheckSliceStore(folder.path() / "dense").empty());
+}
+
 Material GoodMaterial() {
   Material m = SmallMaterial();
   for (float& r : m.residual.pixels) r = 0.04f;
@@ -118,6 +170,7 @@ TEST(QualityFile, RoundTripsAndRefusesOtherVersions) {
   nlohmann::json json = QualityToJson(warnings);
   EXPECT_EQ(json["format"], "svbtdf-quality");
   EXPECT_EQ(json["thresholds"]["k_s_max"], kMaxPlausibleKs);
+  EXPECT_EQ(json["thresholds"]["min_dots_across_lobe"], kMinDotsAcrossLobe);
   json["version"] = 99;
   EXPECT_THROW(QualityFromJson(json, "q.json"), common::Error);
 }

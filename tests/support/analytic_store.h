@@ -26,8 +26,11 @@ struct AnalyticMaterial {
   double U(int x) const { return width > 1 ? x / (width - 1.0) : 0.5; }
   double V(int y) const { return height > 1 ? y / (height - 1.0) : 0.5; }
   bool rough = false;  // rice-paper-like lobes: GGX 0.25-0.45 across, 1.1-1.6x that along
+  // When both are > 0, every texel's lobe instead: GGX `across` along x, `along` along y.
+  double across = 0.0, along = 0.0;
 
   model::GgxNdf Ndf(int x, int y) const {
+    if (across > 0 && along > 0) return model::GgxNdf(across, along);
     if (rough) {
       const double across = 0.25 + 0.20 * U(x);
       return model::GgxNdf(across, across * (1.1 + 0.5 * V(y)));
