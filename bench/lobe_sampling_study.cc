@@ -2,10 +2,10 @@
 // the lobe-undersampled quality check (docs/quality.md, "How many dots across a lobe"). Not a
 // speed benchmark: it prints accuracy, and the fit's time as the last figure.
 //
-// A store is synthesised (tests/support/analytic_store.h's rig: the camera 45 degrees above an
-// 8 cm sample, a square grid of DOTS x DOTS dots 4 cm behind it, 1% noise) from GGX lobes ACROSS
-// along x and 0.40 along y, eta 1.4, alpha from 0.4 to 0.6 across the sample; every texel is fitted
-// on its own (no clustering).
+// A store is synthesised by tests/support/analytic_store.h (its rig: the camera 45 degrees above
+// an 8 cm sample, a square grid of DOTS x DOTS dots 4 cm behind it; 1% noise; its alpha, 0.3 to
+// 0.7 across the sample) with GGX lobes ACROSS along x and 0.40 along y, eta 1.4; every texel is
+// fitted on its own (no clustering).
 //
 //   lobe_sampling_study ACROSS DOTS [TEXELS_PER_SIDE=6] [NDF_RESOLUTION=32]
 
@@ -14,7 +14,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <random>
 #include <unistd.h>
 
 #include "analytic_store.h"
@@ -25,40 +24,7 @@ namespace {
 
 using namespace svbtdf;
 
-constexpr double kEta = 1.4, kAlong = 0.40, kNoise = 0.01;
-
-double TruthAlpha(int x, int side) { return 0.4 + 0.2 * x / std::max(1, side - 1); }
-
-void WriteStore(const std::filesystem::path& folder, double across, int dots, int side) {
-  const calib::SessionCalibration calibration = testing::AnalyticCalibration(dots);
-  fit::SliceStoreInfo info;
-  info.texels_x = info.texels_y = side;
-  info.num_dots = static_cast<int>(calibration.monitor.dots.size());
-  info.eta = kEta;
-  const fit::TexelGeometry geometry = process::MakeTexelGeometry(calibration, side, side);
-  process::SliceStoreWriter writer(folder, info, calibration);
-  std::mt19937_64 rng(7);
-  std::normal_distribution<double> gauss(0.0, 1.0);
-  const model::GgxNdf ndf(across, kAlong);
-  std::vector<float> rgb(3 * geometry.num_texels());
-  for (int q = 0; q < info.num_dots; ++q) {
-    for (int64_t t = 0; t < geometry.num_texels(); ++t) {
-      model::DualMicrofacetParams p;
-      p.eta = kEta;
-      p.alpha = TruthAlpha(static_cast<int>(t % side), side);
-      p.shadowing = model::SmithShadowing::Ggx(0.2);
-      p.k_s = {0.92, 0.93, 0.95};
-      p.rho_d = {0.002, 0.002, 0.002};
-      const model::Rgb r = model::EvaluateMaterial(ndf, p, geometry.Light(t, q), geometry.View(t));
-      const double factor = 1.0 + kNoise * gauss(rng);
-      for (int c = 0; c < 3; ++c) rgb[3 * t + c] = static_cast<float>(r[c] * factor);
-    }
-    writer.WriteDot(q, rgb);
-  }
-  process::SliceStoreWriter::FinishOptions finish;
-  finish.progress = false;
-  writer.Finish(finish);
-}
+constexpr double kEta = 1.4;
 
 double Median(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
@@ -77,7 +43,11 @@ int main(int argc, char** argv) {
   const int side = argc > 3 ? std::atoi(argv[3]) : 6;
   const std::filesystem::path folder =
       std::filesystem::temp_directory_path() / ("svbtdf-lobe-sampling-" + std::to_string(::getpid()));
-  WriteStore(folder, across, dots, side);
+  testing::AnalyticMaterial truth{side, side};
+  truth.eta = kEta;
+  truth.across = across;
+  truth.along = 0.40;
+  testing::WriteAnalyticStore(folder, truth, dots, 0.01, kEta);
   const fit::SliceStore store = fit::SliceStore::Open(folder);
   std::vector<double> dots_across;
   for (int64_t t = 0; t < store.geometry().num_texels(); ++t) dots_across.push_back(fit::DotsAcrossLobe(store.MakeTexelSlice(t)));
@@ -94,7 +64,7 @@ int main(int argc, char** argv) {
   std::vector<double> alpha_error, residual;
   for (int y = 0; y < side; ++y) {
     for (int x = 0; x < side; ++x) {
-      alpha_error.push_back(std::abs(fitted.alpha.at(x, y) - TruthAlpha(x, side)));
+      alpha_error.push_back(std::abs(fitted.alpha.at(x, y) - truth.Params(x, y).alpha));
       residual.push_back(fitted.residual.at(x, y));
     }
   }
