@@ -110,7 +110,6 @@ double DotsAcrossLobe(const TexelSlice& slice) {
   return std::sqrt(1.0 + 12.0 * narrowest / (spacing * spacing));
 }
 
-
 std::vector<QualityWarning> CheckSliceStore(const fs::path& processed) {
   std::vector<QualityWarning> warnings;
   const fs::path mask_file = processed / "mask.exr";

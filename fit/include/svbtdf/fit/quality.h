@@ -74,7 +74,7 @@ inline constexpr double kMaxTexelsWithoutDotFraction = 0.05;
 // dots: its width across, and with it alpha (which the lobe's shape decides) and the NDF there,
 // are not determined by the samples. On stores synthesised with GGX lobes 0.40 long (eta 1.4, 1%
 // noise, docs/quality.md): 0.05 across at 1.1-1.6 degree spacing fitted alpha within 0.05 on 6%
-// of the texels, 0.10 across on 100%; twice the dots brought 0.05 to 92%.
+// of the texels, 0.10 across on 100%; twice the dots brought 0.05 to 100%.
 inline constexpr double kMinDotsAcrossLobe = 2.0;
 // ... and more than this fraction of the texels checked below it is a capture too sparse for
 // the material.
