@@ -43,6 +43,9 @@ void CheckOptions(const FitMaterialOptions& options, double eta) {
   }
   const int pool = options.standard_errors.model_error_pool_radius;
   if (pool < 0) common::ThrowInvalidInput("--model-error-pool", "must be >= 0 texels, got " + std::to_string(pool));
+  if (options.internal_reflection && options.model != MaterialModel::kDualMicrofacet) {
+    common::ThrowInvalidInput("--internal-reflection", "is a term of the dual-microfacet model; --model ggx has none");
+  }
 }
 
 // The texels the fit can use (mask = 1).
@@ -285,6 +288,7 @@ class RepresentativeFits {
     fit_options.free_horizon = options.free_horizon;
     fit_options.profile_uncertainty = options.uncertainty;
     fit_options.standard_errors = options.standard_errors;
+    fit_options.internal_reflection = options.internal_reflection;
     return fit_options;
   }
 
@@ -370,6 +374,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
                              {"representatives", reps}};
   // Only when set, so that journals written before the option existed still resume.
   if (options.free_horizon) identity["free_horizon"] = true;
+  if (options.internal_reflection) identity["internal_reflection"] = true;
   Checkpoint checkpoint(options.checkpoint, identity);
   RepresentativeFits fits(eta, options, reps.size());
   const size_t resumed = checkpoint.done().size();
@@ -387,6 +392,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
   fits.Lend(LenderOfFailed(reps, store.info().texels_x, failed));
 
   Material material = fits.Assemble(store, eta, options.ndf_resolution, clustering);
+  material.internal_reflection = options.internal_reflection;
   material.width_m = store.geometry().width_m;
   material.height_m = store.geometry().height_m;
   RefineStatistics refined;
@@ -416,6 +422,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
         {"refine_texels", options.refine_texels},
         {"free_horizon", options.free_horizon},
         {"uncertainty", options.uncertainty},
+        {"internal_reflection", options.internal_reflection},
         {"seed", options.seed}}},
       {"statistics",
        {{"texels", store.geometry().num_texels()},

@@ -64,6 +64,12 @@ const char* ModelFormula(MaterialModel model) {
              : "dual-microfacet: R = k_s exp(alpha ln rho_T + (1 - alpha) ln rho_B) + rho_d";
 }
 
+int MinimumVersion(const Material& m) {
+  if (m.internal_reflection) return 4;
+  if (m.has_uncertainty()) return 3;
+  return m.model == MaterialModel::kWalterGgx ? 2 : 1;
+}
+
 MaterialModel ParseModel(const std::string& name, const std::string& source) {
   if (name == "dual-microfacet") return MaterialModel::kDualMicrofacet;
   if (name == "walter-ggx") return MaterialModel::kWalterGgx;
@@ -247,6 +253,9 @@ void WriteMaterial(const fs::path& folder, const Material& m) {
   fs::create_directories(folder, error);
   if (error) common::ThrowIoError(folder.string(), "cannot create: " + error.message());
   const model::Hemicube grid(m.ndf_resolution);
+  if (m.internal_reflection && m.model != MaterialModel::kDualMicrofacet) {
+    common::ThrowInvalidInput("material", "the internal-reflection term belongs to the dual-microfacet model only");
+  }
   if (m.representative_ln_d.size() != m.representative_texels.size() || m.representative_texels.empty()) {
     common::ThrowInvalidInput("material", "needs one ln D table per representative, and at least one representative");
   }
@@ -268,8 +277,9 @@ void WriteMaterial(const fs::path& folder, const Material& m) {
   nlohmann::json manifest = {
       {"format", "svbtdf-material"},
       // Version 1 readers would evaluate a baseline as a dual-microfacet material: only it needs 2.
-      // The standard errors need 3 (a version 2 reader would not know to check their maps).
-      {"version", m.has_uncertainty() ? 3 : m.model == MaterialModel::kWalterGgx ? 2 : 1},
+      // The standard errors need 3 (a version 2 reader would not know to check their maps), and
+      // the internal-reflection term 4 (an older reader would evaluate the texels without it).
+      {"version", MinimumVersion(m)},
       {"conventions", "docs/model.md version 1: z toward the camera, i toward the light (i.z < 0)"},
       {"btdf", MaterialModelName(m.model)},
       {"model", ModelFormula(m.model)},
@@ -284,6 +294,10 @@ void WriteMaterial(const fs::path& folder, const Material& m) {
       {"provenance", m.provenance},
   };
   if (m.width_m > 0 && m.height_m > 0) manifest["sample"] = {{"width_m", m.width_m}, {"height_m", m.height_m}};
+  if (m.internal_reflection) {
+    manifest["internal_reflection"] = true;
+    manifest["model"] = std::string(ModelFormula(m.model)) + " + k_s IR(alpha) (docs/model.md, \"Light reflected inside the slab\")";
+  }
   common::WriteTextAtomically(folder / "material.json", manifest.dump(2) + "\n", false);
 }
 
@@ -312,6 +326,7 @@ Material ReadMaterial(const fs::path& folder) {
     m.representative_texels = common::IntegerArrayAt<int64_t>(manifest.at("representatives"), "texels", manifest_path.string());
     m.provenance = manifest.value("provenance", nlohmann::json::object());
     uncertainty = manifest.contains("maps") && manifest["maps"].is_object() && manifest["maps"].contains("alpha_se");
+    m.internal_reflection = manifest.value("internal_reflection", false);
   } catch (const nlohmann::json::exception& e) {
     common::ThrowFormatError(manifest_path.string(), std::string("misses a field or has a wrong type: ") + e.what());
   }
@@ -341,6 +356,10 @@ Material ReadMaterial(const fs::path& folder) {
     std::vector<double> row(grid.num_cells());
     for (int c = 0; c < grid.num_cells(); ++c) row[c] = tables.at(c, r);
     m.representative_ln_d.push_back(std::move(row));
+  }
+  if (m.internal_reflection && (version < 4 || m.model != MaterialModel::kDualMicrofacet)) {
+    common::ThrowFormatError(manifest_path.string(), version < 4 ? "asks for the internal-reflection term, which needs material format version 4"
+                                                                 : "asks for the internal-reflection term, which only the dual-microfacet model has");
   }
   if (uncertainty && version < 3) {
     common::ThrowFormatError(manifest_path.string(), "lists standard-error maps, which need material format version 3");
@@ -381,6 +400,7 @@ model::DualMicrofacetParams TexelParams(const Material& material, int x, int y) 
     params.k_s[c] = material.k_s.at(x, y, c);
     params.rho_d[c] = material.rho_d.at(x, y, c);
   }
+  params.internal_reflection = material.internal_reflection;
   return params;
 }
 

@@ -660,6 +660,17 @@ std::optional<std::pair<double, double>> RefineTexel(const RefineContext& contex
   return std::make_pair(before, best.relative_rmse);
 }
 
+// With the internal-reflection term (material version 4), the refinement fits the dual-microfacet
+// terms to what the term leaves of the samples, the term taken with the texel's parameters before
+// refining (one fixed-point step of the fit's, texel_fit.h step 5). The residual it records is
+// then of that remainder.
+TexelSlice WithoutInternalReflectionOf(const Material& material, const MaterialEvaluator& evaluator, int64_t t,
+                                       const TexelSlice& slice) {
+  const TexelBtdf texel = evaluator.Texel(static_cast<int>(t % material.width), static_cast<int>(t / material.width));
+  const model::DualMicrofacetParams& p = texel.params();
+  return WithoutInternalReflection(slice, texel.ndf(), p.eta, p.alpha, model::Luminance(p.k_s), p.k_s);
+}
+
 // Refines `texels` in parallel (each writes only its own pixels of the maps) and returns the
 // before/after pairs of those refined.
 std::vector<std::pair<double, double>> RefineAll(const RefineContext& context, const std::vector<int64_t>& texels,
@@ -692,7 +703,8 @@ std::vector<std::pair<double, double>> RefineAll(const RefineContext& context, c
       for (int64_t k = a; k < b; ++k) {
         common::ThrowIfInterrupted("refining");
         const size_t index = order[begin + k];
-        const TexelSlice slice = context.store.MakeTexelSlice(texels[index], tile_samples, context.use_dot);
+        TexelSlice slice = context.store.MakeTexelSlice(texels[index], tile_samples, context.use_dot);
+        if (material->internal_reflection) slice = WithoutInternalReflectionOf(*material, evaluator, texels[index], slice);
         results[index] = RefineTexel(context, evaluator, grid, refit_weights, texels[index], slice, moments,
                                      representatives_pass, &neighbour_cache, material);
         if (progress) progress->Advance();

@@ -13,6 +13,7 @@
 #include "svbtdf/common/minimize.h"
 #include "svbtdf/fit/ndf_error.h"
 #include "svbtdf/model/dual_microfacet.h"
+#include "svbtdf/model/internal_reflection.h"
 #include "svbtdf/model/tabulated_ndf.h"
 #include "small_problem.h"
 #include "uncertainty.h"
@@ -352,7 +353,71 @@ struct ShadowingResidual {
 
 }  // namespace
 
+namespace {
+
+// The relative RMSE and log RMS of `fitted` over the slice's samples, and the per-channel scales
+// k_s_rgb of its shape (the model with k_s = 1, `fitted` / result->k_s).
+void MeasureResiduals(const TexelSlice& slice, const std::vector<Sample>& samples, const FittedTexel& fitted,
+                      TexelFitResult* result) {
+  const model::Vec3& view = slice.view;
+  double squared_error = 0, squared_rho = 0, squared_log = 0, model_squared = 0;
+  std::array<double, 3> model_dot_rgb = {0, 0, 0};
+  result->samples_used = 0;
+  for (size_t k = 0; k < samples.size(); ++k) {
+    const Sample& s = samples[k];
+    if (s.weight <= 0) continue;
+    const double predicted = fitted.Rho(s.light, view);
+    squared_error += model::Square(predicted - s.rho);
+    squared_rho += model::Square(s.rho);
+    if (s.used && predicted > 0) {
+      squared_log += model::Square(std::log(predicted) - std::log(s.rho));
+      ++result->samples_used;
+    }
+    if (!slice.rho_rgb.empty()) {
+      const double shape = predicted / result->k_s;
+      model_squared += shape * shape;
+      for (int c = 0; c < 3; ++c) model_dot_rgb[c] += shape * slice.rho_rgb[k][c];
+    }
+  }
+  result->relative_rmse = squared_rho > 0 ? std::sqrt(squared_error / squared_rho) : 0.0;
+  result->log_rms = result->samples_used > 0 ? std::sqrt(squared_log / result->samples_used) : 0.0;
+  for (int c = 0; c < 3; ++c) {
+    result->k_s_rgb[c] = slice.rho_rgb.empty() || model_squared <= 0 ? result->k_s : model_dot_rgb[c] / model_squared;
+  }
+}
+
+}  // namespace
+
 TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace) const {
+  TexelFitResult result = FitDualTerms(slice, workspace);
+  if (!options_.internal_reflection) return result;
+  // The term is small beside the direct paths (a few percent of rho), so a fit that ignores it
+  // is a close start, and each refit moves D, alpha and k_s a little less.
+  for (int pass = 0; pass < options_.internal_reflection_passes; ++pass) {
+    const model::TabulatedNdf ndf(grid_, result.ln_d);
+    result = FitDualTerms(WithoutInternalReflection(slice, ndf, eta_, result.alpha, result.k_s, result.k_s_rgb), workspace);
+  }
+  // Residuals and channel scales against what was measured, the term included.
+  MeasureResiduals(slice, PrepareSamples(slice, options_.dark_fraction), Model(result), &result);
+  return result;
+}
+
+TexelSlice WithoutInternalReflection(const TexelSlice& slice, const model::Ndf& ndf, double eta, double alpha,
+                                     double k_s, const std::array<double, 3>& k_s_rgb) {
+  const model::InternalReflection paths(eta);
+  TexelSlice remaining = slice;
+  for (size_t k = 0; k < slice.light.size(); ++k) {
+    const double term = paths.Blend(ndf, alpha, slice.light[k], slice.view);
+    remaining.rho[k] -= k_s * term;
+    for (int c = 0; c < 3; ++c) {
+      if (k < remaining.rho_rgb.size()) remaining.rho_rgb[k][c] -= k_s_rgb[c] * term;
+      if (k < remaining.measured_rgb.size()) remaining.measured_rgb[k][c] -= k_s_rgb[c] * term;
+    }
+  }
+  return remaining;
+}
+
+TexelFitResult TexelFitter::FitDualTerms(const TexelSlice& slice, FitWorkspace* workspace) const {
   FitWorkspace local_workspace;
   FitWorkspace::State* state = (workspace ? workspace : &local_workspace)->state_.get();
   const std::vector<Sample> samples = PrepareSamples(slice, options_.dark_fraction);
@@ -577,41 +642,24 @@ TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace
   result.shadowing_roughness = shadowing_roughness;
 
   // Residuals and per-channel scales of the final model.
-  const FittedTexel fitted(grid_, eta_, result);
-  double squared_error = 0, squared_rho = 0, squared_log = 0, model_squared = 0;
-  std::array<double, 3> model_dot_rgb = {0, 0, 0};
-  for (size_t k = 0; k < samples.size(); ++k) {
-    const Sample& s = samples[k];
-    if (s.weight <= 0) continue;
-    const double predicted = fitted.Rho(s.light, view);
-    squared_error += model::Square(predicted - s.rho);
-    squared_rho += model::Square(s.rho);
-    if (s.used && predicted > 0) {
-      squared_log += model::Square(std::log(predicted) - std::log(s.rho));
-      ++result.samples_used;
-    }
-    if (!slice.rho_rgb.empty()) {
-      const double shape = predicted / result.k_s;
-      model_squared += shape * shape;
-      for (int c = 0; c < 3; ++c) model_dot_rgb[c] += shape * slice.rho_rgb[k][c];
-    }
-  }
-  result.relative_rmse = squared_rho > 0 ? std::sqrt(squared_error / squared_rho) : 0.0;
-  result.log_rms = result.samples_used > 0 ? std::sqrt(squared_log / result.samples_used) : 0.0;
-  for (int c = 0; c < 3; ++c) {
-    result.k_s_rgb[c] = slice.rho_rgb.empty() || model_squared <= 0 ? result.k_s : model_dot_rgb[c] / model_squared;
-  }
+  MeasureResiduals(slice, samples, FittedTexel(grid_, eta_, result), &result);
   return result;
 }
 
-FittedTexel TexelFitter::Model(const TexelFitResult& fit) const { return FittedTexel(grid_, eta_, fit); }
+FittedTexel TexelFitter::Model(const TexelFitResult& fit) const {
+  return FittedTexel(grid_, eta_, fit, options_.internal_reflection);
+}
 
-FittedTexel::FittedTexel(const model::Hemicube& grid, double eta, const TexelFitResult& fit)
-    : ndf_(std::make_shared<model::TabulatedNdf>(grid, fit.ln_d)),
-      model_(eta, ShadowingFor(fit.shadowing_roughness)),
-      alpha_(fit.alpha),
-      k_s_(fit.k_s) {}
+FittedTexel::FittedTexel(const model::Hemicube& grid, double eta, const TexelFitResult& fit, bool internal_reflection)
+    : ndf_(std::make_shared<model::TabulatedNdf>(grid, fit.ln_d)), k_s_(fit.k_s) {
+  params_.eta = eta;
+  params_.alpha = fit.alpha;
+  params_.shadowing = ShadowingFor(fit.shadowing_roughness);
+  params_.internal_reflection = internal_reflection;
+}
 
-double FittedTexel::Rho(const model::Vec3& i, const model::Vec3& o) const { return k_s_ * model_.Rho(*ndf_, alpha_, i, o); }
+double FittedTexel::Rho(const model::Vec3& i, const model::Vec3& o) const {
+  return k_s_ * model::SpecularRho(*ndf_, params_, i, o);
+}
 
 }  // namespace svbtdf::fit

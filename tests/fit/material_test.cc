@@ -12,6 +12,7 @@
 #include "svbtdf/fit/material.h"
 #include "svbtdf/model/beckmann.h"
 #include "svbtdf/model/ggx.h"
+#include "svbtdf/model/internal_reflection.h"
 #include "synthetic_slices.h"
 #include "temp_folder.h"
 
@@ -222,6 +223,47 @@ TEST_F(MaterialTest, StandardErrorsRoundTripAsVersion3) {
     FAIL() << "a missing standard-error map was not noticed";
   } catch (const common::Error& e) {
     EXPECT_NE(std::string(e.what()).find("rho_d_se.exr"), std::string::npos) << e.what();
+  }
+}
+
+// Version 4: a material with the internal-reflection term says so in its manifest, every
+// evaluator adds the term (TexelParams), and an older version or another model with it is refused.
+TEST_F(MaterialTest, InternalReflectionRoundTripsAsVersion4AndIsEvaluated) {
+  const model::Vec3 view = model::SphericalDirection(model::kPi / 4, 0.0);
+  const SyntheticMaterial synthetic = MakeMaterial(view, DotGrid(view, 16, 0.0));
+  Material material = FitMaterial(synthetic, 0.125);
+  material.internal_reflection = true;
+  WriteMaterial(dir_ / "v4", material);
+  const fs::path manifest = dir_ / "v4" / "material.json";
+  EXPECT_EQ(common::ReadJsonFile(manifest)["version"], 4);
+  const Material read = ReadMaterial(dir_ / "v4");
+  ASSERT_TRUE(read.internal_reflection);
+
+  const MaterialEvaluator evaluator(read);
+  const TexelBtdf texel = evaluator.Texel(2, 3);
+  ASSERT_TRUE(texel.params().internal_reflection);
+  model::DualMicrofacetParams direct_only = texel.params();
+  direct_only.internal_reflection = false;
+  const model::InternalReflection paths(read.eta);
+  const model::Vec3 light = model::FlipZ(model::SphericalDirection(0.9, 2.5));  // far from the lobe
+  const double term = paths.Blend(texel.ndf(), texel.params().alpha, light, view);
+  ASSERT_GT(term, 0.0);
+  const model::Rgb with = texel.Evaluate(light, view);
+  const model::Rgb without = model::EvaluateMaterial(texel.ndf(), direct_only, light, view);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(with[c] - without[c], texel.params().k_s[c] * term, 1e-12 + 1e-9 * with[c]);
+
+  nlohmann::json json = common::ReadJsonFile(manifest);
+  for (const auto& [version, btdf] : {std::pair{3, "dual-microfacet"}, {4, "walter-ggx"}}) {
+    json["version"] = version;
+    json["btdf"] = btdf;
+    common::WriteTextAtomically(manifest, json.dump(), /*overwrite=*/true);
+    try {
+      ReadMaterial(dir_ / "v4");
+      FAIL() << "the internal-reflection term was read under version " << version << " with " << btdf;
+    } catch (const common::Error& e) {
+      EXPECT_NE(std::string(e.what()).find("internal-reflection"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("material.json"), std::string::npos) << e.what();
+    }
   }
 }
 

@@ -135,5 +135,29 @@ TEST(TexelFit, IterativeSolvesAgreeWithFactorisingEverySystem) {
   EXPECT_LT(iterative_workspace.factorizations(), direct_workspace.factorizations());
 }
 
+// A slab whose light is partly reflected inside it (the T R R T paths of a rough lobe): the fit
+// with the term recovers the truth as closely as the plain fit recovers a truth without it (held
+// out: 0.58% against 0.53%, 2026-12-05), the dual-microfacet terms alone cannot (1.19%).
+TEST(TexelFit, InternalReflectionTermIsFittedWhereTheSlabHasIt) {
+  TexelFitOptions with_options;
+  with_options.internal_reflection = true;
+  const TexelFitter without(1.5), with(1.5, with_options);
+  Truth truth = MakeTruth(without.ndf_grid(), model::GgxNdf(0.35), 0.8);
+  truth.internal_reflection = true;
+  const model::Vec3 view = model::SphericalDirection(model::kPi / 4, 0.0);
+  const TexelSlice slice = Synthesize(truth, view, DotGrid(view, 24, 0.0), 0.01, 5);
+  const TexelFitResult a = without.Fit(slice), b = with.Fit(slice);
+  const double error_without = HeldOutRelativeRmse(without.Model(a), truth, view);
+  const double error_with = HeldOutRelativeRmse(with.Model(b), truth, view);
+  std::printf("held-out without %.4f with %.4f; alpha %.3f / %.3f (truth %.2f); k_s %.3f / %.3f (truth %.2f)\n",
+              error_without, error_with, a.alpha, b.alpha, truth.alpha, a.k_s, b.k_s, truth.k_s);
+  EXPECT_LT(error_with, 0.6 * error_without);
+  EXPECT_LT(error_with, 0.01);
+  EXPECT_NEAR(b.alpha, truth.alpha, 0.05);
+  EXPECT_NEAR(b.k_s, truth.k_s, 0.05 * truth.k_s);
+  // The fit's own residual is measured against the samples with the term included.
+  EXPECT_LT(b.relative_rmse, a.relative_rmse);
+}
+
 }  // namespace
 }  // namespace svbtdf::fit

@@ -45,10 +45,15 @@ struct Truth {
   double alpha = 0.3;
   double shadowing_roughness = 0.2;
   double k_s = 0.8;
+  bool internal_reflection = false;  // the slab's T R R T paths in rho too (model/internal_reflection.h)
 
   double Rho(const model::Vec3& i, const model::Vec3& o) const {
-    const model::DualMicrofacetModel model(eta, model::SmithShadowing::Ggx(shadowing_roughness));
-    return k_s * model.Rho(*ndf, alpha, i, o);
+    model::DualMicrofacetParams params;
+    params.eta = eta;
+    params.alpha = alpha;
+    params.shadowing = model::SmithShadowing::Ggx(shadowing_roughness);
+    params.internal_reflection = internal_reflection;
+    return k_s * model::SpecularRho(*ndf, params, i, o);
   }
 };
 

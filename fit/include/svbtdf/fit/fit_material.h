@@ -39,6 +39,9 @@ struct FitMaterialOptions {
   // version 3. false writes a material without them (version 1), as before.
   bool uncertainty = true;
   StandardErrorOptions standard_errors;  // how they are estimated
+  // Dual-microfacet: fit and write the light reflected inside the slab as part of every texel's
+  // rho (TexelFitOptions::internal_reflection; material format version 4).
+  bool internal_reflection = false;
 };
 
 // A representative whose fit fails (kNumerical) takes the fit of the nearest one that succeeded

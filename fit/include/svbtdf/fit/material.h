@@ -23,10 +23,11 @@
 namespace svbtdf::fit {
 
 // Version 2 adds the single-interface baseline (manifest "btdf": "walter-ggx"). Version 3 adds
-// the per-texel standard errors (the *_se maps). A material is written with the lowest version
-// that describes it: 3 with standard errors, else 2 for the baseline, else 1, so that older
-// readers keep reading what they can.
-inline constexpr int kMaterialFormatVersion = 3;
+// the per-texel standard errors (the *_se maps). Version 4 adds the light reflected inside the
+// slab (manifest "internal_reflection": true). A material is written with the lowest version that
+// describes it: 4 with that term, else 3 with standard errors, else 2 for the baseline, else 1,
+// so that older readers keep reading what they can.
+inline constexpr int kMaterialFormatVersion = 4;
 
 // Which BTDF the material's texels hold.
 enum class MaterialModel {
@@ -70,6 +71,10 @@ struct Material {
   // own samples, from the standard errors of its fitted parameters.
   common::FloatImage prediction_se;
   bool has_uncertainty() const { return alpha_se.width > 0; }
+  // Version 4, dual-microfacet: every texel's rho includes the light reflected once by each
+  // interface inside the slab (DualMicrofacetParams::internal_reflection; `svbtdf fit
+  // --internal-reflection`).
+  bool internal_reflection = false;
   nlohmann::json provenance = nlohmann::json::object();  // session, settings, statistics, holdout
 };
 
@@ -94,7 +99,8 @@ void WriteMaterial(const std::filesystem::path& folder, const Material& material
 Material ReadMaterial(const std::filesystem::path& folder);
 
 // Texel (x, y)'s dual-microfacet parameters as every evaluator of a material takes them: the
-// material's eta, alpha clamped to [0, 1], the Smith roughness (0: no shadowing), k_s and rho_d.
+// material's eta, alpha clamped to [0, 1], the Smith roughness (0: no shadowing), k_s, rho_d and
+// whether rho includes the light reflected inside the slab.
 model::DualMicrofacetParams TexelParams(const Material& material, int x, int y);
 
 // Each representative's scale s_j (its own texel's k_s, channel mean), by which a texel's blend

@@ -14,6 +14,10 @@
 //      without symmetry rows and normalise it (projected integral 1; the scale goes into k_s).
 //   4. Refine the Smith shadowing roughness (and the scale) with Ceres' Levenberg-Marquardt on the
 //      log residuals (paper eq. 15) with D and alpha fixed.
+//   5. Optionally (`internal_reflection`), the light reflected once by each interface inside the
+//      slab (model/internal_reflection.h) is part of the model: it is quadratic in D, so it is
+//      taken out of the samples with the last fit's D, alpha and k_s and steps 1-4 run again
+//      (a fixed-point iteration; docs/fitting.md, "Light reflected inside the slab").
 
 #include <array>
 #include <cstdint>
@@ -74,6 +78,10 @@ struct TexelFitOptions {
   // width, and alpha's profile (two more sparse solves).
   bool profile_uncertainty = true;
   StandardErrorOptions standard_errors;  // the shadowing fit's: its correlation_radius
+  // Step 5: rho = rho_dual + IR (DualMicrofacetParams::internal_reflection), with this many
+  // refits after the first (each evaluates the term at every sample: about 0.4 ms a sample).
+  bool internal_reflection = false;
+  int internal_reflection_passes = 2;
 };
 
 struct TexelFitResult {
@@ -115,17 +123,17 @@ class FitWorkspace {
   std::unique_ptr<State> state_;
 };
 
-// A fitted texel as an evaluable BTDF: luminance rho(i, o) = k_s rho_dual(i, o; D, alpha, G).
+// A fitted texel as an evaluable BTDF: luminance rho(i, o) = k_s rho_dual(i, o; D, alpha, G), plus
+// k_s IR(i, o; D, alpha) with `internal_reflection`.
 class FittedTexel {
  public:
-  FittedTexel(const model::Hemicube& grid, double eta, const TexelFitResult& fit);
+  FittedTexel(const model::Hemicube& grid, double eta, const TexelFitResult& fit, bool internal_reflection = false);
   double Rho(const model::Vec3& i, const model::Vec3& o) const;
   const model::TabulatedNdf& ndf() const { return *ndf_; }
 
  private:
   std::shared_ptr<const model::TabulatedNdf> ndf_;
-  model::DualMicrofacetModel model_;
-  double alpha_;
+  model::DualMicrofacetParams params_;  // eta, alpha, shadowing and the term; k_s = 1
   double k_s_;
 };
 
@@ -148,10 +156,20 @@ class TexelFitter {
  private:
   struct GridSystem;  // the rows that do not depend on the data, built once per fitter
 
+  // Steps 1-4: the dual-microfacet terms alone.
+  TexelFitResult FitDualTerms(const TexelSlice& slice, FitWorkspace* workspace) const;
+
   double eta_;
   TexelFitOptions options_;
   model::Hemicube grid_;
   std::shared_ptr<const GridSystem> system_;
 };
+
+// `slice` with the light reflected inside the slab taken out of its values: the term of `ndf`
+// blended with `alpha` (model::InternalReflection), times k_s per channel (`k_s` for the
+// luminance). What is left is what the dual-microfacet terms alone have to fit; a value the term
+// exceeds becomes negative and too dark to fit (TexelFitOptions::dark_fraction).
+TexelSlice WithoutInternalReflection(const TexelSlice& slice, const model::Ndf& ndf, double eta, double alpha,
+                                     double k_s, const std::array<double, 3>& k_s_rgb);
 
 }  // namespace svbtdf::fit
