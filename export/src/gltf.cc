@@ -219,6 +219,9 @@ GltfFiles WriteGltf(const fit::Material& material, const MaterialLobes& lobes, c
   report["clamped_texels"] = maps.clamped_texels;
   report["not_carried"] = {"the blend weight alpha between the two configurations", "the shadowing roughness",
                            "the tabulated lobe's shape beyond an ellipse (lobe_fit.relative_error)"};
+  if (material.internal_reflection) {
+    report["not_carried"].push_back("the light reflected inside the slab (material format version 4)");
+  }
   files.summary = out_dir / (name + ".export.json");
   common::WriteTextAtomically(files.summary, report.dump(2) + "\n");
   files.written.push_back(files.summary);

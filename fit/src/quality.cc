@@ -90,19 +90,20 @@ double DotsAcrossLobe(const TexelSlice& slice) {
   const model::Vec3 centre = slice.light[peak].normalized();
   const model::Vec3 any = std::abs(centre.x()) < 0.9 ? model::Vec3::UnitX() : model::Vec3::UnitY();
   const model::Vec3 e1 = centre.cross(any).normalized(), e2 = centre.cross(e1);
-  double spacing = HUGE_VAL;
+  double nearest_cosine = -HUGE_VAL;  // of the nearest other dot: one acos after the loop, not one per dot
   Eigen::Vector2d mean = Eigen::Vector2d::Zero();
   Eigen::Matrix2d second = Eigen::Matrix2d::Zero();
   int bright = 0;
   for (size_t k = 0; k < n; ++k) {
     const model::Vec3 d = slice.light[k].normalized();
-    if (k != peak) spacing = std::min(spacing, std::acos(std::clamp(d.dot(centre), -1.0, 1.0)));
+    if (k != peak) nearest_cosine = std::max(nearest_cosine, d.dot(centre));
     if (!(slice.rho[k] >= 0.5 * slice.rho[peak])) continue;
     const Eigen::Vector2d x(d.dot(e1), d.dot(e2));
     mean += x;
     second += x * x.transpose();
     ++bright;
   }
+  const double spacing = nearest_cosine > -HUGE_VAL ? std::acos(std::clamp(nearest_cosine, -1.0, 1.0)) : HUGE_VAL;
   if (bright < 2 || !(spacing > 0) || !std::isfinite(spacing)) return 1.0;
   mean /= bright;
   const Eigen::Matrix2d covariance = second / bright - mean * mean.transpose();

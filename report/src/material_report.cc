@@ -500,7 +500,9 @@ std::vector<fit::QualityWarning> WriteMaterialReport(const MaterialReportOptions
   page.Paragraph("Material <code>" + options.material_folder + "</code>: " + std::to_string(material.width) + " x " +
                  std::to_string(material.height) + " texels, eta " + FormatNumber(material.eta) + ", " +
                  std::to_string(material.representative_texels.size()) + " representatives, NDF hemicube " +
-                 std::to_string(material.ndf_resolution) + ".");
+                 std::to_string(material.ndf_resolution) +
+                 (material.internal_reflection ? ", with the light reflected inside the slab (T R R T) in every texel's rho" : "") +
+                 ".");
 
   // Section 1: the live views and the renders.
   const nlohmann::json renders = options.renders_folder.empty() ? nlohmann::json::array()

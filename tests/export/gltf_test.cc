@@ -93,6 +93,20 @@ TEST(WriteGltf, WritesAQuadOfTheSamplesSizeAndEveryTextureItNames) {
   EXPECT_TRUE(fs::is_regular_file(folder / "out" / "sheet_lobe_error.exr"));
 }
 
+// The summary names what glTF cannot hold; the internal-reflection term only when the material has it.
+TEST(WriteGltf, TheSummaryNamesTheInternalReflectionTermItDrops) {
+  const testing::TempFolder folder;
+  fit::Material material = RegionsMaterial(2, 1, 4, {0.1, 0.4});
+  const auto dropped = [&](const char* name) {
+    const GltfFiles files = WriteGltf(material, FitMaterialLobes(material, 1), folder / name, name);
+    const std::string not_carried = common::ReadJsonFile(files.summary)["not_carried"].dump();
+    return not_carried.find("inside the slab") != std::string::npos;
+  };
+  EXPECT_FALSE(dropped("plain"));
+  material.internal_reflection = true;
+  EXPECT_TRUE(dropped("with_term"));
+}
+
 TEST(WriteGltf, RefusesAMaterialWithoutASize) {
   const testing::TempFolder folder;
   const fit::Material material = SmallMaterial();

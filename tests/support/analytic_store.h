@@ -28,6 +28,7 @@ struct AnalyticMaterial {
   bool rough = false;  // rice-paper-like lobes: GGX 0.25-0.45 across, 1.1-1.6x that along
   // When both are > 0, every texel's lobe instead: GGX `across` along x, `along` along y.
   double across = 0.0, along = 0.0;
+  bool internal_reflection = false;  // the slab's T R R T paths in R too (DualMicrofacetParams)
 
   model::GgxNdf Ndf(int x, int y) const {
     if (across > 0 && along > 0) return model::GgxNdf(across, along);
@@ -45,6 +46,7 @@ struct AnalyticMaterial {
     const double scale = 0.8 + 0.1 * V(y);
     p.k_s = {scale, 0.95 * scale, 0.9 * scale};
     p.rho_d = {0.0, 0.0, 0.0};
+    p.internal_reflection = internal_reflection;
     return p;
   }
   model::Rgb R(int x, int y, const model::Vec3& i, const model::Vec3& o) const { return model::EvaluateMaterial(Ndf(x, y), Params(x, y), i, o); }
