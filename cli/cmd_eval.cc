@@ -11,6 +11,7 @@
 #include "commands.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/fit/material.h"
+#include "svbtdf/model/internal_reflection.h"
 
 namespace svbtdf::cli {
 namespace {
@@ -44,11 +45,18 @@ nlohmann::json ModelTerms(const fit::TexelBtdf& texel, const model::Vec3& wi, co
   }
   const model::DualMicrofacetModel btdf(p.eta, p.shadowing);
   const double rho_T = btdf.RhoT(texel.ndf(), wi, wo), rho_B = btdf.RhoB(texel.ndf(), wi, wo);
-  return {{"rho_T", rho_T},
-          {"rho_B", rho_B},
-          {"rho", model::LogBlend(rho_T, rho_B, p.alpha)},
-          {"alpha", p.alpha},
-          {"shadowing_roughness", p.shadowing.roughness()}};
+  nlohmann::json terms = {{"rho_T", rho_T},
+                          {"rho_B", rho_B},
+                          {"rho", model::LogBlend(rho_T, rho_B, p.alpha)},
+                          {"alpha", p.alpha},
+                          {"shadowing_roughness", p.shadowing.roughness()}};
+  // Material format 4: rho = the blend + the light reflected inside the slab (R = k_s rho + rho_d).
+  if (p.internal_reflection) {
+    const double internal = model::InternalReflection(p.eta).Blend(texel.ndf(), p.alpha, wi, wo);
+    terms["internal_reflection"] = internal;
+    terms["rho"] = terms["rho"].get<double>() + internal;
+  }
+  return terms;
 }
 
 void PrintSummary(const model::Rgb& value, const nlohmann::json& terms) {
@@ -57,8 +65,10 @@ void PrintSummary(const model::Rgb& value, const nlohmann::json& terms) {
     std::printf("(walter-ggx: alpha_x %.4f, alpha_y %.4f, azimuth %.3f)\n", terms["baseline_alpha_x"].get<double>(),
                 terms["baseline_alpha_y"].get<double>(), terms["baseline_azimuth"].get<double>());
   } else {
-    std::printf("(rho_T %.6g, rho_B %.6g, alpha %.3f)\n", terms["rho_T"].get<double>(), terms["rho_B"].get<double>(),
+    std::printf("(rho_T %.6g, rho_B %.6g, alpha %.3f", terms["rho_T"].get<double>(), terms["rho_B"].get<double>(),
                 terms["alpha"].get<double>());
+    if (terms.contains("internal_reflection")) std::printf(", internal reflection %.6g", terms["internal_reflection"].get<double>());
+    std::printf(")\n");
   }
 }
 

@@ -53,8 +53,8 @@ void AddFitOptions(CLI::App* command, fit::FitMaterialOptions* options, std::str
                     "prior (which fits rough lobes, GGX roughness above about 0.3, far better)");
   command->add_flag("--internal-reflection", options->internal_reflection,
                     "add the light reflected once by each interface inside the slab to the model, fitted and "
-                    "written with the material (format version 4; about 0.4 ms more per sample and pass, "
-                    "docs/fitting.md)");
+                    "written with the material (format version 4; needs --fixed-horizon; about 0.4 ms more per "
+                    "sample and pass, docs/fitting.md)");
   command->add_option("--ndf-resolution", options->ndf_resolution, "NDF hemicube resolution (top face)")
       ->capture_default_str();
   command->add_option("--seed", options->seed, "seed of the clustering and the held-out dots")->capture_default_str();

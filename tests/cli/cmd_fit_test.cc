@@ -43,7 +43,9 @@ TEST_F(FitCommand, BadArgumentsExitWithTwoNamingTheArgument) {
                {"--representatives some", "--representatives"},
                {"--eta 0.9", "--eta"},
                {"--model-error-pool -1", "--model-error-pool"},
-               {"--model-error-pool wide", "--model-error-pool"}};
+               {"--model-error-pool wide", "--model-error-pool"},
+               {"--internal-reflection", "--fixed-horizon"},
+               {"--internal-reflection --fixed-horizon --model ggx", "--internal-reflection"}};
   for (const auto& c : cases) {
     const auto result = RunSvbtdf(Fit("bad", c.options));
     EXPECT_EQ(result.exit_code, 2) << c.options << ": " << result.output;
@@ -75,6 +77,28 @@ TEST_F(FitCommand, GgxBaselineIsFittedWrittenAndEvaluated) {
                                                                  model::Vec3(0, -0.7, 0.7).normalized());
   EXPECT_NEAR(value["rgb"][0].get<double>(), expected[0], 1e-6 * std::abs(expected[0]) + 1e-12);
   EXPECT_GE(value["rgb"][0].get<double>(), material.rho_d.at(2, 3, 0));
+}
+
+// --internal-reflection: a material of format version 4 whose `svbtdf eval` shows the term and
+// adds it to R (R = k_s (blend + term) + rho_d), through the library's one path.
+TEST_F(FitCommand, TheInternalReflectionTermIsWrittenAndEvaluated) {
+  const auto fitted = RunSvbtdf(Fit("internal", "--internal-reflection --fixed-horizon --representatives 0.25"));
+  ASSERT_EQ(fitted.exit_code, 0) << fitted.output;
+  const nlohmann::json manifest = nlohmann::json::parse(common::ReadTextFile(root_ / "internal" / "material.json"));
+  EXPECT_EQ(manifest["version"], 4);
+  EXPECT_TRUE(manifest["internal_reflection"].get<bool>());
+  const auto eval = RunSvbtdf("eval " + (root_ / "internal").string() + " --texel 2 3 --wi 0.4 0.3 -1 --wo 0 -0.7 0.7 --json");
+  ASSERT_EQ(eval.exit_code, 0) << eval.output;
+  const nlohmann::json value = nlohmann::json::parse(eval.output);
+  const double internal = value["internal_reflection"].get<double>();
+  EXPECT_GT(internal, 0.0);
+  for (int c = 0; c < 3; ++c) {
+    const double expected = value["k_s"][c].get<double>() * value["rho"].get<double>() + value["rho_d"][c].get<double>();
+    EXPECT_NEAR(value["rgb"][c].get<double>(), expected, 1e-6 * expected);
+  }
+  const double blend = std::exp(value["alpha"].get<double>() * std::log(value["rho_T"].get<double>()) +
+                                (1 - value["alpha"].get<double>()) * std::log(value["rho_B"].get<double>()));
+  EXPECT_NEAR(value["rho"].get<double>(), blend + internal, 1e-9 * (blend + internal));
 }
 
 TEST_F(FitCommand, AnExistingMaterialIsNeverOverwritten) {
