@@ -351,10 +351,6 @@ struct ShadowingResidual {
   }
 };
 
-}  // namespace
-
-namespace {
-
 // The relative RMSE and log RMS of `fitted` over the slice's samples, and the per-channel scales
 // k_s_rgb of its shape (the model with k_s = 1, `fitted` / result->k_s).
 void MeasureResiduals(const TexelSlice& slice, const std::vector<Sample>& samples, const FittedTexel& fitted,
