@@ -74,6 +74,28 @@ constexpr std::array<double, kRadonPoints> kRadonWeights = {0.25,  0.125, 0.125,
 // Stratified sub-sample offsets in a pixel, in (-0.5, 0.5).
 double SubSample(int k, int n) { return (k + 0.5) / n - 0.5; }
 
+// The undistorted normalised coordinates of the pixel corners (x - 0.5, y), x = 0 .. size - 1,
+// each Newton solve started from its left neighbour's answer.
+void CornerRow(const PinholeCamera& camera, double y, std::vector<std::optional<model::Vec2>>* row) {
+  const model::Vec2* start = nullptr;
+  for (size_t x = 0; x < row->size(); ++x) {
+    (*row)[x] = camera.ImagePoint(model::Vec2(x - 0.5, y), start);
+    start = (*row)[x] ? &*(*row)[x] : nullptr;
+  }
+}
+
+// Sub-sample (sx, sy) of n x n in the pixel whose corners' normalised coordinates are given
+// (top left, top right, bottom left, bottom right). Across one pixel the lens and the
+// perspective are linear to far below a thousandth of a pixel, so the corners' points
+// interpolate every sub-sample's: one Newton solve a pixel instead of n^2.
+template <typename Point>
+Point InterpolateInPixel(const std::array<Point, 4>& corners, int sx, int sy, int n) {
+  const double fx = SubSample(sx, n) + 0.5, fy = SubSample(sy, n) + 0.5;
+  const Point left = (1 - fy) * corners[0] + fy * corners[2];
+  const Point right = (1 - fy) * corners[1] + fy * corners[3];
+  return (1 - fx) * left + fx * right;
+}
+
 }  // namespace
 
 
@@ -226,30 +248,64 @@ void RigRenderer::RenderAllDots(common::FloatImage* radiance) const {
   RenderDotSet(all, radiance);
 }
 
+namespace {
+
+// The lit dots bucketed by monitor pixel into square cells at least `reach` wide, so that the dots
+// within `reach` pixels of a point lie in the 2 x 2 cells around it: a constant-time lookup where
+// scanning the window of (2 reach + 1)^2 pixels took most of a fiducial image's time.
+class DotBuckets {
+ public:
+  DotBuckets(const std::vector<Dot>& dots, const std::vector<int>& lit, int width_px, int height_px, int reach)
+      : cell_(std::max(1, reach)), cols_(width_px / cell_ + 2), rows_(height_px / cell_ + 2), cells_(size_t(cols_) * rows_) {
+    for (int q : lit) {
+      const Dot& dot = dots.at(q);
+      if (const int c = Cell(dot.monitor_x, dot.monitor_y); c >= 0) cells_[c].push_back(&dot);
+    }
+  }
+
+  // Calls visit(dot) for every lit dot whose monitor pixel is within `reach` of (ux, uy) (and
+  // perhaps a few farther ones); stops at the first that returns true.
+  template <typename Visit>
+  bool Any(int ux, int uy, Visit&& visit) const {
+    const int cx = Floor(ux - cell_ / 2), cy = Floor(uy - cell_ / 2);
+    for (int y = cy; y <= cy + 1; ++y) {
+      for (int x = cx; x <= cx + 1; ++x) {
+        if (x < 0 || y < 0 || x >= cols_ || y >= rows_) continue;
+        for (const Dot* dot : cells_[size_t(y) * cols_ + x]) {
+          if (visit(*dot)) return true;
+        }
+      }
+    }
+    return false;
+  }
+
+ private:
+  int Floor(int u) const { return u >= 0 ? u / cell_ : -((-u + cell_ - 1) / cell_); }
+  int Cell(int ux, int uy) const {
+    const int x = Floor(ux), y = Floor(uy);
+    return x >= 0 && y >= 0 && x < cols_ && y < rows_ ? y * cols_ + x : -1;
+  }
+
+  int cell_, cols_, rows_;
+  std::vector<std::vector<const Dot*>> cells_;
+};
+
+}  // namespace
+
 void RigRenderer::RenderDotSet(const std::vector<int>& lit, common::FloatImage* radiance) const {
   const MonitorConfig& m = rig_.config().monitor;
   const MonitorFrame& frame = rig_.monitor_frame();
-  const double radius_px = rig_.config().dots.radius_px;
-  // Dot centres by monitor pixel, to test a point against the few nearby dots only.
-  std::map<std::pair<int, int>, int> by_pixel;
-  for (int q : lit) by_pixel[{rig_.dots().at(q).monitor_x, rig_.dots().at(q).monitor_y}] = q;
   const double on = m.white_exitance * m.Luminance(rig_.config().dots.level);
   const double off = m.white_exitance * m.Luminance(0.0);
-  const int reach = static_cast<int>(std::ceil(radius_px)) + 1;
-  // Nearby lookups scan a small window of monitor pixels around the hit.
+  // A dot's disk lies within radius_px + 1 monitor pixels of its centre pixel.
+  const int reach = static_cast<int>(std::ceil(rig_.config().dots.radius_px)) + 1;
+  const DotBuckets buckets(rig_.dots(), lit, static_cast<int>(frame.width_px), static_cast<int>(frame.height_px), 2 * reach + 1);
   auto exitance = [&](const model::Vec3& p) -> double {
     const model::Vec2 uv = frame.PixelCoordinates(p);
     if (!frame.InActiveArea(uv)) return 0.0;
-    const int ux = static_cast<int>(uv.x()), uy = static_cast<int>(uv.y());
-    for (int dy = -reach; dy <= reach; ++dy) {
-      for (int dx = -reach; dx <= reach; ++dx) {
-        const auto it = by_pixel.find({ux + dx, uy + dy});
-        if (it == by_pixel.end()) continue;
-        const Dot& dot = rig_.dots()[it->second];
-        if ((p - dot.position).norm() <= dot.radius) return on;
-      }
-    }
-    return off;
+    const bool lit_here = buckets.Any(static_cast<int>(uv.x()), static_cast<int>(uv.y()),
+                                      [&](const Dot& dot) { return (p - dot.position).norm() <= dot.radius; });
+    return lit_here ? on : off;
   };
   RenderMonitor(exitance, radiance);
 }
@@ -267,17 +323,24 @@ void RigRenderer::RenderMonitor(const std::function<double(const model::Vec3&)>&
   const MonitorFrame& frame = rig_.monitor_frame();
   const CameraIntrinsics& k = rig_.config().intrinsics;
   const int n = rig_.config().board_samples;
-  const model::Vec3 camera = rig_.camera().Centre();
+  const PinholeCamera& camera = rig_.camera();
+  const model::Vec3 centre = camera.Centre();
   *radiance = common::FloatImage(k.width, k.height, 3);
   common::ParallelFor(k.height, threads_, 4, [&](int begin, int end) {
+    std::vector<std::optional<model::Vec2>> top(k.width + 1), bottom(k.width + 1);
+    CornerRow(camera, begin - 0.5, &top);
     for (int y = begin; y < end; ++y) {
+      CornerRow(camera, y + 0.5, &bottom);
       for (int x = 0; x < k.width; ++x) {
+        const bool interpolate = top[x] && top[x + 1] && bottom[x] && bottom[x + 1];
         double sum = 0.0;
         for (int sy = 0; sy < n; ++sy) {
           for (int sx = 0; sx < n; ++sx) {
-            const auto ray = rig_.camera().PixelRay(model::Vec2(x + SubSample(sx, n), y + SubSample(sy, n)));
+            const std::optional<model::Vec3> ray =
+                interpolate ? camera.RayThrough(InterpolateInPixel<model::Vec2>({*top[x], *top[x + 1], *bottom[x], *bottom[x + 1]}, sx, sy, n))
+                            : camera.PixelRay(model::Vec2(x + SubSample(sx, n), y + SubSample(sy, n)));
             if (!ray) continue;
-            const std::optional<model::Vec3> p = frame.Intersect(camera, *ray);
+            const std::optional<model::Vec3> p = frame.Intersect(centre, *ray);
             const double cos_e = -frame.normal.dot(*ray);
             if (!p || !(cos_e > 0.0)) continue;
             // Radiance of an emitter of radiant intensity per area I P(theta_e): I P / cos.
@@ -286,6 +349,7 @@ void RigRenderer::RenderMonitor(const std::function<double(const model::Vec3&)>&
         }
         for (int c = 0; c < 3; ++c) radiance->at(x, y, c) = static_cast<float>(sum / (n * n));
       }
+      std::swap(top, bottom);
     }
   });
 }
@@ -346,15 +410,34 @@ class BoardPattern {
 }  // namespace
 
 void RigRenderer::RenderZhangBoard(const BoardPose& board, common::FloatImage* radiance) const {
-  RenderBoard(board, rig_.config().board, rig_.sensor_camera(), radiance);
+  RenderBoard(board, rig_.config().board, rig_.sensor_camera(), SensorCornerTable(), radiance);
 }
 
 void RigRenderer::RenderHolderBoard(const BoardPose& board, common::FloatImage* radiance) const {
-  RenderBoard(board, rig_.config().holder_board, rig_.camera(), radiance);
+  RenderBoard(board, rig_.config().holder_board, rig_.camera(), nullptr, radiance);
+}
+
+const std::vector<model::Vec2>* RigRenderer::SensorCornerTable() const {
+  const PinholeCamera& camera = rig_.sensor_camera();
+  const size_t stride = size_t(camera.intrinsics().width) + 1, rows = size_t(camera.intrinsics().height) + 1;
+  if (stride * rows > kMaxCornerTable) return nullptr;
+  std::call_once(sensor_corners_once_, [&] {
+    sensor_corners_.resize(stride * rows);
+    common::ParallelFor(static_cast<int>(rows), threads_, 16, [&](int begin, int end) {
+      std::vector<std::optional<model::Vec2>> row(stride);
+      for (int y = begin; y < end; ++y) {
+        CornerRow(camera, y - 0.5, &row);
+        for (size_t x = 0; x < stride; ++x) {
+          sensor_corners_[y * stride + x] = row[x].value_or(model::Vec2::Constant(std::numeric_limits<double>::quiet_NaN()));
+        }
+      }
+    });
+  });
+  return &sensor_corners_;
 }
 
 void RigRenderer::RenderBoard(const BoardPose& board, const BoardConfig& config, const PinholeCamera& camera,
-                              common::FloatImage* radiance) const {
+                              const std::vector<model::Vec2>* corners, common::FloatImage* radiance) const {
   const CameraIntrinsics& k = camera.intrinsics();
   const int n = rig_.config().board_samples;
   const BoardPattern pattern(board, config, camera.Centre());
@@ -362,26 +445,30 @@ void RigRenderer::RenderBoard(const BoardPose& board, const BoardConfig& config,
   *radiance = common::FloatImage(k.width, k.height, 3);
   common::ParallelFor(k.height, threads_, 4, [&](int begin, int end) {
     // Board coordinates of the pixel corners above and below the current row.
-    std::vector<std::optional<model::Vec2>> top(k.width + 1), bottom(k.width + 1);
-    for (int x = 0; x <= k.width; ++x) top[x] = hit(x - 0.5, begin - 0.5);
+    std::vector<std::optional<model::Vec2>> points(k.width + 1), top(k.width + 1), bottom(k.width + 1);
+    // Corner row r lies at y = r - 0.5.
+    const auto corner_hits = [&](int r, std::vector<std::optional<model::Vec2>>* hits) {
+      if (corners) {
+        const model::Vec2* row = corners->data() + size_t(r) * (k.width + 1);
+        for (int x = 0; x <= k.width; ++x) points[x] = row[x].allFinite() ? std::optional(row[x]) : std::nullopt;
+      } else {
+        CornerRow(camera, r - 0.5, &points);
+      }
+      for (int x = 0; x <= k.width; ++x) (*hits)[x] = points[x] ? pattern.Hit(camera.RayThrough(*points[x])) : std::nullopt;
+    };
+    corner_hits(begin, &top);
     for (int y = begin; y < end; ++y) {
-      for (int x = 0; x <= k.width; ++x) bottom[x] = hit(x - 0.5, y + 0.5);
+      corner_hits(y + 1, &bottom);
       for (int x = 0; x < k.width; ++x) {
         double reflectance = 0.0;
         const std::array<std::optional<model::Vec2>, 4> corners = {top[x], top[x + 1], bottom[x], bottom[x + 1]};
         if (BoardPattern::OneCell(corners)) {
           reflectance = pattern.Reflectance(top[x]);  // the cell's, wherever in it
         } else if (corners[0] && corners[1] && corners[2] && corners[3]) {
-          // Across one pixel the lens and the perspective are linear to far below a
-          // thousandth of a pixel: the sub-samples' board points interpolate the corners'.
+          // The sub-samples' board points interpolate the corners' (see InterpolateInPixel).
+          const std::array<model::Vec2, 4> board_corners = {*corners[0], *corners[1], *corners[2], *corners[3]};
           for (int sy = 0; sy < n; ++sy) {
-            const double fy = SubSample(sy, n) + 0.5;
-            const model::Vec2 left = (1 - fy) * *corners[0] + fy * *corners[2];
-            const model::Vec2 right = (1 - fy) * *corners[1] + fy * *corners[3];
-            for (int sx = 0; sx < n; ++sx) {
-              const double fx = SubSample(sx, n) + 0.5;
-              reflectance += pattern.Reflectance((1 - fx) * left + fx * right);
-            }
+            for (int sx = 0; sx < n; ++sx) reflectance += pattern.Reflectance(InterpolateInPixel(board_corners, sx, sy, n));
           }
           reflectance /= n * n;
         } else {

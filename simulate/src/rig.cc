@@ -53,9 +53,9 @@ model::Vec2 PinholeCamera::Distort(const model::Vec2& p) const {
           y * radial + d[2] * (r2 + 2.0 * y * y) + 2.0 * d[3] * x * y};
 }
 
-std::optional<model::Vec2> PinholeCamera::Undistort(const model::Vec2& distorted) const {
+std::optional<model::Vec2> PinholeCamera::Undistort(const model::Vec2& distorted, const model::Vec2* start) const {
   const auto& d = intrinsics_.distortion;
-  model::Vec2 p = distorted;
+  model::Vec2 p = start ? *start : distorted;
   for (int iteration = 0; iteration < 50; ++iteration) {
     const double x = p.x(), y = p.y();
     const double r2 = x * x + y * y;
@@ -84,12 +84,20 @@ std::optional<model::Vec2> PinholeCamera::Project(const model::Vec3& world) cons
   return model::Vec2(intrinsics_.fx * q.x() + intrinsics_.cx, intrinsics_.fy * q.y() + intrinsics_.cy);
 }
 
-std::optional<model::Vec3> PinholeCamera::PixelRay(const model::Vec2& pixel) const {
+std::optional<model::Vec2> PinholeCamera::ImagePoint(const model::Vec2& pixel, const model::Vec2* start) const {
   const model::Vec2 distorted((pixel.x() - intrinsics_.cx) / intrinsics_.fx,
-                       (pixel.y() - intrinsics_.cy) / intrinsics_.fy);
-  const std::optional<model::Vec2> p = Undistort(distorted);
+                              (pixel.y() - intrinsics_.cy) / intrinsics_.fy);
+  return Undistort(distorted, start);
+}
+
+model::Vec3 PinholeCamera::RayThrough(const model::Vec2& p) const {
+  return (pose_.rotation.transpose() * model::Vec3(p.x(), p.y(), 1.0)).normalized();
+}
+
+std::optional<model::Vec3> PinholeCamera::PixelRay(const model::Vec2& pixel) const {
+  const std::optional<model::Vec2> p = ImagePoint(pixel);
   if (!p) return std::nullopt;
-  return (pose_.rotation.transpose() * model::Vec3(p->x(), p->y(), 1.0)).normalized();
+  return RayThrough(*p);
 }
 
 double EmissionProfile::operator()(double cos_theta_e) const {

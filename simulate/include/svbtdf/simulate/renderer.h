@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <mutex>
 #include <vector>
 
 #include "svbtdf/simulate/rig.h"
@@ -88,8 +89,17 @@ class RigRenderer {
     float weight;     // fraction of the pixel's sub-samples in this texel
     double x, y;      // centroid of those sub-samples on the sample plane
   };
+  // `corners`, when not null: the camera's CornerTable, else each row's corners are solved.
   void RenderBoard(const BoardPose& board, const BoardConfig& config, const PinholeCamera& camera,
-                   common::FloatImage* radiance) const;
+                   const std::vector<model::Vec2>* corners, common::FloatImage* radiance) const;
+  // The undistorted normalised coordinates of every pixel corner (x - 0.5, y - 0.5) of the whole
+  // sensor, row-major with width + 1 a row (NaN where the distortion cannot be inverted), made on
+  // first use and shared by every Zhang view: one Newton solve a corner per session, not per
+  // view. Null for a sensor of more than kMaxCornerTable corners (a paper-scale camera: there
+  // the 384 MB it would take is worth more than the minute of solves it would save).
+  const std::vector<model::Vec2>* SensorCornerTable() const;
+  static constexpr size_t kMaxCornerTable = size_t{1} << 22;
+
   double ElectronsPerRadiance(const model::Vec2& pixel, double exposure_s) const;
   double MeanElectrons(double radiance, double electrons_per_radiance, double exposure_s) const;
   void PrecomputeGroups();
@@ -105,6 +115,8 @@ class RigRenderer {
   double vignetting_per_r2_;  // the vignetting coefficient over the squared half diagonal
   std::vector<Group> groups_;
   std::vector<size_t> row_begin_;         // groups_ index of each image row's first group
+  mutable std::once_flag sensor_corners_once_;
+  mutable std::vector<model::Vec2> sensor_corners_;
   std::vector<float> background_;         // black-level glow per group (RGB), when enabled
 };
 

@@ -56,13 +56,20 @@ class PinholeCamera {
   model::Vec2 Distort(const model::Vec2& undistorted) const;
   // Inverse of Distort by Newton's method; nullopt where it does not converge (far outside the
   // region where the polynomial model is invertible).
-  std::optional<model::Vec2> Undistort(const model::Vec2& distorted) const;
+  // `start`: where Newton's method begins (the distorted point itself when not given); the
+  // answer for a point a pixel away converges in two steps instead of four or five.
+  std::optional<model::Vec2> Undistort(const model::Vec2& distorted, const model::Vec2* start = nullptr) const;
 
   // Pixel coordinates of a world point; nullopt when it is not in front of the camera.
   std::optional<model::Vec2> Project(const model::Vec3& world) const;
   // Unit world-frame direction of the ray through pixel coordinates `pixel`, nullopt where the
   // distortion cannot be inverted.
   std::optional<model::Vec3> PixelRay(const model::Vec2& pixel) const;
+  // The two halves of PixelRay, for renderers that interpolate within a pixel: the undistorted
+  // normalised coordinates of `pixel` (Newton started at `start`, see Undistort), and the unit
+  // world-frame ray through normalised coordinates p.
+  std::optional<model::Vec2> ImagePoint(const model::Vec2& pixel, const model::Vec2* start = nullptr) const;
+  model::Vec3 RayThrough(const model::Vec2& p) const;
 
  private:
   CameraIntrinsics intrinsics_;
