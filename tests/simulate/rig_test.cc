@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include "svbtdf/common/error.h"
@@ -71,6 +72,33 @@ TEST(PinholeCamera, ProjectionMatchesOpenCv) {
     EXPECT_LT((*ray - direction).norm(), 1e-9);
   }
   EXPECT_LT(worst, 1e-6) << "largest difference from cv::projectPoints, px";
+}
+
+// Newton's method started at a neighbouring pixel's answer (as the renderer's corner rows do)
+// finds the same point as started at the distorted one, under a strong distortion.
+TEST(PinholeCamera, UndistortStartedAtANeighbourFindsTheSamePoint) {
+  CameraIntrinsics k;
+  k.width = 1600;
+  k.height = 1200;
+  k.fx = k.fy = 1450.0;
+  k.cx = 800.0;
+  k.cy = 600.0;
+  k.distortion = {-0.21, 0.09, 0.0012, -0.0007, -0.015};
+  const PinholeCamera camera(k, RigConfig::PaperPose(1.0, 0.7));
+  int compared = 0;
+  for (double y = -0.5; y <= k.height; y += 97.0) {
+    for (double x = -0.5; x <= k.width; x += 89.0) {
+      const auto neighbour = camera.ImagePoint(model::Vec2(x - 1.0, y));
+      const auto cold = camera.ImagePoint(model::Vec2(x, y));
+      ASSERT_TRUE(neighbour && cold) << x << ", " << y;
+      const auto warm = camera.ImagePoint(model::Vec2(x, y), &*neighbour);
+      ASSERT_TRUE(warm.has_value());
+      EXPECT_LT((*warm - *cold).norm(), 1e-12) << x << ", " << y;
+      EXPECT_LT((camera.RayThrough(*warm) - *camera.PixelRay(model::Vec2(x, y))).norm(), 1e-12);
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 200);
 }
 
 TEST(Rig, PaperGeometryByDefault) {
@@ -315,6 +343,65 @@ TEST(RigRenderer, FlatFieldOfIsotropicMonitor) {
       EXPECT_NEAR(image.at(x, y, 1), exitance / cos_e, 1e-4 * exitance / cos_e);
     }
   }
+}
+
+// Each dot lit alone, seen directly: its image minus the unlit screen's is the dot's disk, and
+// nothing else, as a brute-force render finds it (every sub-sample's own ray, every dot's disk
+// tested). Checks the renderer's bucketed dot lookup and its sub-samples interpolated from the
+// pixel corners (a sub-sample within 1e-5 px of a disk's edge may fall on the other side).
+TEST(RigRenderer, EachDotLitAloneShowsItsDiskAndNothingElse) {
+  const Rig rig(NoiseFreeTiny());
+  const RigRenderer renderer(rig, nullptr, 2);
+  const MonitorConfig& m = rig.config().monitor;
+  const MonitorFrame& frame = rig.monitor_frame();
+  const PinholeCamera& camera = rig.camera();
+  const int n = rig.config().board_samples;
+  const double step = m.white_exitance * (m.Luminance(rig.config().dots.level) - m.Luminance(0.0));
+  common::FloatImage unlit, lit;
+  renderer.RenderDotSet({}, &unlit);
+  const auto expected_at = [&](const Dot& dot, int x, int y) {
+    double sum = 0.0;
+    for (int sy = 0; sy < n; ++sy) {
+      for (int sx = 0; sx < n; ++sx) {
+        const auto ray = camera.PixelRay(model::Vec2(x + (sx + 0.5) / n - 0.5, y + (sy + 0.5) / n - 0.5));
+        const auto p = ray ? frame.Intersect(camera.Centre(), *ray) : std::nullopt;
+        if (!p || (*p - dot.position).norm() > dot.radius) continue;
+        const double cos_e = -frame.normal.dot(*ray);
+        sum += step * m.emission(cos_e) / cos_e;
+      }
+    }
+    return sum / (n * n);
+  };
+  int dots_seen = 0;
+  for (size_t q = 0; q < rig.dots().size(); q += 3) {  // a third of them: 12 renders, not 36
+    const Dot& dot = rig.dots()[q];
+    renderer.RenderDotSet({static_cast<int>(q)}, &lit);
+    const auto centre = camera.Project(dot.position);
+    ASSERT_TRUE(centre.has_value());
+    int lit_pixels = 0, mismatched = 0;
+    for (int y = 0; y < lit.height; ++y) {
+      for (int x = 0; x < lit.width; ++x) {
+        const double rendered = lit.at(x, y, 1) - unlit.at(x, y, 1);
+        const bool near = std::abs(x - centre->x()) < 12 && std::abs(y - centre->y()) < 12;
+        if (!near) {
+          EXPECT_EQ(rendered, 0.0) << "dot " << q << " lights pixel " << x << ", " << y << " far from it";
+          continue;
+        }
+        const double expected = expected_at(dot, x, y);
+        lit_pixels += expected > 0.0;
+        // At most one sub-sample's worth (an isotropic screen seen at cos_e > 0.5): a sub-sample
+        // on the disk's edge.
+        mismatched += std::abs(rendered - expected) > 1e-5 * step;
+        EXPECT_LE(std::abs(rendered - expected), 2.0 * step / (n * n));
+      }
+    }
+    const bool in_view = centre->x() >= 0 && centre->y() >= 0 && centre->x() < lit.width && centre->y() < lit.height;
+    if (!in_view) continue;
+    ++dots_seen;
+    EXPECT_GT(lit_pixels, 4) << "dot " << q;
+    EXPECT_LE(mismatched, 1) << "dot " << q << ": " << lit_pixels << " lit pixels";
+  }
+  EXPECT_GE(dots_seen, 6);
 }
 
 // The sensor's noise: mean and variance of a constant field match Poisson + read noise, and the
