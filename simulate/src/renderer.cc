@@ -55,22 +55,6 @@ double SrgbEncode(double v) {
   return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
 }
 
-// Radon's 7-point rule on the unit disk (degree 5): the centre with weight 1/4 and six points at
-// radius sqrt(2/3) with weight 1/8 each (weights sum to 1: they average over the disk).
-constexpr int kRadonPoints = 7;
-const std::array<model::Vec2, kRadonPoints>& RadonNodes() {
-  static const std::array<model::Vec2, kRadonPoints> nodes = [] {
-    std::array<model::Vec2, kRadonPoints> n;
-    n[0] = model::Vec2::Zero();
-    const double r = std::sqrt(2.0 / 3.0);
-    for (int k = 0; k < 6; ++k) n[k + 1] = r * model::Vec2(std::cos(k * model::kPi / 3), std::sin(k * model::kPi / 3));
-    return n;
-  }();
-  return nodes;
-}
-constexpr std::array<double, kRadonPoints> kRadonWeights = {0.25,  0.125, 0.125, 0.125,
-                                                            0.125, 0.125, 0.125};
-
 // Stratified sub-sample offsets in a pixel, in (-0.5, 0.5).
 double SubSample(int k, int n) { return (k + 0.5) / n - 0.5; }
 
@@ -98,6 +82,49 @@ Point InterpolateInPixel(const std::array<Point, 4>& corners, int sx, int sy, in
 
 }  // namespace
 
+
+const DiskRule& DotRule(double ratio) {
+  // The centre alone.
+  static const DiskRule point{{model::Vec2::Zero()}, {1.0}};
+  // Stroud's S2:3-1: four points at radius sqrt(1/2) on the axes, weight 1/4 each. The mean of
+  // x^2 over the unit disk is 1/4 = r^2 / 2, and the odd moments vanish: exact to degree 3.
+  static const DiskRule four = [] {
+    DiskRule rule;
+    const double r = std::sqrt(0.5);
+    rule.nodes = {{r, 0.0}, {0.0, r}, {-r, 0.0}, {0.0, -r}};
+    rule.weights.assign(4, 0.25);
+    return rule;
+  }();
+  // Radon's 7-point rule (degree 5): the centre with weight 1/4 and six points at radius
+  // sqrt(2/3) with weight 1/8 each.
+  static const DiskRule radon = [] {
+    DiskRule rule{{model::Vec2::Zero()}, {0.25}};
+    const double r = std::sqrt(2.0 / 3.0);
+    for (int k = 0; k < 6; ++k) {
+      rule.nodes.push_back(r * model::Vec2(std::cos(k * model::kPi / 3), std::sin(k * model::kPi / 3)));
+      rule.weights.push_back(0.125);
+    }
+    return rule;
+  }();
+  // A product rule: 3 Gauss-Legendre nodes in r^2 (uniform in area) x 8 angles, staggered from
+  // ring to ring; exact to degree 7.
+  static const DiskRule fine = [] {
+    DiskRule rule;
+    const double s[3] = {0.5 - 0.5 * std::sqrt(0.6), 0.5, 0.5 + 0.5 * std::sqrt(0.6)};
+    const double w[3] = {5.0 / 18, 8.0 / 18, 5.0 / 18};
+    for (int ring = 0; ring < 3; ++ring) {
+      for (int k = 0; k < 8; ++k) {
+        const double phi = (k + 0.5 * ring) * model::kPi / 4;
+        rule.nodes.push_back(std::sqrt(s[ring]) * model::Vec2(std::cos(phi), std::sin(phi)));
+        rule.weights.push_back(w[ring] / 8);
+      }
+    }
+    return rule;
+  }();
+  if (ratio < kPointDotRatio) return point;
+  if (ratio < kFourPointDotRatio) return four;
+  return ratio < kRadonDotRatio ? radon : fine;
+}
 
 RigRenderer::RigRenderer(const Rig& rig, const SpatialBtdf* material, int threads)
     : rig_(rig),
@@ -207,15 +234,14 @@ model::Vec3 RigRenderer::DotRadianceAt(const Dot& dot, const Group& group) const
   const Polarisation& polarisation = rig_.config().monitor.polarisation;
   const model::Vec3 field = polarisation.linear() ? polarisation.FieldDirection(frame) : model::Vec3::Zero();
   const double angular_radius = dot.radius / (dot.position - x).norm();
-  const bool point = angular_radius < 0.1 * material_->MinRoughness(group.texel);
+  const DiskRule& rule = DotRule(angular_radius / material_->MinRoughness(group.texel));
   model::Vec3 sum = model::Vec3::Zero();
-  const int points = point ? 1 : kRadonPoints;
-  for (int k = 0; k < points; ++k) {
-    const model::Vec3 p = dot.position + dot.radius * (RadonNodes()[k].x() * frame.right + RadonNodes()[k].y() * frame.down);
+  for (size_t k = 0; k < rule.nodes.size(); ++k) {
+    const model::Vec3 p = dot.position + dot.radius * (rule.nodes[k].x() * frame.right + rule.nodes[k].y() * frame.down);
     const model::Vec3 to_light = p - x;
     const double r2 = to_light.squaredNorm();
     const model::Vec3 i = to_light / std::sqrt(r2);
-    const double intensity = dot.intensity * (point ? 1.0 : kRadonWeights[k]) * profile(-frame.normal.dot(i));
+    const double intensity = dot.intensity * rule.weights[k] * profile(-frame.normal.dot(i));
     // A polarised screen's light reaches x along -i with the transverse part of its field.
     const model::Rgb rgb = polarisation.linear()
                                ? material_->EvaluatePolarised(group.texel, i, o, model::TransverseField(field, -i))

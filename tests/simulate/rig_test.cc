@@ -8,6 +8,11 @@
 #include <opencv2/core.hpp>
 
 #include <cmath>
+#include <array>
+#include <cstdlib>
+#include <cstdio>
+#include <string>
+#include <map>
 #include <optional>
 #include <vector>
 
@@ -227,7 +232,7 @@ Inversion InvertDotImages(const Rig& rig, const SpatialBtdf& material) {
 // A point-like dot and a 16-bit sensor, so that the inversion is exact up to quantisation.
 RigConfig InversionRig() {
   RigConfig config = NoiseFreeTiny();
-  config.dots.radius_px = 0.5;  // a point emitter, as the equation assumes
+  config.dots.radius_px = 0.02;  // a point emitter, as the equation assumes (DotRule: its centre)
   config.sensor.bit_depth = 16;
   return config;
 }
@@ -241,6 +246,104 @@ RigConfig InversionRig() {
 
 // The analytic truth the rig tests render: smooth 32 x 32 texels, eta 1.5, seed 7.
 TruthMaterial SmoothTruth() { return TruthMaterial::FromPattern("smooth", 32, 32, 1.5, 7); }
+
+// The dot rules (DotRule) against a fine reference over the disk (16 Gauss-Legendre rings in r^2
+// x 48 angles), with the renderer's integrand: R |i.z| / |p - x|^2 of grid-sheet texels (GGX,
+// anisotropic, roughness 0.05-0.40) and smooth ones, the dot on the lobe's peak and 0.5, 1 and 2
+// roughnesses off it, in the tiny rig's monitor plane. The error is relative to the lobe's peak
+// (the largest reference value of the four positions).
+TEST(RigRenderer, DotRulesAreAccurateWhereTheyAreUsed) {
+  const Rig rig(NoiseFreeTiny());
+  const MonitorFrame& frame = rig.monitor_frame();
+  const DiskRule& point = DotRule(0.0);
+  const DiskRule& four = DotRule(0.5 * (kPointDotRatio + kFourPointDotRatio));
+  const DiskRule& radon = DotRule(0.5 * (kFourPointDotRatio + kRadonDotRatio));
+  const DiskRule& fine = DotRule(1.0);
+  ASSERT_EQ(point.nodes.size(), 1u);
+  ASSERT_EQ(four.nodes.size(), 4u);
+  ASSERT_EQ(radon.nodes.size(), 7u);
+  ASSERT_EQ(fine.nodes.size(), 24u);
+  // Gauss-Legendre nodes on [0, 1] (Golub-Welsch would do; 16 by bisection of P_16 suffices here).
+  std::vector<double> gauss_t, gauss_w;
+  {
+    const int n = 16;
+    for (int k = 1; k <= n; ++k) {
+      double t = std::cos(model::kPi * (k - 0.25) / (n + 0.5));
+      for (int it = 0; it < 100; ++it) {
+        double p0 = 1.0, p1 = t;
+        for (int j = 2; j <= n; ++j) {
+          const double p2 = ((2 * j - 1) * t * p1 - (j - 1) * p0) / j;
+          p0 = p1;
+          p1 = p2;
+        }
+        const double dp = n * (t * p1 - p0) / (t * t - 1.0);
+        const double step = p1 / dp;
+        t -= step;
+        if (std::abs(step) < 1e-15) {
+          gauss_t.push_back(0.5 * (t + 1.0));
+          gauss_w.push_back(1.0 / ((1.0 - t * t) * dp * dp));  // 2 / ((1 - t^2) P'^2), halved for [0, 1]
+          break;
+        }
+      }
+    }
+  }
+  const model::Vec3 x = model::Vec3::Zero();
+  const model::Vec3 o = model::Vec3(0.3, -0.2, 1.0).normalized();
+  const double distance = 0.3;
+  const char* const names[4] = {"point", "four", "radon", "fine"};
+  std::map<std::string, double> worst;  // rule -> worst error where it is used
+  for (const std::string pattern : {"grid-sheet", "smooth"}) {
+    const TruthMaterial truth = TruthMaterial::FromPattern(pattern, 16, 16, 1.45, 3);
+    for (int t = 0; t < truth.texels_x() * truth.texels_y(); t += 37) {
+      const double sigma = truth.MinRoughness(t);
+      for (const double ratio : {0.005, 0.014, 0.02, 0.05, 0.09, 0.119, 0.13, 0.16, 0.2, 0.219, 0.25, 0.3, 0.35, 0.4, 0.5}) {
+        const double radius = ratio * sigma * distance;
+        std::vector<std::array<double, 5>> values;  // reference, point, four, radon, fine per position
+        double peak = 0.0;
+        for (const double offset : {0.0, 0.5, 1.0, 2.0}) {
+          const model::Vec3 centre = x + distance * (-o + offset * sigma * frame.right).normalized();
+          const auto f = [&](const model::Vec2& u) {
+            const model::Vec3 p = centre + radius * (u.x() * frame.right + u.y() * frame.down);
+            const double r2 = (p - x).squaredNorm();
+            const model::Vec3 i = (p - x) / std::sqrt(r2);
+            return truth.Evaluate(t, i, o)[1] * std::abs(i.z()) / r2;
+          };
+          const auto apply = [&](const DiskRule& rule) {
+            double sum = 0.0;
+            for (size_t k = 0; k < rule.nodes.size(); ++k) sum += rule.weights[k] * f(rule.nodes[k]);
+            return sum;
+          };
+          double reference = 0.0;
+          for (size_t a = 0; a < gauss_t.size(); ++a) {
+            const double r = std::sqrt(gauss_t[a]);  // uniform in r^2: uniform in area
+            for (int b = 0; b < 48; ++b) {
+              const double phi = 2.0 * model::kPi * (b + 0.5) / 48;
+              reference += gauss_w[a] / 48 * f(r * model::Vec2(std::cos(phi), std::sin(phi)));
+            }
+          }
+          values.push_back({reference, apply(point), apply(four), apply(radon), apply(fine)});
+          peak = std::max(peak, reference);
+        }
+        const DiskRule& chosen = DotRule(ratio);
+        const int used = &chosen == &point ? 0 : &chosen == &four ? 1 : &chosen == &radon ? 2 : 3;
+        for (const auto& v : values) {
+          double errors[4];
+          for (int k = 0; k < 4; ++k) errors[k] = std::abs(v[k + 1] - v[0]) / peak;
+          worst[names[used]] = std::max(worst[names[used]], errors[used]);
+          if (std::getenv("SVBTDF_PRINT_DOT_RULES")) {
+            std::printf("%s t%d sigma %.3f ratio %.3f: point %.2e four %.2e radon %.2e fine %.2e\n", pattern.c_str(), t,
+                        sigma, ratio, errors[0], errors[1], errors[2], errors[3]);
+          }
+        }
+      }
+    }
+  }
+  for (const auto& [rule, error] : worst) {
+    std::printf("dot rule %s: worst error %.2e of the peak where it is used\n", rule.c_str(), error);
+    EXPECT_LT(error, 1e-3) << rule;
+  }
+  EXPECT_EQ(worst.size(), 4u);
+}
 
 TEST(RigRenderer, DotImageInvertsToTruth) {
   const Rig rig(InversionRig());

@@ -28,8 +28,8 @@ class SpatialBtdf {
   virtual model::Rgb EvaluatePolarised(int index, const model::Vec3& i, const model::Vec3& o,
                                        const model::Vec3& field) const;
 
-  // How sharp the texel's lobe can be, as a microfacet roughness: the renderer treats a dot as a
-  // point when it subtends less than a tenth of this.
+  // How sharp the texel's lobe can be, as a microfacet roughness: the renderer chooses its rule
+  // over a dot's disk by the ratio of the dot's angular radius to this (DotRule).
   virtual double MinRoughness(int index) const = 0;
 };
 
