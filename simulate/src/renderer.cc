@@ -276,21 +276,22 @@ void RigRenderer::RenderAllDots(common::FloatImage* radiance) const {
 
 namespace {
 
-// The lit dots bucketed by monitor pixel into square cells at least `reach` wide, so that the dots
-// within `reach` pixels of a point lie in the 2 x 2 cells around it: a constant-time lookup where
-// scanning the window of (2 reach + 1)^2 pixels took most of a fiducial image's time.
+// The lit dots bucketed by their centre's monitor pixel into square cells of `cell` pixels, so
+// that the dots within cell / 2 pixels of a point lie in the 2 x 2 cells around it: a
+// constant-time lookup where scanning the window of cell^2 pixels took most of a fiducial image's
+// time.
 class DotBuckets {
  public:
-  DotBuckets(const std::vector<Dot>& dots, const std::vector<int>& lit, int width_px, int height_px, int reach)
-      : cell_(std::max(1, reach)), cols_(width_px / cell_ + 2), rows_(height_px / cell_ + 2), cells_(size_t(cols_) * rows_) {
+  DotBuckets(const std::vector<Dot>& dots, const std::vector<int>& lit, int width_px, int height_px, int cell)
+      : cell_(std::max(1, cell)), cols_(width_px / cell_ + 2), rows_(height_px / cell_ + 2), cells_(size_t(cols_) * rows_) {
     for (int q : lit) {
       const Dot& dot = dots.at(q);
       if (const int c = Cell(dot.monitor_x, dot.monitor_y); c >= 0) cells_[c].push_back(&dot);
     }
   }
 
-  // Calls visit(dot) for every lit dot whose monitor pixel is within `reach` of (ux, uy) (and
-  // perhaps a few farther ones); stops at the first that returns true.
+  // Calls visit(dot) for every lit dot whose centre pixel is within cell / 2 pixels of (ux, uy)
+  // along both axes (and perhaps a few farther ones); stops at the first that returns true.
   template <typename Visit>
   bool Any(int ux, int uy, Visit&& visit) const {
     const int cx = Floor(ux - cell_ / 2), cy = Floor(uy - cell_ / 2);
@@ -323,7 +324,7 @@ void RigRenderer::RenderDotSet(const std::vector<int>& lit, common::FloatImage* 
   const MonitorFrame& frame = rig_.monitor_frame();
   const double on = m.white_exitance * m.Luminance(rig_.config().dots.level);
   const double off = m.white_exitance * m.Luminance(0.0);
-  // A dot's disk lies within radius_px + 1 monitor pixels of its centre pixel.
+  // A dot's disk lies within `reach` monitor pixels of its centre pixel.
   const int reach = static_cast<int>(std::ceil(rig_.config().dots.radius_px)) + 1;
   const DotBuckets buckets(rig_.dots(), lit, static_cast<int>(frame.width_px), static_cast<int>(frame.height_px), 2 * reach + 1);
   auto exitance = [&](const model::Vec3& p) -> double {
