@@ -43,6 +43,15 @@ void PrintSummary(const report::CompareMetrics& m) {
                 percent(m.coverage_shadowing).c_str(), percent(m.coverage_ndf_width).c_str(), m.heldout_rank_correlation,
                 m.residual_rank_correlation);
   }
+  // A slab material: each true slab's interfaces against the fitted ones (medians over its texels).
+  const auto roughness = [](double v) { return std::isfinite(v) ? std::to_string(v).substr(0, 5) : std::string("-"); };
+  for (const report::CompareMetrics::SlabRecovery& r : m.slab_recovery) {
+    std::printf("slab %s (%zu texels): entry %s (true %s, within 15%% on %s, se %s), exit %s (true %s, within 15%% on %s, se %s)\n",
+                r.label.substr(0, r.label.find(':')).c_str(), r.texels, roughness(r.entry_median).c_str(),
+                roughness(r.true_entry).c_str(), percent(r.entry_within_15).c_str(), roughness(r.entry_se_median).c_str(),
+                roughness(r.exit_median).c_str(), roughness(r.true_exit).c_str(), percent(r.exit_within_15).c_str(),
+                roughness(r.exit_se_median).c_str());
+  }
 }
 
 void RunCompare(CompareCommandOptions options) {

@@ -34,9 +34,15 @@ model::Vec3 Direction(const std::vector<double>& xyz, const char* flag, bool tow
 }
 
 // The terms behind R, for the reader: rho_T, rho_B and alpha of a dual-microfacet texel, or the
-// lobe of a baseline texel. R itself always comes from TexelBtdf::Evaluate.
+// lobe of a baseline texel, the two interfaces of a slab texel. R itself always comes from
+// TexelBtdf::Evaluate.
 nlohmann::json ModelTerms(const fit::TexelBtdf& texel, const model::Vec3& wi, const model::Vec3& wo) {
   const model::DualMicrofacetParams& p = texel.params();
+  if (const auto& slab = texel.slab()) {
+    return {{"slab_entry_roughness", slab->entry_roughness},
+            {"slab_exit_roughness", slab->exit_roughness},
+            {"rho", fit::SlabShape(*slab, p.eta, wi, wo)}};
+  }
   if (const auto& lobe = texel.baseline()) {
     return {{"baseline_alpha_x", lobe->alpha_x},
             {"baseline_alpha_y", lobe->alpha_y},
@@ -64,6 +70,9 @@ void PrintSummary(const model::Rgb& value, const nlohmann::json& terms) {
   if (terms.contains("baseline_alpha_x")) {
     std::printf("(walter-ggx: alpha_x %.4f, alpha_y %.4f, azimuth %.3f)\n", terms["baseline_alpha_x"].get<double>(),
                 terms["baseline_alpha_y"].get<double>(), terms["baseline_azimuth"].get<double>());
+  } else if (terms.contains("slab_entry_roughness")) {
+    std::printf("(slab: entry roughness %.4f, exit roughness %.4f, rho %.6g)\n", terms["slab_entry_roughness"].get<double>(),
+                terms["slab_exit_roughness"].get<double>(), terms["rho"].get<double>());
   } else {
     std::printf("(rho_T %.6g, rho_B %.6g, alpha %.3f", terms["rho_T"].get<double>(), terms["rho_B"].get<double>(),
                 terms["alpha"].get<double>());

@@ -33,12 +33,13 @@ void RunExport(const ExportCommandOptions& options) {
     common::ThrowInvalidInput(folder.string(), "is not a material folder (it has no material.json)");
   }
   const fit::Material material = fit::ReadMaterial(folder);
+  exporter::RequireLobeFittable(material, (folder / "material.json").string());
   const std::string name = options.name.empty() ? folder.filename().string() : options.name;
   if (name.empty() || name.find('/') != std::string::npos) common::ThrowInvalidInput("--name", "must be a plain file name");
 
   const common::FolderLock lock = common::FolderLock::Acquire(options.gltf, "svbtdf export");
   const auto start = std::chrono::steady_clock::now();
-  const exporter::MaterialLobes lobes = exporter::FitMaterialLobes(material, threads);
+  const exporter::MaterialLobes lobes = exporter::FitMaterialLobes(material, threads, (folder / "material.json").string());
   const double fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   nlohmann::json summary;
   summary["material"] = fs::absolute(folder).string();

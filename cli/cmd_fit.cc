@@ -27,8 +27,11 @@ struct FitCommandOptions {
 
 void AddFitOptions(CLI::App* command, fit::FitMaterialOptions* options, std::string* representatives) {
   const std::map<std::string, fit::MaterialModel> models = {{"dual", fit::MaterialModel::kDualMicrofacet},
-                                                            {"ggx", fit::MaterialModel::kWalterGgx}};
-  command->add_option("--model", options->model, "dual (the dual-microfacet model) or ggx (the single-interface baseline)")
+                                                            {"ggx", fit::MaterialModel::kWalterGgx},
+                                                            {"slab", fit::MaterialModel::kSlab}};
+  command->add_option("--model", options->model,
+                      "dual (the dual-microfacet model), ggx (the single-interface baseline) or slab (two rough "
+                      "interfaces, each side's GGX roughness fitted; docs/fitting.md)")
       ->transform(CLI::CheckedTransformer(models))
       ->default_str("dual");
   command->add_option("--eta", options->eta, "relative index of refraction (default: the session's)");

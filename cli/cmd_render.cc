@@ -50,7 +50,7 @@ ParametricMaterial LoadParametric(const fs::path& folder, std::optional<std::pai
   }
   ParametricMaterial loaded{std::make_unique<fit::Material>(fit::ReadMaterial(folder)), nullptr};
   const fit::Material& m = *loaded.material;
-  exporter::MaterialLobes lobes = exporter::FitMaterialLobes(m, threads);
+  exporter::MaterialLobes lobes = exporter::FitMaterialLobes(m, threads, (folder / "material.json").string());
   const auto [width_m, height_m] = sample_size.value_or(std::pair{m.width_m, m.height_m});
   loaded.surface = std::make_unique<render::LobeSurface>(m, std::move(lobes.alpha_x), std::move(lobes.alpha_y),
                                                          std::move(lobes.azimuth), width_m, height_m,

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "svbtdf/common/error.h"
 #include "svbtdf/common/parallel.h"
 #include "svbtdf/common/statistics.h"
 
@@ -161,7 +162,18 @@ LobeFit GgxLobeFitter::Fit(const std::vector<double>& cell_d) const {
   return fit;
 }
 
-MaterialLobes FitMaterialLobes(const fit::Material& material, int threads) {
+void RequireLobeFittable(const fit::Material& material, const std::string& source) {
+  if (material.model == fit::MaterialModel::kSlab) {
+    // One lobe per texel would have to stand for the convolution of two interfaces; no fit of it
+    // has been measured yet, so nothing is exported that would misstate the material.
+    common::ThrowInvalidInput(source, "is a slab material (two rough interfaces); a GGX lobe per texel is fitted only to "
+                              "a dual-microfacet material's NDF", "export the dual-microfacet fit of the same session "
+                              "(svbtdf fit --model dual)");
+  }
+}
+
+MaterialLobes FitMaterialLobes(const fit::Material& material, int threads, const std::string& source) {
+  RequireLobeFittable(material, source);
   MaterialLobes lobes;
   const int width = material.width, height = material.height;
   lobes.alpha_x = common::FloatImage(width, height, 1);

@@ -44,7 +44,8 @@ void CheckOptions(const FitMaterialOptions& options, double eta) {
   const int pool = options.standard_errors.model_error_pool_radius;
   if (pool < 0) common::ThrowInvalidInput("--model-error-pool", "must be >= 0 texels, got " + std::to_string(pool));
   if (options.internal_reflection && options.model != MaterialModel::kDualMicrofacet) {
-    common::ThrowInvalidInput("--internal-reflection", "is a term of the dual-microfacet model; --model ggx has none");
+    common::ThrowInvalidInput("--internal-reflection", std::string("is a term of the dual-microfacet model; --model ") +
+                                                           (options.model == MaterialModel::kSlab ? "slab" : "ggx") + " has none");
   }
   // The term integrates D over every facet normal, the grazing ones too, where a free horizon
   // leaves D to the smoothness prior (and k_s scales it up): on the Monte Carlo truth that made
@@ -253,15 +254,39 @@ std::vector<int64_t> FailedTexels(const std::vector<int64_t>& reps, const std::v
   return texels;
 }
 
+nlohmann::json SlabToJson(const SlabFitResult& f) {
+  return {{"entry_roughness", f.interfaces.entry_roughness}, {"exit_roughness", f.interfaces.exit_roughness},
+          {"entry_roughness_se", f.entry_roughness_se},     {"exit_roughness_se", f.exit_roughness_se},
+          {"roughness_correlation", f.roughness_correlation}, {"k_s", f.k_s},
+          {"k_s_rgb", f.k_s_rgb},                           {"log_rms", f.log_rms},
+          {"relative_rmse", f.relative_rmse},               {"converged", f.converged}};
+}
+
+SlabFitResult SlabFromJson(const nlohmann::json& j) {
+  SlabFitResult f;
+  f.interfaces.entry_roughness = j.at("entry_roughness").get<double>();
+  f.interfaces.exit_roughness = j.at("exit_roughness").get<double>();
+  f.entry_roughness_se = j.at("entry_roughness_se").get<double>();
+  f.exit_roughness_se = j.at("exit_roughness_se").get<double>();
+  f.roughness_correlation = j.at("roughness_correlation").get<double>();
+  f.k_s = j.at("k_s").get<double>();
+  f.k_s_rgb = j.at("k_s_rgb").get<std::array<double, 3>>();
+  f.log_rms = j.at("log_rms").get<double>();
+  f.relative_rmse = j.at("relative_rmse").get<double>();
+  f.converged = j.at("converged").get<bool>();
+  return f;
+}
+
 // The fits of all representatives with one model, as the journal records them.
 class RepresentativeFits {
  public:
   RepresentativeFits(double eta, const FitMaterialOptions& options, size_t count)
-      : model_(options.model), dual_(eta, DualOptions(options)), baseline_(eta), results_(count) {}
+      : model_(options.model), dual_(eta, DualOptions(options)), baseline_(eta), slab_(eta), results_(count) {}
 
   // Fits one slice (svbtdf::Error kNumerical when it cannot be fitted).
   nlohmann::json Fit(const TexelSlice& slice, FitWorkspace* workspace) const {
     if (model_ == MaterialModel::kWalterGgx) return BaselineToJson(baseline_.Fit(slice));
+    if (model_ == MaterialModel::kSlab) return SlabToJson(slab_.Fit(slice));
     return FitToJson(dual_.Fit(slice, workspace));
   }
   void Set(size_t r, nlohmann::json result) { results_[r] = std::move(result); }
@@ -283,6 +308,11 @@ class RepresentativeFits {
       for (const nlohmann::json& j : results_) fits.push_back(BaselineFromJson(j));
       return AssembleBaselineMaterial(width, height, eta, ndf_resolution, clustering, fits, store.rho_d());
     }
+    if (model_ == MaterialModel::kSlab) {
+      std::vector<SlabFitResult> fits;
+      for (const nlohmann::json& j : results_) fits.push_back(SlabFromJson(j));
+      return AssembleSlabMaterial(width, height, eta, ndf_resolution, clustering, fits, store.rho_d());
+    }
     std::vector<TexelFitResult> fits;
     for (const nlohmann::json& j : results_) fits.push_back(FitFromJson(j, "a representative fit in the checkpoint"));
     return AssembleMaterial(width, height, eta, ndf_resolution, clustering, fits, store.rho_d());
@@ -302,6 +332,7 @@ class RepresentativeFits {
   MaterialModel model_;
   TexelFitter dual_;
   BaselineFitter baseline_;
+  SlabFitter slab_;
   std::vector<nlohmann::json> results_;
 };
 

@@ -38,6 +38,14 @@ const MapSpec kBaselineMaps[] = {
     {"baseline_azimuth", "baseline_azimuth.exr", &Material::baseline_azimuth, 1},
 };
 
+// The slab's interface maps (slab materials only, version 5).
+const MapSpec kSlabMaps[] = {
+    {"slab_entry_roughness", "slab_entry_roughness.exr", &Material::slab_entry_roughness, 1},
+    {"slab_exit_roughness", "slab_exit_roughness.exr", &Material::slab_exit_roughness, 1},
+    {"slab_entry_roughness_se", "slab_entry_roughness_se.exr", &Material::slab_entry_roughness_se, 1},
+    {"slab_exit_roughness_se", "slab_exit_roughness_se.exr", &Material::slab_exit_roughness_se, 1},
+};
+
 // The standard errors (version 3; docs/fitting.md, "Uncertainty").
 const MapSpec kUncertaintyMaps[] = {
     {"alpha_se", "alpha_se.exr", &Material::alpha_se, 1},
@@ -52,19 +60,28 @@ const MapSpec kUncertaintyMaps[] = {
 std::vector<MapSpec> MapsOf(MaterialModel model, bool uncertainty) {
   std::vector<MapSpec> maps(std::begin(kMaps), std::end(kMaps));
   if (model == MaterialModel::kWalterGgx) maps.insert(maps.end(), std::begin(kBaselineMaps), std::end(kBaselineMaps));
+  if (model == MaterialModel::kSlab) maps.insert(maps.end(), std::begin(kSlabMaps), std::end(kSlabMaps));
   if (uncertainty) maps.insert(maps.end(), std::begin(kUncertaintyMaps), std::end(kUncertaintyMaps));
   return maps;
 }
 
 // The manifest's description of the BTDF (for people; readers use "btdf").
 const char* ModelFormula(MaterialModel model) {
-  return model == MaterialModel::kWalterGgx
-             ? "walter-ggx: R = k_s f_Walter(GGX(baseline_alpha_x, baseline_alpha_y) rotated by baseline_azimuth; i, o, "
-               "1, eta) + rho_d"
-             : "dual-microfacet: R = k_s exp(alpha ln rho_T + (1 - alpha) ln rho_B) + rho_d";
+  switch (model) {
+    case MaterialModel::kWalterGgx:
+      return "walter-ggx: R = k_s f_Walter(GGX(baseline_alpha_x, baseline_alpha_y) rotated by baseline_azimuth; i, o, "
+             "1, eta) + rho_d";
+    case MaterialModel::kSlab:
+      return "slab: R = k_s rho_TT(GGX(slab_entry_roughness), GGX(slab_exit_roughness); i, o, eta) + rho_d "
+             "(docs/model.md, \"Two rough interfaces\")";
+    case MaterialModel::kDualMicrofacet:
+      break;
+  }
+  return "dual-microfacet: R = k_s exp(alpha ln rho_T + (1 - alpha) ln rho_B) + rho_d";
 }
 
 int MinimumVersion(const Material& m) {
+  if (m.model == MaterialModel::kSlab) return 5;
   if (m.internal_reflection) return 4;
   if (m.has_uncertainty()) return 3;
   return m.model == MaterialModel::kWalterGgx ? 2 : 1;
@@ -73,7 +90,8 @@ int MinimumVersion(const Material& m) {
 MaterialModel ParseModel(const std::string& name, const std::string& source) {
   if (name == "dual-microfacet") return MaterialModel::kDualMicrofacet;
   if (name == "walter-ggx") return MaterialModel::kWalterGgx;
-  common::ThrowFormatError(source, "has an unknown btdf '" + name + "' (expected dual-microfacet or walter-ggx)");
+  if (name == "slab") return MaterialModel::kSlab;
+  common::ThrowFormatError(source, "has an unknown btdf '" + name + "' (expected dual-microfacet, walter-ggx or slab)");
 }
 
 // "WxH" or "WxHxC"; built with += because GCC 12 misreads a long chain of temporaries as an overflow.
@@ -200,7 +218,15 @@ Material AssembleMaterial(int width, int height, double eta, int ndf_resolution,
 }
 
 const char* MaterialModelName(MaterialModel model) {
-  return model == MaterialModel::kWalterGgx ? "walter-ggx" : "dual-microfacet";
+  switch (model) {
+    case MaterialModel::kWalterGgx:
+      return "walter-ggx";
+    case MaterialModel::kSlab:
+      return "slab";
+    case MaterialModel::kDualMicrofacet:
+      break;
+  }
+  return "dual-microfacet";
 }
 
 Material AssembleBaselineMaterial(int width, int height, double eta, int ndf_resolution, const Clustering& clustering,
@@ -240,6 +266,35 @@ Material AssembleBaselineMaterial(int width, int height, double eta, int ndf_res
     m.baseline_alpha_x.pixels[t] = static_cast<float>(lobe.alpha_x);
     m.baseline_alpha_y.pixels[t] = static_cast<float>(lobe.alpha_y);
     m.baseline_azimuth.pixels[t] = static_cast<float>(lobe.azimuth);
+  }
+  return m;
+}
+
+Material AssembleSlabMaterial(int width, int height, double eta, int ndf_resolution, const Clustering& clustering,
+                              const std::vector<SlabFitResult>& representative_fits, const common::FloatImage& rho_d) {
+  // The shared maps through the baseline's path, with the exit's GGX as each NDF table.
+  std::vector<BaselineFitResult> as_baseline(representative_fits.size());
+  for (size_t r = 0; r < representative_fits.size(); ++r) {
+    const SlabFitResult& f = representative_fits[r];
+    as_baseline[r].alpha_x = as_baseline[r].alpha_y = f.interfaces.exit_roughness;
+    as_baseline[r].k_s = f.k_s;
+    as_baseline[r].k_s_rgb = f.k_s_rgb;
+    as_baseline[r].relative_rmse = f.relative_rmse;
+  }
+  Material m = AssembleBaselineMaterial(width, height, eta, ndf_resolution, clustering, as_baseline, rho_d);
+  m.model = MaterialModel::kSlab;
+  for (common::FloatImage* map : {&m.baseline_alpha_x, &m.baseline_alpha_y, &m.baseline_azimuth}) *map = common::FloatImage();
+  for (common::FloatImage* map : {&m.slab_entry_roughness, &m.slab_exit_roughness, &m.slab_entry_roughness_se,
+                                  &m.slab_exit_roughness_se}) {
+    *map = common::FloatImage(width, height, 1);
+  }
+  // Every texel takes its cluster's representative whole (AssembleBaselineMaterial's weights).
+  for (int64_t t = 0; t < static_cast<int64_t>(width) * height; ++t) {
+    const SlabFitResult& f = representative_fits.at(clustering.cluster[t]);
+    m.slab_entry_roughness.pixels[t] = static_cast<float>(f.interfaces.entry_roughness);
+    m.slab_exit_roughness.pixels[t] = static_cast<float>(f.interfaces.exit_roughness);
+    m.slab_entry_roughness_se.pixels[t] = static_cast<float>(f.entry_roughness_se);
+    m.slab_exit_roughness_se.pixels[t] = static_cast<float>(f.exit_roughness_se);
   }
   return m;
 }
@@ -374,6 +429,17 @@ Material ReadMaterial(const fs::path& folder) {
     common::ThrowFormatError((folder / "weight_value.exr").string(), "has a different channel count than weight_index.exr");
   }
   const int reps = static_cast<int>(m.representative_texels.size());
+  if (m.model == MaterialModel::kSlab && version < 5) {
+    common::ThrowFormatError(manifest_path.string(), "has a slab btdf, which needs material format version 5");
+  }
+  if (m.model == MaterialModel::kSlab) {
+    for (const MapSpec& spec : {kSlabMaps[0], kSlabMaps[1]}) {
+      const common::FloatImage& map = m.*spec.image;
+      if (*std::min_element(map.pixels.begin(), map.pixels.end()) <= 0.0f) {
+        common::ThrowFormatError((folder / spec.file).string(), "holds a GGX roughness <= 0");
+      }
+    }
+  }
   if (m.model == MaterialModel::kWalterGgx) {
     for (const common::FloatImage* map : {&m.baseline_alpha_x, &m.baseline_alpha_y}) {
       if (*std::min_element(map->pixels.begin(), map->pixels.end()) <= 0.0f) {
@@ -430,11 +496,23 @@ MaterialEvaluator::MaterialEvaluator(const Material& material)
 }
 
 model::Rgb TexelBtdf::Evaluate(const model::Vec3& i, const model::Vec3& o) const {
-  if (!baseline_) return model::EvaluateMaterial(ndf_, params_, i, o);
-  const double shape = BaselineShape(*baseline_, params_.eta, i, o);
+  if (!baseline_ && !slab_) return model::EvaluateMaterial(ndf_, params_, i, o);
+  const double shape = slab_ ? SlabShape(*slab_, params_.eta, i, o) : BaselineShape(*baseline_, params_.eta, i, o);
   model::Rgb value;
   for (int c = 0; c < 3; ++c) value[c] = params_.k_s[c] * shape + params_.rho_d[c];
   return value;
+}
+
+TexelBtdf TexelBtdf::UnitShape() const {
+  model::DualMicrofacetParams unit = params_;
+  unit.k_s = {1.0, 1.0, 1.0};
+  unit.rho_d = {0.0, 0.0, 0.0};
+  return TexelBtdf(ndf_, unit, baseline_, slab_);
+}
+
+std::optional<SlabInterfaces> MaterialEvaluator::Slab(int x, int y) const {
+  if (material_.model != MaterialModel::kSlab) return std::nullopt;
+  return SlabInterfaces{material_.slab_entry_roughness.at(x, y), material_.slab_exit_roughness.at(x, y)};
 }
 
 std::optional<BaselineLobe> MaterialEvaluator::Lobe(int x, int y) const {
@@ -446,6 +524,10 @@ std::optional<BaselineLobe> MaterialEvaluator::Lobe(int x, int y) const {
 model::TabulatedNdf MaterialEvaluator::TexelNdf(int x, int y) const {
   // The baseline's texel NDF is its own interpolated lobe, the one Evaluate uses.
   if (const std::optional<BaselineLobe> lobe = Lobe(x, y)) return model::TabulatedNdf(grid_, BaselineLnD(grid_, *lobe));
+  // A slab's is its exit interface's GGX (the tables hold the representatives' exits).
+  if (const std::optional<SlabInterfaces> slab = Slab(x, y)) {
+    return model::TabulatedNdf(grid_, BaselineLnD(grid_, {slab->exit_roughness, slab->exit_roughness, 0.0}));
+  }
   std::vector<double> ln_d = TexelCellD(x, y);
   for (double& value : ln_d) value = std::log(value);
   model::TabulatedNdf ndf(grid_, std::move(ln_d));
@@ -491,7 +573,7 @@ TexelBtdf MaterialEvaluator::Texel(int x, int y) const {
                                      std::to_string(material_.width) + "x" + std::to_string(material_.height) +
                                      " material");
   }
-  return TexelBtdf(TexelNdf(x, y), TexelParams(material_, x, y), Lobe(x, y));
+  return TexelBtdf(TexelNdf(x, y), TexelParams(material_, x, y), Lobe(x, y), Slab(x, y));
 }
 
 }  // namespace svbtdf::fit

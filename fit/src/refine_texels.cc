@@ -97,11 +97,8 @@ class ScalarRefiner {
   ScalarRefiner(const TexelBtdf& texel, const TexelSlice& slice, const SampleLookups* lookups)
       : slice_(slice), sum_rho_squared_(SumOfSquares(slice.rho)) {
     const size_t n = slice_.light.size();
-    if (texel.model() == MaterialModel::kWalterGgx) {
-      model::DualMicrofacetParams unit = texel.params();
-      unit.k_s = {1.0, 1.0, 1.0};
-      unit.rho_d = {0.0, 0.0, 0.0};
-      const TexelBtdf shape(texel.ndf(), unit, texel.baseline());
+    if (texel.model() != MaterialModel::kDualMicrofacet) {  // a parametric lobe: its shape is fixed
+      const TexelBtdf shape = texel.UnitShape();
       for (size_t k = 0; k < n; ++k) fixed_shape_.push_back(shape.Evaluate(slice_.light[k], slice_.view)[0]);
       return;
     }

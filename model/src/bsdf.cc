@@ -59,6 +59,62 @@ Vec3 SampleCosineTransmission(const Vec3& wo, const Vec2& u) {
   return {r * std::cos(phi), r * std::sin(phi), wo.z() > 0 ? -z : z};
 }
 
+// The one-rough-side configurations' samplers, drawing from the visible normals of `proposal`:
+// DualMicrofacetBsdf's two strategies, and SlabBsdf's (one per interface).
+namespace {
+
+// Rough entry: om = eta t is fixed by o, and h_T = normalize(i + om) is a visible normal of the
+// in-slab direction t refracted out into the air; dw_h / dw_i = |i.h| / |i + om|^2 (Walter eq. 17
+// with the light's side in air).
+std::optional<Vec3> SampleRoughEntry(const Ndf& proposal, double eta, const Vec3& o, const Vec2& u) {
+  const Vec3 om(o.x(), o.y(), std::sqrt(std::max(0.0, eta * eta - o.x() * o.x() - o.y() * o.y())));
+  const Vec3 t = om / eta;
+  const NormalSample s = proposal.SampleVisibleNormal(t, u);
+  if (!(s.pdf > 0) || s.h.dot(t) <= 0) return std::nullopt;
+  const std::optional<Vec3> i = Refract(t, s.h, eta);
+  if (!i || i->z() >= 0) return std::nullopt;
+  return i->normalized();
+}
+
+double RoughEntryPdf(const Ndf& proposal, double eta, const Vec3& i, const Vec3& o) {
+  const Vec3 om(o.x(), o.y(), std::sqrt(std::max(0.0, eta * eta - o.x() * o.x() - o.y() * o.y())));
+  const Vec3 sum = i + om;
+  const double length2 = sum.squaredNorm();
+  if (!(length2 > 0)) return 0.0;
+  const Vec3 h = sum / std::sqrt(length2);
+  if (h.z() <= 0 || i.dot(h) >= 0 || om.dot(h) <= 0) return 0.0;
+  return proposal.VisibleNormalPdf(om / eta, h) * std::abs(i.dot(h)) / length2;
+}
+
+// Rough exit: h_B is a visible normal of o, o refracts into the slab (never totally reflected)
+// and the in-slab direction leaves the flat entry along i. dw_h / dw_i is Walter's refraction
+// Jacobian times the flat interface's dw_t / dw_i = |i.z| / (eta^2 t.z), which together give
+// |im.h| |i.z| / (im.z |im - o|^2).
+std::optional<Vec3> SampleRoughExit(const Ndf& proposal, double eta, const Vec3& o, const Vec2& u) {
+  if (o.z() < kMinRoughExitCosine) return std::nullopt;
+  const NormalSample s = proposal.SampleVisibleNormal(o, u);
+  if (!(s.pdf > 0) || s.h.dot(o) <= 0) return std::nullopt;
+  const std::optional<Vec3> into_slab = Refract(o, s.h, 1.0 / eta);
+  if (!into_slab || into_slab->z() >= 0) return std::nullopt;
+  const Vec3 im = -eta * into_slab->normalized();  // eta times the light's in-slab direction
+  const double sin2 = im.x() * im.x() + im.y() * im.y();
+  if (sin2 >= 1.0) return std::nullopt;  // totally reflected at the flat entry
+  return Vec3(-im.x(), -im.y(), -std::sqrt(1.0 - sin2));
+}
+
+double RoughExitPdf(const Ndf& proposal, double eta, const Vec3& i, const Vec3& o) {
+  const Vec3 im(-i.x(), -i.y(), std::sqrt(std::max(0.0, eta * eta - i.x() * i.x() - i.y() * i.y())));
+  if (o.z() < kMinRoughExitCosine) return 0.0;
+  const Vec3 difference = im - o;
+  const double length2 = difference.squaredNorm();
+  if (!(length2 > 0)) return 0.0;
+  const Vec3 h = difference / std::sqrt(length2);
+  if (h.z() <= 0 || im.dot(h) <= 0 || o.dot(h) <= 0) return 0.0;
+  return proposal.VisibleNormalPdf(o, h) * im.dot(h) * std::abs(i.z()) / (im.z() * length2);
+}
+
+}  // namespace
+
 // ---------------------------------------------------------------------------------------------
 // DualMicrofacetBsdf
 
@@ -92,64 +148,10 @@ Rgb DualMicrofacetBsdf::Eval(const Vec3& wi, const Vec3& wo) const {
   return EvalAbove(FlipZ(wi), FlipZ(wo), 1.0 - params_.alpha);
 }
 
-// Rough entry: om = eta t is fixed by o, and h_T = normalize(i + om) is a visible normal of the
-// in-slab direction t refracted out into the air; dw_h / dw_i = |i.h| / |i + om|^2 (Walter eq. 17
-// with the light's side in air).
-std::optional<Vec3> DualMicrofacetBsdf::SampleRoughEntry(const Vec3& o, const Vec2& u) const {
-  const double eta = params_.eta;
-  const Vec3 om(o.x(), o.y(), std::sqrt(std::max(0.0, eta * eta - o.x() * o.x() - o.y() * o.y())));
-  const Vec3 t = om / eta;
-  const NormalSample s = proposal_.SampleVisibleNormal(t, u);
-  if (!(s.pdf > 0) || s.h.dot(t) <= 0) return std::nullopt;
-  const std::optional<Vec3> i = Refract(t, s.h, eta);
-  if (!i || i->z() >= 0) return std::nullopt;
-  return i->normalized();
-}
-
-double DualMicrofacetBsdf::RoughEntryPdf(const Vec3& i, const Vec3& o) const {
-  const double eta = params_.eta;
-  const Vec3 om(o.x(), o.y(), std::sqrt(std::max(0.0, eta * eta - o.x() * o.x() - o.y() * o.y())));
-  const Vec3 sum = i + om;
-  const double length2 = sum.squaredNorm();
-  if (!(length2 > 0)) return 0.0;
-  const Vec3 h = sum / std::sqrt(length2);
-  if (h.z() <= 0 || i.dot(h) >= 0 || om.dot(h) <= 0) return 0.0;
-  return proposal_.VisibleNormalPdf(om / eta, h) * std::abs(i.dot(h)) / length2;
-}
-
-// Rough exit: h_B is a visible normal of o, o refracts into the slab (never totally reflected)
-// and the in-slab direction leaves the flat entry along i. dw_h / dw_i is Walter's refraction
-// Jacobian times the flat interface's dw_t / dw_i = |i.z| / (eta^2 t.z), which together give
-// |im.h| |i.z| / (im.z |im - o|^2).
-std::optional<Vec3> DualMicrofacetBsdf::SampleRoughExit(const Vec3& o, const Vec2& u) const {
-  const double eta = params_.eta;
-  if (o.z() < kMinRoughExitCosine) return std::nullopt;
-  const NormalSample s = proposal_.SampleVisibleNormal(o, u);
-  if (!(s.pdf > 0) || s.h.dot(o) <= 0) return std::nullopt;
-  const std::optional<Vec3> into_slab = Refract(o, s.h, 1.0 / eta);
-  if (!into_slab || into_slab->z() >= 0) return std::nullopt;
-  const Vec3 im = -eta * into_slab->normalized();  // eta times the light's in-slab direction
-  const double sin2 = im.x() * im.x() + im.y() * im.y();
-  if (sin2 >= 1.0) return std::nullopt;  // totally reflected at the flat entry
-  return Vec3(-im.x(), -im.y(), -std::sqrt(1.0 - sin2));
-}
-
-double DualMicrofacetBsdf::RoughExitPdf(const Vec3& i, const Vec3& o) const {
-  const double eta = params_.eta;
-  const Vec3 im(-i.x(), -i.y(), std::sqrt(std::max(0.0, eta * eta - i.x() * i.x() - i.y() * i.y())));
-  if (o.z() < kMinRoughExitCosine) return 0.0;
-  const Vec3 difference = im - o;
-  const double length2 = difference.squaredNorm();
-  if (!(length2 > 0)) return 0.0;
-  const Vec3 h = difference / std::sqrt(length2);
-  if (h.z() <= 0 || im.dot(h) <= 0 || o.dot(h) <= 0) return 0.0;
-  return proposal_.VisibleNormalPdf(o, h) * im.dot(h) * std::abs(i.z()) / (im.z() * length2);
-}
-
 double DualMicrofacetBsdf::PdfAbove(const Vec3& i, const Vec3& o, const LobeWeights& weights) const {
   double pdf = weights.diffuse * std::abs(i.z()) * kInvPi;
-  if (weights.rough_entry > 0) pdf += weights.rough_entry * RoughEntryPdf(i, o);
-  if (weights.rough_exit > 0) pdf += weights.rough_exit * RoughExitPdf(i, o);
+  if (weights.rough_entry > 0) pdf += weights.rough_entry * RoughEntryPdf(proposal_, params_.eta, i, o);
+  if (weights.rough_exit > 0) pdf += weights.rough_exit * RoughExitPdf(proposal_, params_.eta, i, o);
   return pdf;
 }
 
@@ -168,9 +170,9 @@ std::optional<BsdfSample> DualMicrofacetBsdf::Sample(const Vec3& wo, double u_lo
   if (u_lobe < weights.diffuse) {
     i = SampleCosineTransmission(o, u);
   } else if (u_lobe < weights.diffuse + weights.rough_entry) {
-    i = SampleRoughEntry(o, u);
+    i = SampleRoughEntry(proposal_, params_.eta, o, u);
   } else {
-    i = SampleRoughExit(o, u);
+    i = SampleRoughExit(proposal_, params_.eta, o, u);
   }
   if (!i) return std::nullopt;
   return Finish(*this, below ? FlipZ(*i) : *i, wo);
@@ -300,6 +302,54 @@ std::optional<BsdfSample> SlabLobeBsdf::Sample(const Vec3& wo, double u_lobe, co
     if (!OppositeSides(wi, wo)) return std::nullopt;  // the lobe's mass beyond the horizon
   }
   return Finish(*this, wi, wo);
+}
+
+// ---------------------------------------------------------------------------------------------
+// SlabBsdf
+
+SlabBsdf::SlabBsdf(const Ndf& entry, const Ndf& exit, double eta, const Rgb& k_s, const Rgb& rho_d)
+    : entry_(entry), exit_(exit), eta_(eta), k_s_(k_s), rho_d_(rho_d), diffuse_probability_(DiffuseProbability(k_s, rho_d)) {
+  DualMicrofacetModel validate_eta(eta);
+}
+
+Rgb SlabBsdf::Eval(const Vec3& wi, const Vec3& wo) const {
+  if (!OppositeSides(wi, wo)) return {0, 0, 0};
+  const bool below = wo.z() < 0;
+  const SlabTransmission slab(below ? exit_ : entry_, below ? entry_ : exit_, eta_);
+  const double rho = below ? slab.Rho(FlipZ(wi), FlipZ(wo)) : slab.Rho(wi, wo);
+  return {k_s_[0] * rho + rho_d_[0], k_s_[1] * rho + rho_d_[1], k_s_[2] * rho + rho_d_[2]};
+}
+
+// Half of the specular draws go to each side's configuration: the slab's lobe is their
+// convolution, at least as wide as either, and whichever side is rougher shapes most of it.
+double SlabBsdf::PdfAbove(const Ndf& entry, const Ndf& exit, const Vec3& i, const Vec3& o) const {
+  const double specular = 0.5 * (1.0 - diffuse_probability_);
+  return diffuse_probability_ * std::abs(i.z()) * kInvPi + specular * RoughEntryPdf(entry, eta_, i, o) +
+         specular * RoughExitPdf(exit, eta_, i, o);
+}
+
+double SlabBsdf::Pdf(const Vec3& wi, const Vec3& wo) const {
+  if (!OppositeSides(wi, wo)) return 0.0;
+  if (wo.z() < 0) return PdfAbove(exit_, entry_, FlipZ(wi), FlipZ(wo));
+  return PdfAbove(entry_, exit_, wi, wo);
+}
+
+std::optional<BsdfSample> SlabBsdf::Sample(const Vec3& wo, double u_lobe, const Vec2& u) const {
+  if (wo.z() == 0) return std::nullopt;
+  const bool below = wo.z() < 0;
+  const Vec3 o = below ? FlipZ(wo) : wo;
+  const Ndf& entry = below ? exit_ : entry_;
+  const Ndf& exit = below ? entry_ : exit_;
+  std::optional<Vec3> i;
+  if (u_lobe < diffuse_probability_) {
+    i = SampleCosineTransmission(o, u);
+  } else if (u_lobe < diffuse_probability_ + 0.5 * (1.0 - diffuse_probability_)) {
+    i = SampleRoughEntry(entry, eta_, o, u);
+  } else {
+    i = SampleRoughExit(exit, eta_, o, u);
+  }
+  if (!i) return std::nullopt;
+  return Finish(*this, below ? FlipZ(*i) : *i, wo);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -138,7 +138,8 @@ fit::FitMaterialOptions FitOptions(const std::string& model, double eta, const s
   fit::FitMaterialOptions options;
   if (model == "dual") options.model = fit::MaterialModel::kDualMicrofacet;
   else if (model == "ggx") options.model = fit::MaterialModel::kWalterGgx;
-  else common::ThrowInvalidInput("model", "must be 'dual' or 'ggx', not '" + model + "'");
+  else if (model == "slab") options.model = fit::MaterialModel::kSlab;
+  else common::ThrowInvalidInput("model", "must be 'dual', 'ggx' or 'slab', not '" + model + "'");
   options.eta = eta;
   options.representative_fraction = fit::ParseRepresentativeFraction(representatives, "representatives");
   options.holdout = holdout;

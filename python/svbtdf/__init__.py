@@ -82,7 +82,7 @@ def fit(processed: str, out: str, *, model: str = "dual", eta: Optional[float] =
         progress: Progress = None, log: Log = None) -> dict:
     """``svbtdf fit PROCESSED --out OUT``: fits and writes the material (resumable).
 
-    The options are the command line's: model ("dual" | "ggx"), eta (None: the store's),
+    The options are the command line's: model ("dual" | "ggx" | "slab"), eta (None: the store's),
     representatives (fraction or "all"), holdout, refine (False: --no-refine), fixed_horizon,
     ndf_resolution, seed, threads. Returns {"material", "warnings"}.
     """

@@ -51,6 +51,11 @@ const model::Bsdf& MaterialSurface::At(int col, int row, BsdfScratch& scratch) c
     scratch.ggx.emplace(m.baseline_alpha_x.at(col, row), m.baseline_alpha_y.at(col, row));
     return scratch.walter.emplace(*scratch.ggx, 1.0, m.eta, params.k_s, params.rho_d, m.baseline_azimuth.at(col, row));
   }
+  if (m.model == fit::MaterialModel::kSlab) {
+    scratch.ggx.emplace(m.slab_entry_roughness.at(col, row));
+    scratch.ggx_exit.emplace(m.slab_exit_roughness.at(col, row));
+    return scratch.slab.emplace(*scratch.ggx, *scratch.ggx_exit, m.eta, params.k_s, params.rho_d);
+  }
   // D = sum_j c_j D_j with c_j = w_j s_j / S, as MaterialEvaluator::TexelNdf blends the cells
   // (docs/material-format.md), except that the sum is taken after interpolation.
   struct Term {
@@ -150,7 +155,8 @@ LobeSurface::LobeSurface(const fit::Material& material, common::FloatImage alpha
       alpha_y_(std::move(alpha_y)),
       azimuth_(std::move(azimuth)) {
   if (material.model != fit::MaterialModel::kDualMicrofacet) {
-    common::ThrowInvalidInput(source, "is a walter-ggx material: its texels are GGX lobes already");
+    common::ThrowInvalidInput(source, std::string("is a ") + fit::MaterialModelName(material.model) +
+                                          " material: only a dual-microfacet material's NDF tables are fitted by lobes");
   }
   for (const common::FloatImage* map : {&alpha_x_, &alpha_y_, &azimuth_}) {
     if (map->width != material.width || map->height != material.height || map->channels != 1) {

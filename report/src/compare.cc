@@ -10,6 +10,7 @@
 #include "svbtdf/common/progress.h"
 #include "svbtdf/common/statistics.h"
 #include "svbtdf/fit/ndf_error.h"
+#include "svbtdf/simulate/montecarlo_truth.h"
 
 namespace svbtdf::report {
 namespace {
@@ -120,6 +121,55 @@ void RequireSameSize(const fit::Material& material, const std::string& material_
                     "compare a material fitted at the truth's resolution");
 }
 
+namespace {
+
+// The true GGX roughness of a slab interface, or NaN where it is not isotropic GGX.
+double IsotropicGgxRoughness(const simulate::SlabInterfaceSpec& spec) {
+  const model::AnalyticNdfParams& p = spec.params;
+  const bool isotropic = p.alpha_x == p.alpha_y && p.theta_x == 0 && p.theta_y == 0;
+  return spec.ndf == "ggx" && isotropic ? p.alpha_x : std::nan("");
+}
+
+// Each true slab material's texels among `texels`, their fitted interfaces against the truth's.
+std::vector<CompareMetrics::SlabRecovery> SlabRecoveries(const fit::Material& material, const simulate::MonteCarloTruth& truth,
+                                                         const std::vector<int>& texels) {
+  std::vector<CompareMetrics::SlabRecovery> recoveries;
+  for (size_t m = 0; m < truth.materials().size(); ++m) {
+    const simulate::SlabMaterial& slab = truth.materials()[m];
+    CompareMetrics::SlabRecovery r;
+    r.label = slab.label;
+    r.true_entry = IsotropicGgxRoughness(slab.entry);
+    r.true_exit = IsotropicGgxRoughness(slab.exit);
+    std::vector<double> entry, exit, entry_se, exit_se;
+    for (int t : texels) {
+      if (truth.material_of(t) != static_cast<int>(m)) continue;
+      const int x = t % material.width, y = t / material.width;
+      entry.push_back(material.slab_entry_roughness.at(x, y));
+      exit.push_back(material.slab_exit_roughness.at(x, y));
+      entry_se.push_back(material.slab_entry_roughness_se.at(x, y));
+      exit_se.push_back(material.slab_exit_roughness_se.at(x, y));
+    }
+    r.texels = entry.size();
+    if (entry.empty()) continue;
+    const auto within = [](const std::vector<double>& fitted, double truth_value) {
+      if (!std::isfinite(truth_value)) return std::nan("");
+      std::vector<double> errors;
+      for (double v : fitted) errors.push_back(std::abs(v / truth_value - 1.0));
+      return FractionWithin(errors, 0.15);
+    };
+    r.entry_within_15 = within(entry, r.true_entry);
+    r.exit_within_15 = within(exit, r.true_exit);
+    r.entry_median = common::Median(entry);
+    r.exit_median = common::Median(exit);
+    r.entry_se_median = common::Median(entry_se);
+    r.exit_se_median = common::Median(exit_se);
+    recoveries.push_back(r);
+  }
+  return recoveries;
+}
+
+}  // namespace
+
 CompareMetrics Compare(const fit::Material& material, const simulate::Truth& truth, const CompareOptions& options) {
   RequireSameSize(material, options.material_folder, truth);
   CompareMetrics metrics;
@@ -200,8 +250,32 @@ CompareMetrics Compare(const fit::Material& material, const simulate::Truth& tru
   metrics.coverage_ndf_width = width_coverage.Value();
   metrics.heldout_rank_correlation = SpearmanCorrelation(predicted_error, actual_error);
   metrics.residual_rank_correlation = SpearmanCorrelation(residual_error, actual_error);
+  if (material.model == fit::MaterialModel::kSlab && truth.montecarlo()) {
+    metrics.slab_recovery = SlabRecoveries(material, *truth.montecarlo(), texels);
+  }
   return metrics;
 }
+
+namespace {
+
+nlohmann::json SlabRecoveriesToJson(const std::vector<CompareMetrics::SlabRecovery>& recoveries) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const CompareMetrics::SlabRecovery& r : recoveries) {
+    list.push_back({{"label", r.label},
+                    {"texels", r.texels},
+                    {"true_entry_roughness", NumberOrNull(r.true_entry)},
+                    {"true_exit_roughness", NumberOrNull(r.true_exit)},
+                    {"entry_roughness_median", NumberOrNull(r.entry_median)},
+                    {"exit_roughness_median", NumberOrNull(r.exit_median)},
+                    {"entry_roughness_se_median", NumberOrNull(r.entry_se_median)},
+                    {"exit_roughness_se_median", NumberOrNull(r.exit_se_median)},
+                    {"entry_within_15_percent", NumberOrNull(r.entry_within_15)},
+                    {"exit_within_15_percent", NumberOrNull(r.exit_within_15)}});
+  }
+  return list;
+}
+
+}  // namespace
 
 nlohmann::json ToJson(const CompareMetrics& metrics) {
   return {
@@ -232,6 +306,7 @@ nlohmann::json ToJson(const CompareMetrics& metrics) {
         {"ndf_width", NumberOrNull(metrics.z_median[4])}}},
       {"heldout_rank_correlation", NumberOrNull(metrics.heldout_rank_correlation)},
       {"residual_rank_correlation", NumberOrNull(metrics.residual_rank_correlation)},
+      {"slab_recovery", SlabRecoveriesToJson(metrics.slab_recovery)},
   };
 }
 

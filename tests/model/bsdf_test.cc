@@ -14,6 +14,7 @@
 #include "svbtdf/model/ellipsoid_ndf.h"
 #include "svbtdf/model/ggx.h"
 #include "svbtdf/model/hemicube.h"
+#include "svbtdf/model/slab_transmission.h"
 #include "svbtdf/model/tabulated_ndf.h"
 #include "sampling_check.h"
 
@@ -154,6 +155,61 @@ TEST(WalterBsdf, SampleFollowsPdfAndEvalIsTheBaselineShape) {
     const Eigen::AngleAxisd unrotate(-azimuth, Vec3::UnitZ());
     const double shape = WalterBtdf(ndf, unrotate * i, unrotate * o, 1.0, 1.5);
     EXPECT_NEAR(bsdf.Eval(i, o)[1], 0.9 * shape + 0.01, 1e-12);
+  }
+}
+
+TEST(SlabBsdf, SampleFollowsPdfAndEvalIsTheTwoInterfaceTransmission) {
+  const GgxNdf entry(0.3), exit(0.12, 0.2);
+  const Rgb k_s = {0.9, 0.8, 0.7}, rho_d = {0.02, 0.03, 0.04};
+  const SlabBsdf bsdf(entry, exit, 1.45, k_s, rho_d);
+  // Each Eval is an integral (about 10 us): fewer draws than the closed-form BSDFs get.
+  for (const Vec3& wo : {Direction(0, 0), Direction(70, 200), FlipZ(Direction(35, 10))}) {
+    const testing::BsdfSamplerCheck c = testing::CheckBsdf(bsdf, wo, 100000, 19);
+    const std::string where = "wo.z " + std::to_string(wo.z());
+    EXPECT_TRUE(c.Passes()) << where << ": chi2 " << c.chi2 << " over " << c.bins << " bins";
+    EXPECT_LE(c.pdf_integral, 1.0 + 5e-3) << where;
+    EXPECT_LT(c.max_pdf_mismatch, 1e-9) << where;
+    EXPECT_LT(c.max_weight_mismatch, 1e-9) << where;
+  }
+  // Seen from above it is k_s rho_TT + rho_d; from below, the slab turned over.
+  const SlabTransmission above(entry, exit, 1.45), below(exit, entry, 1.45);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (int k = 0; k < 50; ++k) {
+    const Vec3 o = Direction(80 * u(rng), 360 * u(rng)), i = FlipZ(Direction(60 * u(rng), 360 * u(rng)));
+    const Rgb got = bsdf.Eval(i, o), turned = bsdf.Eval(FlipZ(i), FlipZ(o));
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_DOUBLE_EQ(got[c], k_s[c] * above.Rho(i, o) + rho_d[c]);
+      EXPECT_DOUBLE_EQ(turned[c], k_s[c] * below.Rho(i, o) + rho_d[c]);
+    }
+  }
+}
+
+// Light and viewer swapped is the slab seen from the other side: reciprocal to the accuracy of
+// the integral's quadrature (the two sides sample different directions). With k_s = 1 it
+// transmits at most what it receives, and Sample's weights estimate what quadrature finds.
+TEST(SlabBsdf, IsReciprocalAndSampleEstimatesItsEnergy) {
+  const GgxNdf entry(0.25), exit(0.1);
+  const SlabBsdf bsdf(entry, exit, 1.5, {1, 1, 1}, {0, 0, 0});
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0, 1);
+  int checked = 0;
+  for (int k = 0; k < 300; ++k) {
+    const Vec3 wo = Direction(60 * u(rng), 360 * u(rng));
+    const Vec3 wi = FlipZ(Direction(60 * u(rng), 360 * u(rng)));
+    const double forward = Luminance(bsdf.Eval(wi, wo)), backward = Luminance(bsdf.Eval(wo, wi));
+    if (forward < 0.05) continue;  // far tails, where a relative error means little
+    EXPECT_NEAR(backward / forward, 1.0, 0.02) << "pair " << k;
+    ++checked;
+  }
+  EXPECT_GT(checked, 20);
+  for (const Vec3& wo : {Direction(50, 30), FlipZ(Direction(60, 120))}) {
+    const testing::BsdfSamplerCheck c = testing::CheckBsdf(bsdf, wo, 50000, 23);
+    const double quadrature = QuadratureEnergy(bsdf, wo);
+    const std::string where = "wo.z " + std::to_string(wo.z());
+    EXPECT_LE(quadrature, 1.0) << where;
+    EXPECT_GT(quadrature, 0.3) << where;  // two interfaces' Fresnel at 60 degrees take much
+    EXPECT_NEAR(c.mean_weight, quadrature, 5 * c.weight_standard_error + 0.01 * quadrature) << where;
   }
 }
 

@@ -7,6 +7,7 @@
 // light landed; the tails beyond are the fit's smoothness prior, not measurements, and the
 // material does not record which cells its dots reached.
 
+#include <string>
 #include <vector>
 
 #include "svbtdf/common/image_io.h"
@@ -51,8 +52,13 @@ struct MaterialLobes {
   bool exact = false;  // a walter-ggx material: its texels are GGX lobes already (error 0)
 };
 
-// Fits every texel of `material` on `threads` threads (<= 0: all cores).
-MaterialLobes FitMaterialLobes(const fit::Material& material, int threads);
+// Throws svbtdf::Error(kInvalidInput) naming `source` (the material's manifest) for a material
+// whose texels no lobe fit stands for: a slab material's are two interfaces, not one NDF.
+void RequireLobeFittable(const fit::Material& material, const std::string& source);
+
+// Fits every texel of `material` on `threads` threads (<= 0: all cores), after
+// RequireLobeFittable.
+MaterialLobes FitMaterialLobes(const fit::Material& material, int threads, const std::string& source = "material");
 
 // The distribution of a map's values (a fitted lobe's error): median, 90th percentile, maximum.
 struct ErrorDistribution {

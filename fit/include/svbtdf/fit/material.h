@@ -15,6 +15,7 @@
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/fit/baseline_fit.h"
 #include "svbtdf/fit/clustering.h"
+#include "svbtdf/fit/slab_fit.h"
 #include "svbtdf/fit/texel_fit.h"
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/hemicube.h"
@@ -24,15 +25,17 @@ namespace svbtdf::fit {
 
 // Version 2 adds the single-interface baseline (manifest "btdf": "walter-ggx"). Version 3 adds
 // the per-texel standard errors (the *_se maps). Version 4 adds the light reflected inside the
-// slab (manifest "internal_reflection": true). A material is written with the lowest version that
-// describes it: 4 with that term, else 3 with standard errors, else 2 for the baseline, else 1,
-// so that older readers keep reading what they can.
-inline constexpr int kMaterialFormatVersion = 4;
+// slab (manifest "internal_reflection": true). Version 5 adds the slab model (manifest "btdf":
+// "slab", `svbtdf fit --model slab`). A material is written with the lowest version that
+// describes it: 5 for a slab, 4 with that term, else 3 with standard errors, else 2 for the
+// baseline, else 1, so that older readers keep reading what they can.
+inline constexpr int kMaterialFormatVersion = 5;
 
 // Which BTDF the material's texels hold.
 enum class MaterialModel {
   kDualMicrofacet,  // the paper's model: NDF table, alpha, shadowing
   kWalterGgx,       // the baseline (`svbtdf fit --model ggx`): one rough refraction, anisotropic GGX
+  kSlab,            // `svbtdf fit --model slab`: two rough interfaces, a GGX roughness each
 };
 
 struct Material {
@@ -59,6 +62,11 @@ struct Material {
   // kWalterGgx only (1 channel each, interpolated like alpha): the GGX lobe of every texel. The NDF
   // tables then hold that lobe tabulated, and alpha and the shadowing roughness are unused (0).
   common::FloatImage baseline_alpha_x, baseline_alpha_y, baseline_azimuth;
+  // kSlab only (1 channel each): every texel's two interfaces (SlabInterfaces) and the standard
+  // errors of their roughnesses (-1: not known). The NDF tables then hold the exit's GGX, and
+  // alpha and the shadowing roughness are unused (0).
+  common::FloatImage slab_entry_roughness, slab_exit_roughness;
+  common::FloatImage slab_entry_roughness_se, slab_exit_roughness_se;
   // Version 3, dual-microfacet: standard errors per texel (docs/fitting.md, "Uncertainty"); all
   // empty (0 x 0) in a material without them. -1 where not known.
   common::FloatImage alpha_se;                // 1 channel
@@ -90,7 +98,12 @@ Material AssembleMaterial(int width, int height, double eta, int ndf_resolution,
 Material AssembleBaselineMaterial(int width, int height, double eta, int ndf_resolution, const Clustering& clustering,
                                   const std::vector<BaselineFitResult>& representative_fits, const common::FloatImage& rho_d);
 
-// "dual-microfacet" | "walter-ggx", as in the manifest's "btdf" field.
+// The same for the slab model (`svbtdf fit --model slab`): every texel takes its cluster's
+// representative's interfaces, as the baseline does.
+Material AssembleSlabMaterial(int width, int height, double eta, int ndf_resolution, const Clustering& clustering,
+                              const std::vector<SlabFitResult>& representative_fits, const common::FloatImage& rho_d);
+
+// "dual-microfacet" | "walter-ggx" | "slab", as in the manifest's "btdf" field.
 const char* MaterialModelName(MaterialModel model);
 
 // Writes MATERIAL/ (a new or empty folder; an existing material is never overwritten).
@@ -109,21 +122,29 @@ std::vector<double> RepresentativeScales(const Material& material);
 
 // One texel of a material, ready to evaluate at many direction pairs.
 // For the baseline, `params` holds eta, k_s and rho_d, and `baseline` the lobe:
-//   R[c] = k_s[c] BaselineShape(lobe, eta, i, o) + rho_d[c].
+//   R[c] = k_s[c] BaselineShape(lobe, eta, i, o) + rho_d[c];
+// for the slab model, `slab` the interfaces: R[c] = k_s[c] SlabShape(slab, eta, i, o) + rho_d[c].
 class TexelBtdf {
  public:
-  TexelBtdf(model::TabulatedNdf ndf, model::DualMicrofacetParams params, std::optional<BaselineLobe> baseline = std::nullopt)
-      : ndf_(std::move(ndf)), params_(params), baseline_(baseline) {}
+  TexelBtdf(model::TabulatedNdf ndf, model::DualMicrofacetParams params, std::optional<BaselineLobe> baseline = std::nullopt,
+            std::optional<SlabInterfaces> slab = std::nullopt)
+      : ndf_(std::move(ndf)), params_(params), baseline_(baseline), slab_(slab) {}
   model::Rgb Evaluate(const model::Vec3& i, const model::Vec3& o) const;
   const model::TabulatedNdf& ndf() const { return ndf_; }
   const model::DualMicrofacetParams& params() const { return params_; }
-  MaterialModel model() const { return baseline_ ? MaterialModel::kWalterGgx : MaterialModel::kDualMicrofacet; }
+  MaterialModel model() const {
+    return slab_ ? MaterialModel::kSlab : baseline_ ? MaterialModel::kWalterGgx : MaterialModel::kDualMicrofacet;
+  }
   const std::optional<BaselineLobe>& baseline() const { return baseline_; }
+  const std::optional<SlabInterfaces>& slab() const { return slab_; }
+  // The same texel with k_s = 1 and rho_d = 0: its shape.
+  TexelBtdf UnitShape() const;
 
  private:
   model::TabulatedNdf ndf_;
   model::DualMicrofacetParams params_;
   std::optional<BaselineLobe> baseline_;
+  std::optional<SlabInterfaces> slab_;
 };
 
 // Evaluates R(x, i, o) for any texel: D = sum of w_j D_j over the texel's representatives.
@@ -148,6 +169,7 @@ class MaterialEvaluator {
 
  private:
   std::optional<BaselineLobe> Lobe(int x, int y) const;  // the texel's lobe, for a walter-ggx material
+  std::optional<SlabInterfaces> Slab(int x, int y) const;  // the texel's interfaces, for a slab material
 
   const Material& material_;
   model::Hemicube grid_;

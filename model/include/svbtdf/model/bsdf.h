@@ -16,6 +16,7 @@
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/ndf.h"
 #include "svbtdf/model/slab_lobe.h"
+#include "svbtdf/model/slab_transmission.h"
 #include "svbtdf/model/vec.h"
 
 namespace svbtdf::model {
@@ -72,10 +73,6 @@ class DualMicrofacetBsdf final : public Bsdf {
   // Everything with the viewer above (o.z > 0, i.z < 0) and blend weight `alpha`.
   Rgb EvalAbove(const Vec3& i, const Vec3& o, double alpha) const;
   double PdfAbove(const Vec3& i, const Vec3& o, const LobeWeights& weights) const;
-  std::optional<Vec3> SampleRoughEntry(const Vec3& o, const Vec2& u) const;
-  std::optional<Vec3> SampleRoughExit(const Vec3& o, const Vec2& u) const;
-  double RoughEntryPdf(const Vec3& i, const Vec3& o) const;
-  double RoughExitPdf(const Vec3& i, const Vec3& o) const;
 
   const Ndf& ndf_;
   const Ndf& proposal_;
@@ -122,6 +119,33 @@ class SlabLobeBsdf final : public Bsdf {
 
  private:
   SlabLobeModel above_, below_;  // the viewer above, and below (turned over)
+  Rgb k_s_, rho_d_;
+  double diffuse_probability_;
+};
+
+// A slab with two rough interfaces (slab_transmission.h), R = k_s rho_TT + rho_d, with Lambertian
+// transmission as the diffuse part. rho_TT is an integral, so no sampler of its own has a closed
+// pdf: Sample draws from a mixture of the one-rough-side configurations (the entry's normals
+// with the exit taken flat, the exit's with the entry flat) and the cosine, and reports that
+// mixture's exact pdf. Seen from below, the slab is turned over: the exit becomes the entry.
+// The NDFs must look the same turned by half a turn about z (any GGX or Beckmann lobe does);
+// the caller keeps them alive.
+class SlabBsdf final : public Bsdf {
+ public:
+  // Throws svbtdf::common::Error(kInvalidInput) unless eta is finite and > 1.
+  SlabBsdf(const Ndf& entry, const Ndf& exit, double eta, const Rgb& k_s, const Rgb& rho_d);
+
+  Rgb Eval(const Vec3& wi, const Vec3& wo) const override;
+  std::optional<BsdfSample> Sample(const Vec3& wo, double u_lobe, const Vec2& u) const override;
+  double Pdf(const Vec3& wi, const Vec3& wo) const override;
+
+ private:
+  // With the viewer above: the interface the light crosses first, and the one facing o.
+  double PdfAbove(const Ndf& entry, const Ndf& exit, const Vec3& i, const Vec3& o) const;
+
+  const Ndf& entry_;
+  const Ndf& exit_;
+  double eta_;
   Rgb k_s_, rho_d_;
   double diffuse_probability_;
 };

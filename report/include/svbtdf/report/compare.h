@@ -54,6 +54,19 @@ struct CompareMetrics {
   // (prediction_se.exr) and the texel's actual held-out relative RMSE against the truth; and the
   // same for the fit's residual (residual.exr). NaN without.
   double heldout_rank_correlation = std::nan(""), residual_rank_correlation = std::nan("");
+  // A slab material (`fit --model slab`) against a Monte Carlo truth: per slab material of the
+  // truth, its texels' fitted interfaces against the true ones. A true roughness is NaN where that
+  // interface is not isotropic GGX (the fit's family), so that no number pretends to compare.
+  struct SlabRecovery {
+    std::string label;
+    size_t texels = 0;
+    double true_entry = std::nan(""), true_exit = std::nan("");
+    double entry_median = std::nan(""), exit_median = std::nan("");  // of the fitted roughnesses
+    double entry_se_median = std::nan(""), exit_se_median = std::nan("");
+    // Fraction of the texels whose fitted roughness lies within 15% of the true one.
+    double entry_within_15 = std::nan(""), exit_within_15 = std::nan("");
+  };
+  std::vector<SlabRecovery> slab_recovery;
 };
 
 // Spearman's rank correlation of two equally long samples (ties take their mean rank); NaN for
