@@ -16,6 +16,7 @@
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/interrupt.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/common/statistics.h"
 #include "svbtdf/fit/fit_material.h"
 #include "svbtdf/fit/material.h"
@@ -336,6 +337,75 @@ TEST_F(FitMaterialTest, GgxBaselineIsWorseThanDualOnADualTruthAndRoundTrips) {
               1e-5 * texel.Evaluate(i, o)[1] + 1e-9);
 }
 
+// `--model slab`: the same clustering, each representative's two interfaces fitted by
+// SlabFitter and held whole by its cluster, written as format version 5 and read back; a reader
+// refuses the slab btdf under an older version. The truth here is a dual-microfacet material,
+// which the slab cannot hold exactly: its accuracy is measured on traced slabs
+// (slab_fit_test.cc) and the Monte Carlo truth (docs/validation.md), not here.
+TEST_F(FitMaterialTest, TheSlabModelIsFittedWrittenAsVersion5AndReadBack) {
+  FitMaterialOptions options = Options(0.05);
+  options.model = MaterialModel::kSlab;
+  const Material slab = FitMaterial(Store(), options);
+  EXPECT_EQ(slab.model, MaterialModel::kSlab);
+  EXPECT_EQ(slab.provenance["settings"]["model"], "slab");
+  const int64_t rep = slab.representative_texels.front();
+  const int x = static_cast<int>(rep % 16), y = static_cast<int>(rep / 16);
+  std::vector<bool> use_dot(kDots * kDots, true);
+  for (int q : HeldOutDots(kDots * kDots, 0.1, 1)) use_dot[q] = false;
+  const SlabFitResult own = SlabFitter(1.5).Fit(Store().MakeTexelSlice(rep, use_dot));
+  EXPECT_NEAR(slab.slab_entry_roughness.at(x, y), own.interfaces.entry_roughness, 1e-5);
+  EXPECT_NEAR(slab.slab_exit_roughness.at(x, y), own.interfaces.exit_roughness, 1e-5);
+  EXPECT_NEAR(slab.slab_exit_roughness_se.at(x, y), own.exit_roughness_se, 1e-5);
+  EXPECT_GT(own.exit_roughness_se, 0.0);
+  // Every texel holds its cluster's representative's interfaces.
+  for (int64_t t = 0; t < 256; ++t) {
+    const int r = static_cast<int>(slab.cluster.pixels[t]);
+    const int64_t own_rep = slab.representative_texels[r];
+    EXPECT_EQ(slab.slab_entry_roughness.pixels[t], slab.slab_entry_roughness.pixels[own_rep]);
+  }
+  // The slab describes the dual truth only roughly, but it is a fit of it (measured 9.2%).
+  const Scores scores = Score(slab, truth_, Store(), slab.representative_texels);
+  std::printf("slab on a dual-microfacet truth: held-out rel. RMSE at the representatives %.4f\n", scores.heldout_rel_rmse);
+  EXPECT_LT(scores.heldout_rel_rmse, 0.2);  // measured 0.092
+
+  WriteMaterial(dir_ / "slab", slab);
+  const nlohmann::json manifest = common::ReadJsonFile(dir_ / "slab" / "material.json");
+  EXPECT_EQ(manifest["version"], 5);
+  EXPECT_EQ(manifest["btdf"], "slab");
+  const Material read = ReadMaterial(dir_ / "slab");
+  EXPECT_EQ(read.model, MaterialModel::kSlab);
+  EXPECT_EQ(read.slab_exit_roughness.pixels, slab.slab_exit_roughness.pixels);
+  const MaterialEvaluator before(slab), after(read);
+  const model::Vec3 o = Store().geometry().View(rep), i = Store().geometry().Light(rep, 300);
+  const TexelBtdf texel = after.Texel(x, y);
+  ASSERT_TRUE(texel.slab().has_value());
+  EXPECT_NEAR(after.Evaluate(x, y, i, o)[1], before.Evaluate(x, y, i, o)[1], 1e-6 * before.Evaluate(x, y, i, o)[1]);
+  EXPECT_NEAR(texel.Evaluate(i, o)[1], texel.params().k_s[1] * SlabShape(*texel.slab(), 1.5, i, o) + texel.params().rho_d[1],
+              1e-9 * texel.Evaluate(i, o)[1]);
+
+  // A slab under version 4, and a roughness of 0, are refused naming the file.
+  nlohmann::json old = manifest;
+  old["version"] = 4;
+  common::WriteTextAtomically(dir_ / "slab" / "material.json", old.dump(), /*overwrite=*/true);
+  EXPECT_THROW(
+      try { ReadMaterial(dir_ / "slab"); } catch (const common::Error& e) {
+        EXPECT_NE(std::string(e.what()).find("material.json"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("version 5"), std::string::npos) << e.what();
+        throw;
+      },
+      common::Error);
+  common::WriteTextAtomically(dir_ / "slab" / "material.json", manifest.dump(), /*overwrite=*/true);
+  common::FloatImage zero = slab.slab_entry_roughness;
+  zero.pixels[3] = 0.0f;
+  common::WriteFloatImage(dir_ / "slab" / "slab_entry_roughness.exr", zero, false, true);
+  EXPECT_THROW(
+      try { ReadMaterial(dir_ / "slab"); } catch (const common::Error& e) {
+        EXPECT_NE(std::string(e.what()).find("slab_entry_roughness.exr"), std::string::npos) << e.what();
+        throw;
+      },
+      common::Error);
+}
+
 // Waits until the checkpoint holds `lines` lines (its header and lines - 1 fits).
 void WaitForLines(const fs::path& path, int lines) {
   for (int i = 0; i < 1200; ++i) {
@@ -420,6 +490,9 @@ TEST_F(FitMaterialTest, ErrorsNameTheArgumentOrFile) {
   with_term.free_horizon = false;
   with_term.model = MaterialModel::kWalterGgx;
   EXPECT_NE(ErrorOf([&] { FitMaterial(no_eta, with_term); }, common::ErrorKind::kInvalidInput).find("--internal-reflection"),
+            std::string::npos);
+  with_term.model = MaterialModel::kSlab;
+  EXPECT_NE(ErrorOf([&] { FitMaterial(no_eta, with_term); }, common::ErrorKind::kInvalidInput).find("--model slab has none"),
             std::string::npos);
 }
 

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -14,6 +15,7 @@
 #include "small_material.h"
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
+#include "svbtdf/simulate/montecarlo_truth.h"
 
 namespace svbtdf::report {
 namespace {
@@ -160,7 +162,43 @@ TEST(Compare, AMonteCarloTruthHasNoAlphaOrNdfMetrics) {
   EXPECT_TRUE(json["coverage_2se"]["alpha"].is_null());
   EXPECT_TRUE(json["coverage_2se"]["rho_d"].is_null());
   EXPECT_TRUE(json["heldout_rank_correlation"].is_null());
-  EXPECT_EQ(json.size(), 17u);
+  EXPECT_TRUE(json["slab_recovery"].empty());  // a slab material's
+  EXPECT_EQ(json.size(), 18u);
+}
+
+// A slab material (`fit --model slab`) against the Monte Carlo truth: each true slab's texels,
+// their fitted interfaces against the true ones where the truth's interface is isotropic GGX
+// (the fit's family), and nothing where it is not.
+TEST(Compare, ASlabMaterialIsScoredOnEachTrueSlabsRoughnesses) {
+  const simulate::Truth montecarlo = simulate::ReadTruth(SimulatedTruths::TruthFolder("montecarlo"));
+  fit::Material slab = SmallMaterial(montecarlo.width(), montecarlo.height());
+  slab.model = fit::MaterialModel::kSlab;
+  const auto map = [&](float value) {
+    common::FloatImage image(slab.width, slab.height, 1);
+    std::fill(image.pixels.begin(), image.pixels.end(), value);
+    return image;
+  };
+  slab.slab_entry_roughness = map(0.31f);  // the frosted slab's 0.30 within 15%
+  slab.slab_exit_roughness = map(0.16f);   // its 0.12 not
+  slab.slab_entry_roughness_se = slab.slab_exit_roughness_se = map(0.01f);
+  const CompareMetrics metrics = Compare(slab, montecarlo, Named("m"));
+  ASSERT_EQ(metrics.slab_recovery.size(), montecarlo.montecarlo()->materials().size());
+  size_t texels = 0;
+  for (const CompareMetrics::SlabRecovery& r : metrics.slab_recovery) {
+    texels += r.texels;
+    EXPECT_NEAR(r.entry_median, 0.31, 1e-6);
+    if (r.label.rfind("frosted", 0) == 0) {
+      EXPECT_DOUBLE_EQ(r.true_entry, 0.30);
+      EXPECT_DOUBLE_EQ(r.true_exit, 0.12);
+      EXPECT_DOUBLE_EQ(r.entry_within_15, 1.0);
+      EXPECT_DOUBLE_EQ(r.exit_within_15, 0.0);
+    }
+    if (r.label.rfind("brushed", 0) == 0) {  // anisotropic GGX at the entry, Beckmann at the exit
+      EXPECT_TRUE(std::isnan(r.true_entry) && std::isnan(r.true_exit) && std::isnan(r.entry_within_15));
+    }
+  }
+  EXPECT_EQ(texels, metrics.texels_compared);
+  EXPECT_EQ(ToJson(metrics)["slab_recovery"].size(), metrics.slab_recovery.size());
 }
 
 }  // namespace
