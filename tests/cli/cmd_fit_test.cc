@@ -45,7 +45,8 @@ TEST_F(FitCommand, BadArgumentsExitWithTwoNamingTheArgument) {
                {"--model-error-pool -1", "--model-error-pool"},
                {"--model-error-pool wide", "--model-error-pool"},
                {"--internal-reflection", "--fixed-horizon"},
-               {"--internal-reflection --fixed-horizon --model ggx", "--internal-reflection"}};
+               {"--internal-reflection --fixed-horizon --model ggx", "--internal-reflection"},
+               {"--internal-reflection --fixed-horizon --model slab", "--internal-reflection"}};
   for (const auto& c : cases) {
     const auto result = RunSvbtdf(Fit("bad", c.options));
     EXPECT_EQ(result.exit_code, 2) << c.options << ": " << result.output;
@@ -77,6 +78,34 @@ TEST_F(FitCommand, GgxBaselineIsFittedWrittenAndEvaluated) {
                                                                  model::Vec3(0, -0.7, 0.7).normalized());
   EXPECT_NEAR(value["rgb"][0].get<double>(), expected[0], 1e-6 * std::abs(expected[0]) + 1e-12);
   EXPECT_GE(value["rgb"][0].get<double>(), material.rho_d.at(2, 3, 0));
+}
+
+// --model slab: a material of format version 5 whose texels `svbtdf eval` shows as two
+// interfaces, R = k_s rho + rho_d through the library's one path; `svbtdf export` refuses it in
+// one line naming its manifest, and writes nothing.
+TEST_F(FitCommand, TheSlabModelIsWrittenEvaluatedAndNotExported) {
+  const auto fitted = RunSvbtdf(Fit("slab", "--model slab --representatives 0.25 --holdout 0.1"));
+  ASSERT_EQ(fitted.exit_code, 0) << fitted.output;
+  const nlohmann::json manifest = nlohmann::json::parse(common::ReadTextFile(root_ / "slab" / "material.json"));
+  EXPECT_EQ(manifest["btdf"], "slab");
+  EXPECT_EQ(manifest["version"], 5);
+  const auto eval = RunSvbtdf("eval " + (root_ / "slab").string() + " --texel 2 3 --wi 0 0.3 -1 --wo 0 -0.7 0.7 --json");
+  ASSERT_EQ(eval.exit_code, 0) << eval.output;
+  const nlohmann::json value = nlohmann::json::parse(eval.output);
+  EXPECT_EQ(value["btdf"], "slab");
+  EXPECT_GT(value["slab_entry_roughness"].get<double>(), 0.0);
+  EXPECT_GT(value["slab_exit_roughness"].get<double>(), 0.0);
+  for (int c = 0; c < 3; ++c) {
+    const double expected = value["k_s"][c].get<double>() * value["rho"].get<double>() + value["rho_d"][c].get<double>();
+    EXPECT_NEAR(value["rgb"][c].get<double>(), expected, 1e-6 * expected);
+  }
+  const auto text = RunSvbtdf("eval " + (root_ / "slab").string() + " --texel 2 3 --wi 0 0.3 -1 --wo 0 -0.7 0.7");
+  EXPECT_NE(text.output.find("entry roughness"), std::string::npos) << text.output;
+  const auto exported = RunSvbtdf("export " + (root_ / "slab").string() + " --gltf " + (root_ / "slab-gltf").string());
+  EXPECT_EQ(exported.exit_code, 2) << exported.output;
+  EXPECT_NE(exported.output.find((root_ / "slab" / "material.json").string()), std::string::npos) << exported.output;
+  EXPECT_NE(exported.output.find("slab material"), std::string::npos) << exported.output;
+  EXPECT_FALSE(fs::exists(root_ / "slab-gltf"));
 }
 
 // --internal-reflection: a material of format version 4 whose `svbtdf eval` shows the term and
