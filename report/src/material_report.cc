@@ -7,6 +7,7 @@
 #include <cmath>
 #include <optional>
 #include <sstream>
+#include <tuple>
 
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/json.h"
@@ -188,6 +189,27 @@ void AddUncertaintyMaps(const fit::Material& material, const MapFunction& map) {
       "relative");
 }
 
+// A slab material's two interfaces (`svbtdf fit --model slab`): each side's GGX roughness on one
+// scale, and their standard errors relative to them (a side the dots do not constrain shows up
+// bright there).
+template <typename MapFunction>
+void AddSlabInterfaceMaps(const fit::Material& material, const MapFunction& map) {
+  const double roughness_max = std::max({1e-3, MaxOf(material.slab_entry_roughness), MaxOf(material.slab_exit_roughness)});
+  map("slab_entry_roughness.png", ScalarMap(material.slab_entry_roughness, 0, 0, roughness_max),
+      "GGX roughness of the slab's entry, the side facing the light (docs/fitting.md, \"The slab fit\")", 0, roughness_max,
+      "GGX alpha");
+  map("slab_exit_roughness.png", ScalarMap(material.slab_exit_roughness, 0, 0, roughness_max),
+      "GGX roughness of the slab's exit, the side facing the camera (same scale)", 0, roughness_max, "GGX alpha");
+  for (const auto& [file, se, value, side] :
+       {std::tuple{"slab_entry_roughness_se.png", &material.slab_entry_roughness_se, &material.slab_entry_roughness, "entry"},
+        std::tuple{"slab_exit_roughness_se.png", &material.slab_exit_roughness_se, &material.slab_exit_roughness, "exit"}}) {
+    const common::FloatImage relative = KnownOnly(*se, value);
+    const double hi = UpperScale(relative, 1e-3);
+    map(file, ScalarMap(relative, 0, 0, hi),
+        std::string("relative standard error of the ") + side + "'s roughness (white: not known)", 0, hi, "relative");
+  }
+}
+
 void AddMaps(Page& page, const fit::Material& material, const simulate::Truth* truth, const std::string& lobe_error_file) {
   const simulate::MaterialTruth* parameters = truth ? truth->parameters() : nullptr;
   const int w = material.width, h = material.height;
@@ -202,7 +224,11 @@ void AddMaps(Page& page, const fit::Material& material, const simulate::Truth* t
   if (truth && !parameters) {
     page.Paragraph("The Monte Carlo truth has no alpha and no NDF; its rho_d and its slab materials are shown.");
   }
-  map("alpha.png", ScalarMap(material.alpha, 0, 0, 1), "alpha, the blend between rough entry (1) and rough exit (0)", 0, 1, "unitless");
+  if (material.model == fit::MaterialModel::kSlab) AddSlabInterfaceMaps(material, map);
+  if (material.model == fit::MaterialModel::kDualMicrofacet) {
+    map("alpha.png", ScalarMap(material.alpha, 0, 0, 1), "alpha, the blend between rough entry (1) and rough exit (0)", 0, 1,
+        "unitless");
+  }
   if (parameters) {
     map("alpha_truth.png", ScalarMap(parameters->alpha, 0, 0, 1), "true alpha", 0, 1, "unitless");
     common::FloatImage error = material.alpha;
@@ -212,7 +238,7 @@ void AddMaps(Page& page, const fit::Material& material, const simulate::Truth* t
     map("alpha_error.png", ScalarMap(error, 0, 0, 0.1), "error of alpha against the truth, |alpha - true alpha|", 0, 0.1, "unitless");
   }
   const double shadowing_max = std::max(1e-3, MaxOf(material.shadowing_roughness));
-  map("shadowing.png", ScalarMap(material.shadowing_roughness, 0, 0, shadowing_max),
+  if (material.model == fit::MaterialModel::kDualMicrofacet) map("shadowing.png", ScalarMap(material.shadowing_roughness, 0, 0, shadowing_max),
       "shadowing roughness (Smith GGX alpha; 0 = no shadowing)", 0, shadowing_max, "GGX alpha");
   const double k_s_max = std::max(1e-3, MaxOf(material.k_s));
   map("k_s.png", ColourMap(material.k_s, k_s_max), "k_s, the specular scale per colour channel", 0, k_s_max, "unitless, RGB", true);
