@@ -121,6 +121,18 @@ TEST(MaterialSurface, ABaselineTexelIsTheEvaluatorsWalterTexel) {
   EXPECT_EQ(surface.description(), "fitted walter-ggx material");
 }
 
+TEST(MaterialSurface, ASlabTexelIsTheEvaluatorsSlabTexel) {
+  fit::Material m = SmallMaterial(3, 2);
+  m.model = fit::MaterialModel::kSlab;
+  m.slab_entry_roughness = common::FloatImage(3, 2, 1, 0.3f);
+  m.slab_exit_roughness = common::FloatImage(3, 2, 1, 0.12f);
+  m.slab_entry_roughness_se = m.slab_exit_roughness_se = common::FloatImage(3, 2, 1, 0.01f);
+  const MaterialSurface surface(m, 0.03, 0.02, "slab");
+  BsdfScratch scratch;
+  EXPECT_LT(RelativeL2(surface.At(1, 1, scratch), fit::MaterialEvaluator(m).Texel(1, 1)), 1e-9);
+  EXPECT_EQ(surface.description(), "fitted slab material");
+}
+
 // A material whose one representative is an anisotropic GGX lobe turned by 0.6 rad, tabulated.
 fit::Material TurnedLobeMaterial(const fit::BaselineLobe& lobe) {
   fit::Material m = SmallMaterial(3, 2);
