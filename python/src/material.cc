@@ -331,7 +331,7 @@ void BindMaterial(py::module_& m) {
       .def_property_readonly("height", [](const Material& m) { return m.material().height; }, "texels down")
       .def_property_readonly("eta", [](const Material& m) { return m.material().eta; })
       .def_property_readonly("btdf", [](const Material& m) { return std::string(fit::MaterialModelName(m.material().model)); },
-                             "'dual-microfacet' or 'walter-ggx' (the baseline)")
+                             "'dual-microfacet', 'walter-ggx' (the baseline) or 'slab' (two rough interfaces)")
       .def_property_readonly("ndf_resolution", [](const Material& m) { return m.material().ndf_resolution; })
       .def_property_readonly("sample_size", [](const Material& m) { return py::make_tuple(m.material().width_m, m.material().height_m); },
                              "(width, height) of the sample in metres; (0, 0) when not recorded")
@@ -360,6 +360,16 @@ void BindMaterial(py::module_& m) {
                              "float32 (H, W) for a walter-ggx material, else None")
       .def_property_readonly("baseline_azimuth", [](const Material& m) { return MapOrNone(m.material().baseline_azimuth); },
                              "float32 (H, W) for a walter-ggx material, else None")
+      .def_property_readonly("slab_entry_roughness", [](const Material& m) { return MapOrNone(m.material().slab_entry_roughness); },
+                             "float32 (H, W): GGX roughness of the side facing the light, for a slab material, else None")
+      .def_property_readonly("slab_exit_roughness", [](const Material& m) { return MapOrNone(m.material().slab_exit_roughness); },
+                             "float32 (H, W): GGX roughness of the side facing the camera, for a slab material, else None")
+      .def_property_readonly("slab_entry_roughness_se",
+                             [](const Material& m) { return MapOrNone(m.material().slab_entry_roughness_se); },
+                             "float32 (H, W): its standard error (-1: not known), for a slab material, else None")
+      .def_property_readonly("slab_exit_roughness_se",
+                             [](const Material& m) { return MapOrNone(m.material().slab_exit_roughness_se); },
+                             "float32 (H, W): its standard error (-1: not known), for a slab material, else None")
       .def("eval", &Material::Eval, py::arg("texels"), py::arg("wi"), py::arg("wo"), py::arg("threads") = 0,
            "R(x, i, o) RGB, float64 (N, 3), exactly as `svbtdf eval`. texels: int (N, 2) of (column, row) or (2,); "
            "wi: (N, 3) or (3,) toward the light (z < 0); wo: toward the camera (z > 0); any length, normalised. "

@@ -116,3 +116,22 @@ def test_a_stage_refuses_an_output_folder_another_writer_holds(tiny, tmp_path):
         with pytest.raises(svbtdf.IoError, match=re.escape(str(out))):
             svbtdf.fit(tiny.processed, str(out), representatives=0.02)
     assert not out.exists()
+
+
+def test_fit_model_slab_writes_both_interfaces_and_evaluates_as_the_command_line(tiny, tmp_path):
+    out = str(tmp_path / "slab")
+    svbtdf.fit(tiny.processed, out, model="slab", representatives=0.05)
+    material = svbtdf.Material.load(out)
+    assert material.btdf == "slab"
+    for name in ("slab_entry_roughness", "slab_exit_roughness", "slab_entry_roughness_se", "slab_exit_roughness_se"):
+        array = getattr(material, name)
+        assert array.shape == (material.height, material.width) and array.dtype == np.float32, name
+    assert (material.slab_entry_roughness > 0).all() and (material.slab_exit_roughness > 0).all()
+    assert material.baseline_alpha_x is None
+    wi, wo = np.array([0.0, 0.3, -1.0]), np.array([0.0, -0.7, 0.7])
+    value = material.eval(np.array([2, 3]), wi, wo)
+    cli = json.loads(svbtdf_cli("eval", out, "--texel", "2", "3", "--wi", "0", "0.3", "-1", "--wo", "0", "-0.7", "0.7",
+                                "--json").stdout)
+    np.testing.assert_allclose(value.reshape(-1), cli["rgb"], rtol=1e-12)
+    with pytest.raises(svbtdf.InvalidInputError, match="must be 'dual', 'ggx' or 'slab'"):
+        svbtdf.fit(tiny.processed, str(tmp_path / "other"), model="walter")
