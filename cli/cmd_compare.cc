@@ -43,6 +43,11 @@ void PrintSummary(const report::CompareMetrics& m) {
                 percent(m.coverage_shadowing).c_str(), percent(m.coverage_ndf_width).c_str(), m.heldout_rank_correlation,
                 m.residual_rank_correlation);
   }
+  // A Monte Carlo truth: the held-out error on each of its slab materials' texels.
+  for (const report::CompareMetrics::TruthSlabError& e : m.heldout_by_truth_slab) {
+    std::printf("held-out rel. RMSE on the true slab %s (%zu texels): %.4f\n", e.label.substr(0, e.label.find(':')).c_str(),
+                e.texels, e.heldout_rel_rmse);
+  }
   // A slab material: each true slab's interfaces against the fitted ones (medians over its texels).
   const auto roughness = [](double v) { return std::isfinite(v) ? std::to_string(v).substr(0, 5) : std::string("-"); };
   for (const report::CompareMetrics::SlabRecovery& r : m.slab_recovery) {

@@ -41,6 +41,7 @@ nlohmann::json ModelTerms(const fit::TexelBtdf& texel, const model::Vec3& wi, co
   if (const auto& slab = texel.slab()) {
     return {{"slab_entry_roughness", slab->entry_roughness},
             {"slab_exit_roughness", slab->exit_roughness},
+            {"slab_internal_reflection", slab->internal_reflection},
             {"rho", fit::SlabShape(*slab, p.eta, wi, wo)}};
   }
   if (const auto& lobe = texel.baseline()) {

@@ -256,6 +256,7 @@ std::vector<int64_t> FailedTexels(const std::vector<int64_t>& reps, const std::v
 
 nlohmann::json SlabToJson(const SlabFitResult& f) {
   return {{"entry_roughness", f.interfaces.entry_roughness}, {"exit_roughness", f.interfaces.exit_roughness},
+          {"internal_reflection", f.interfaces.internal_reflection},
           {"entry_roughness_se", f.entry_roughness_se},     {"exit_roughness_se", f.exit_roughness_se},
           {"roughness_correlation", f.roughness_correlation}, {"k_s", f.k_s},
           {"k_s_rgb", f.k_s_rgb},                           {"log_rms", f.log_rms},
@@ -266,6 +267,7 @@ SlabFitResult SlabFromJson(const nlohmann::json& j) {
   SlabFitResult f;
   f.interfaces.entry_roughness = j.at("entry_roughness").get<double>();
   f.interfaces.exit_roughness = j.at("exit_roughness").get<double>();
+  f.interfaces.internal_reflection = j.at("internal_reflection").get<double>();
   f.entry_roughness_se = j.at("entry_roughness_se").get<double>();
   f.exit_roughness_se = j.at("exit_roughness_se").get<double>();
   f.roughness_correlation = j.at("roughness_correlation").get<double>();

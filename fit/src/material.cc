@@ -44,6 +44,7 @@ const MapSpec kSlabMaps[] = {
     {"slab_exit_roughness", "slab_exit_roughness.exr", &Material::slab_exit_roughness, 1},
     {"slab_entry_roughness_se", "slab_entry_roughness_se.exr", &Material::slab_entry_roughness_se, 1},
     {"slab_exit_roughness_se", "slab_exit_roughness_se.exr", &Material::slab_exit_roughness_se, 1},
+    {"slab_internal_reflection", "slab_internal_reflection.exr", &Material::slab_internal_reflection, 1},
 };
 
 // The standard errors (version 3; docs/fitting.md, "Uncertainty").
@@ -72,8 +73,8 @@ const char* ModelFormula(MaterialModel model) {
       return "walter-ggx: R = k_s f_Walter(GGX(baseline_alpha_x, baseline_alpha_y) rotated by baseline_azimuth; i, o, "
              "1, eta) + rho_d";
     case MaterialModel::kSlab:
-      return "slab: R = k_s rho_TT(GGX(slab_entry_roughness), GGX(slab_exit_roughness); i, o, eta) + rho_d "
-             "(docs/model.md, \"Two rough interfaces\")";
+      return "slab: R = k_s (rho_TT + slab_internal_reflection IR)(GGX(slab_entry_roughness), GGX(slab_exit_roughness); "
+             "i, o, eta) + rho_d (docs/model.md, \"Two rough interfaces\")";
     case MaterialModel::kDualMicrofacet:
       break;
   }
@@ -285,7 +286,7 @@ Material AssembleSlabMaterial(int width, int height, double eta, int ndf_resolut
   m.model = MaterialModel::kSlab;
   for (common::FloatImage* map : {&m.baseline_alpha_x, &m.baseline_alpha_y, &m.baseline_azimuth}) *map = common::FloatImage();
   for (common::FloatImage* map : {&m.slab_entry_roughness, &m.slab_exit_roughness, &m.slab_entry_roughness_se,
-                                  &m.slab_exit_roughness_se}) {
+                                  &m.slab_exit_roughness_se, &m.slab_internal_reflection}) {
     *map = common::FloatImage(width, height, 1);
   }
   // Every texel takes its cluster's representative whole (AssembleBaselineMaterial's weights).
@@ -295,6 +296,7 @@ Material AssembleSlabMaterial(int width, int height, double eta, int ndf_resolut
     m.slab_exit_roughness.pixels[t] = static_cast<float>(f.interfaces.exit_roughness);
     m.slab_entry_roughness_se.pixels[t] = static_cast<float>(f.entry_roughness_se);
     m.slab_exit_roughness_se.pixels[t] = static_cast<float>(f.exit_roughness_se);
+    m.slab_internal_reflection.pixels[t] = static_cast<float>(f.interfaces.internal_reflection);
   }
   return m;
 }
@@ -439,6 +441,10 @@ Material ReadMaterial(const fs::path& folder) {
         common::ThrowFormatError((folder / spec.file).string(), "holds a GGX roughness <= 0");
       }
     }
+    const common::FloatImage& weights = m.slab_internal_reflection;
+    if (*std::min_element(weights.pixels.begin(), weights.pixels.end()) < 0.0f) {
+      common::ThrowFormatError((folder / "slab_internal_reflection.exr").string(), "holds a negative weight");
+    }
   }
   if (m.model == MaterialModel::kWalterGgx) {
     for (const common::FloatImage* map : {&m.baseline_alpha_x, &m.baseline_alpha_y}) {
@@ -512,7 +518,8 @@ TexelBtdf TexelBtdf::UnitShape() const {
 
 std::optional<SlabInterfaces> MaterialEvaluator::Slab(int x, int y) const {
   if (material_.model != MaterialModel::kSlab) return std::nullopt;
-  return SlabInterfaces{material_.slab_entry_roughness.at(x, y), material_.slab_exit_roughness.at(x, y)};
+  return SlabInterfaces{material_.slab_entry_roughness.at(x, y), material_.slab_exit_roughness.at(x, y),
+                        material_.slab_internal_reflection.at(x, y)};
 }
 
 std::optional<BaselineLobe> MaterialEvaluator::Lobe(int x, int y) const {

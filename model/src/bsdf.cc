@@ -307,16 +307,30 @@ std::optional<BsdfSample> SlabLobeBsdf::Sample(const Vec3& wo, double u_lobe, co
 // ---------------------------------------------------------------------------------------------
 // SlabBsdf
 
-SlabBsdf::SlabBsdf(const Ndf& entry, const Ndf& exit, double eta, const Rgb& k_s, const Rgb& rho_d)
-    : entry_(entry), exit_(exit), eta_(eta), k_s_(k_s), rho_d_(rho_d), diffuse_probability_(DiffuseProbability(k_s, rho_d)) {
+SlabBsdf::SlabBsdf(const Ndf& entry, const Ndf& exit, double eta, const Rgb& k_s, const Rgb& rho_d, double internal_reflection)
+    : entry_(entry),
+      exit_(exit),
+      eta_(eta),
+      k_s_(k_s),
+      rho_d_(rho_d),
+      internal_reflection_(internal_reflection),
+      diffuse_probability_(DiffuseProbability(k_s, rho_d)) {
   DualMicrofacetModel validate_eta(eta);
+  if (!(internal_reflection >= 0) || !std::isfinite(internal_reflection)) {
+    common::ThrowInvalidInput("internal reflection", "its weight must be finite and >= 0");
+  }
+  // The halo is broad and covered by the cosine alone: give it a fifth, as DualMicrofacetBsdf does.
+  if (internal_reflection > 0) diffuse_probability_ = std::max(diffuse_probability_, kInternalReflectionCosineShare);
 }
 
 Rgb SlabBsdf::Eval(const Vec3& wi, const Vec3& wo) const {
   if (!OppositeSides(wi, wo)) return {0, 0, 0};
   const bool below = wo.z() < 0;
-  const SlabTransmission slab(below ? exit_ : entry_, below ? entry_ : exit_, eta_);
-  const double rho = below ? slab.Rho(FlipZ(wi), FlipZ(wo)) : slab.Rho(wi, wo);
+  const Ndf& entry = below ? exit_ : entry_;
+  const Ndf& exit = below ? entry_ : exit_;
+  const Vec3 i = below ? FlipZ(wi) : wi, o = below ? FlipZ(wo) : wo;
+  double rho = SlabTransmission(entry, exit, eta_).Rho(i, o);
+  if (internal_reflection_ > 0) rho += internal_reflection_ * SlabInternalReflection(entry, exit, eta_).Rho(i, o);
   return {k_s_[0] * rho + rho_d_[0], k_s_[1] * rho + rho_d_[1], k_s_[2] * rho + rho_d_[2]};
 }
 

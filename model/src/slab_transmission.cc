@@ -10,6 +10,10 @@
 namespace svbtdf::model {
 namespace {
 
+// The halo is broad and its weight is fitted: 12 x 12 polar nodes (a quarter of
+// InternalReflection's default) hold its shape (docs/model.md, "Two rough interfaces").
+const InternalReflectionQuadrature kQuadrature = {12, 12};
+
 Vec2 StratumCentre(int index, int per_axis) {
   return {(index % per_axis + 0.5) / per_axis, (index / per_axis + 0.5) / per_axis};
 }
@@ -108,5 +112,13 @@ double SlabTransmission::ForViewer::Rho(const Vec3& i) const {
 }
 
 double SlabTransmission::Rho(const Vec3& i, const Vec3& o) const { return Viewer(o).Rho(i); }
+
+SlabInternalReflection::SlabInternalReflection(const Ndf& entry, const Ndf& exit, double eta)
+    : entry_(entry), exit_(exit), paths_(eta, kQuadrature) {}
+
+double SlabInternalReflection::Rho(const Vec3& i, const Vec3& o) const {
+  if (i.z() >= 0 || o.z() <= 0) return 0.0;
+  return paths_.RoughEntry(entry_, i, o) + paths_.RoughExit(exit_, i, o);
+}
 
 }  // namespace svbtdf::model

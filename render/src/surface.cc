@@ -54,7 +54,8 @@ const model::Bsdf& MaterialSurface::At(int col, int row, BsdfScratch& scratch) c
   if (m.model == fit::MaterialModel::kSlab) {
     scratch.ggx.emplace(m.slab_entry_roughness.at(col, row));
     scratch.ggx_exit.emplace(m.slab_exit_roughness.at(col, row));
-    return scratch.slab.emplace(*scratch.ggx, *scratch.ggx_exit, m.eta, params.k_s, params.rho_d);
+    return scratch.slab.emplace(*scratch.ggx, *scratch.ggx_exit, m.eta, params.k_s, params.rho_d,
+                                m.slab_internal_reflection.at(col, row));
   }
   // D = sum_j c_j D_j with c_j = w_j s_j / S, as MaterialEvaluator::TexelNdf blends the cells
   // (docs/material-format.md), except that the sum is taken after interpolation.

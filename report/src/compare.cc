@@ -194,6 +194,9 @@ CompareMetrics Compare(const fit::Material& material, const simulate::Truth& tru
   const bool uncertainty = material.has_uncertainty();
   Coverage alpha_coverage, k_s_coverage, rho_d_coverage, shadowing_coverage, width_coverage;
   std::vector<double> predicted_error, residual_error, actual_error;
+  const simulate::MonteCarloTruth* slabs = truth.montecarlo();
+  std::vector<RelativeRmse> heldout_by_slab(slabs ? slabs->materials().size() : 0);
+  std::vector<size_t> texels_by_slab(heldout_by_slab.size(), 0);
   common::ProgressBar progress("compare", static_cast<int64_t>(texels.size()), "texels");
   for (int t : texels) {
     const int x = t % material.width, y = t / material.width;
@@ -225,7 +228,9 @@ CompareMetrics Compare(const fit::Material& material, const simulate::Truth& tru
       const double fitted_value = model::Luminance(fitted.Evaluate(i, o)), expected = model::Luminance(truth.Evaluate(x, y, i, o));
       all_dots.Add(fitted_value, expected);
       if (held_out[q]) heldout.Add(fitted_value, expected), texel_heldout.Add(fitted_value, expected);
+      if (held_out[q] && slabs) heldout_by_slab[slabs->material_of(t)].Add(fitted_value, expected);
     }
+    if (slabs) ++texels_by_slab[slabs->material_of(t)];
     if (uncertainty && material.prediction_se.at(x, y) >= 0 && material.residual.at(x, y) >= 0 &&
         std::isfinite(texel_heldout.Value())) {
       predicted_error.push_back(material.prediction_se.at(x, y));
@@ -250,6 +255,9 @@ CompareMetrics Compare(const fit::Material& material, const simulate::Truth& tru
   metrics.coverage_ndf_width = width_coverage.Value();
   metrics.heldout_rank_correlation = SpearmanCorrelation(predicted_error, actual_error);
   metrics.residual_rank_correlation = SpearmanCorrelation(residual_error, actual_error);
+  for (size_t m = 0; m < heldout_by_slab.size(); ++m) {
+    metrics.heldout_by_truth_slab.push_back({slabs->materials()[m].label, texels_by_slab[m], heldout_by_slab[m].Value()});
+  }
   if (material.model == fit::MaterialModel::kSlab && truth.montecarlo()) {
     metrics.slab_recovery = SlabRecoveries(material, *truth.montecarlo(), texels);
   }
@@ -257,6 +265,14 @@ CompareMetrics Compare(const fit::Material& material, const simulate::Truth& tru
 }
 
 namespace {
+
+nlohmann::json HeldOutBySlabToJson(const std::vector<CompareMetrics::TruthSlabError>& errors) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const CompareMetrics::TruthSlabError& e : errors) {
+    list.push_back({{"label", e.label}, {"texels", e.texels}, {"heldout_rel_rmse", NumberOrNull(e.heldout_rel_rmse)}});
+  }
+  return list;
+}
 
 nlohmann::json SlabRecoveriesToJson(const std::vector<CompareMetrics::SlabRecovery>& recoveries) {
   nlohmann::json list = nlohmann::json::array();
@@ -307,6 +323,7 @@ nlohmann::json ToJson(const CompareMetrics& metrics) {
       {"heldout_rank_correlation", NumberOrNull(metrics.heldout_rank_correlation)},
       {"residual_rank_correlation", NumberOrNull(metrics.residual_rank_correlation)},
       {"slab_recovery", SlabRecoveriesToJson(metrics.slab_recovery)},
+      {"heldout_by_truth_slab", HeldOutBySlabToJson(metrics.heldout_by_truth_slab)},
   };
 }
 

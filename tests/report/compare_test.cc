@@ -163,7 +163,15 @@ TEST(Compare, AMonteCarloTruthHasNoAlphaOrNdfMetrics) {
   EXPECT_TRUE(json["coverage_2se"]["rho_d"].is_null());
   EXPECT_TRUE(json["heldout_rank_correlation"].is_null());
   EXPECT_TRUE(json["slab_recovery"].empty());  // a slab material's
-  EXPECT_EQ(json.size(), 18u);
+  // The held-out error per true slab: every slab's texels, summing to those compared.
+  ASSERT_EQ(json["heldout_by_truth_slab"].size(), montecarlo.montecarlo()->materials().size());
+  size_t texels = 0;
+  for (const CompareMetrics::TruthSlabError& e : metrics.heldout_by_truth_slab) {
+    texels += e.texels;
+    EXPECT_GT(e.heldout_rel_rmse, 0.0) << e.label;
+  }
+  EXPECT_EQ(texels, metrics.texels_compared);
+  EXPECT_EQ(json.size(), 19u);
 }
 
 // A slab material (`fit --model slab`) against the Monte Carlo truth: each true slab's texels,

@@ -67,6 +67,7 @@ struct Material {
   // alpha and the shadowing roughness are unused (0).
   common::FloatImage slab_entry_roughness, slab_exit_roughness;
   common::FloatImage slab_entry_roughness_se, slab_exit_roughness_se;
+  common::FloatImage slab_internal_reflection;  // SlabInterfaces::internal_reflection (>= 0)
   // Version 3, dual-microfacet: standard errors per texel (docs/fitting.md, "Uncertainty"); all
   // empty (0 x 0) in a material without them. -1 where not known.
   common::FloatImage alpha_se;                // 1 channel

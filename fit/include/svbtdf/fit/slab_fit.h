@@ -18,11 +18,15 @@ namespace svbtdf::fit {
 struct SlabInterfaces {
   double entry_roughness = 0.2;  // the side facing the light (the monitor)
   double exit_roughness = 0.2;   // the side facing the camera
+  // Weight of the light reflected inside the slab (model::SlabInternalReflection's shape) against
+  // the light transmitted straight through; 0: none.
+  double internal_reflection = 0.0;
 };
 
 // rho(i, o) of the slab with unit scale: SlabTransmission(GGX(entry), GGX(exit), eta) with the
-// default quadrature. The one evaluation of the slab model: the fitter and fitted materials
-// (MaterialEvaluator) share it.
+// default quadrature, plus internal_reflection x SlabInternalReflection of the same interfaces.
+// The one evaluation of the slab model: the fitter and fitted materials (MaterialEvaluator)
+// share it.
 double SlabShape(const SlabInterfaces& slab, double eta, const model::Vec3& i, const model::Vec3& o);
 
 struct SlabFitResult {
@@ -41,17 +45,26 @@ struct SlabFitResult {
   bool converged = false;
 };
 
+struct SlabFitOptions {
+  // Fit the weight of the light reflected inside the slab too (SlabInterfaces::internal_reflection).
+  bool internal_reflection = true;
+  // Its shape depends on the roughnesses: it is computed at the last fit's and the fit repeated,
+  // this many times (a fixed-point iteration).
+  int internal_reflection_passes = 2;
+  double dark_fraction = 2e-3;  // samples below this fraction of the brightest do not count as a lobe
+};
+
 class SlabFitter {
  public:
   // Throws svbtdf::common::Error(kInvalidInput) unless eta is finite and > 1.
-  explicit SlabFitter(double eta, double dark_fraction = 2e-3);
+  explicit SlabFitter(double eta, SlabFitOptions options = {});
   // Throws svbtdf::common::Error(kNumerical) for a slice with too few bright samples.
   SlabFitResult Fit(const TexelSlice& slice) const;
   double Rho(const SlabFitResult& fit, const model::Vec3& i, const model::Vec3& o) const;
 
  private:
   double eta_;
-  double dark_fraction_;
+  SlabFitOptions options_;
 };
 
 }  // namespace svbtdf::fit

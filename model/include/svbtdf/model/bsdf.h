@@ -123,7 +123,8 @@ class SlabLobeBsdf final : public Bsdf {
   double diffuse_probability_;
 };
 
-// A slab with two rough interfaces (slab_transmission.h), R = k_s rho_TT + rho_d, with Lambertian
+// A slab with two rough interfaces (slab_transmission.h), R = k_s (rho_TT + w IR) + rho_d with IR
+// the light reflected inside it (SlabInternalReflection) at weight w, and Lambertian
 // transmission as the diffuse part. rho_TT is an integral, so no sampler of its own has a closed
 // pdf: Sample draws from a mixture of the one-rough-side configurations (the entry's normals
 // with the exit taken flat, the exit's with the entry flat) and the cosine, and reports that
@@ -133,7 +134,7 @@ class SlabLobeBsdf final : public Bsdf {
 class SlabBsdf final : public Bsdf {
  public:
   // Throws svbtdf::common::Error(kInvalidInput) unless eta is finite and > 1.
-  SlabBsdf(const Ndf& entry, const Ndf& exit, double eta, const Rgb& k_s, const Rgb& rho_d);
+  SlabBsdf(const Ndf& entry, const Ndf& exit, double eta, const Rgb& k_s, const Rgb& rho_d, double internal_reflection = 0.0);
 
   Rgb Eval(const Vec3& wi, const Vec3& wo) const override;
   std::optional<BsdfSample> Sample(const Vec3& wo, double u_lobe, const Vec2& u) const override;
@@ -147,6 +148,7 @@ class SlabBsdf final : public Bsdf {
   const Ndf& exit_;
   double eta_;
   Rgb k_s_, rho_d_;
+  double internal_reflection_;
   double diffuse_probability_;
 };
 

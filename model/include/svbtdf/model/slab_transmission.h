@@ -23,6 +23,7 @@
 
 #include <vector>
 
+#include "svbtdf/model/internal_reflection.h"
 #include "svbtdf/model/ndf.h"
 #include "svbtdf/model/vec.h"
 
@@ -78,6 +79,26 @@ class SlabTransmission {
   double eta_;
   double optical_depth_;
   int per_axis_;
+};
+
+// The shape of the light a slab with two rough interfaces reflects inside before it leaves toward
+// the camera (T R R T and longer paths), which SlabTransmission leaves out: the one-rough-side
+// T R R T terms of each side (internal_reflection.h) summed, IR_T[entry] + IR_B[exit]. Each term is
+// exact when the other side is flat; with both sides rough it is an approximation of the
+// four-hit halo's shape, and with a fitted weight it stands for every internal path (measured
+// against the Monte Carlo slab in docs/model.md, "Two rough interfaces").
+class SlabInternalReflection {
+ public:
+  // The NDFs are referenced, not copied. Throws svbtdf::common::Error(kInvalidInput) unless eta
+  // is finite and > 1.
+  SlabInternalReflection(const Ndf& entry, const Ndf& exit, double eta);
+  // 0 unless i.z < 0 < o.z.
+  double Rho(const Vec3& i, const Vec3& o) const;
+
+ private:
+  const Ndf& entry_;
+  const Ndf& exit_;
+  InternalReflection paths_;
 };
 
 }  // namespace svbtdf::model

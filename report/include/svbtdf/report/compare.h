@@ -67,6 +67,14 @@ struct CompareMetrics {
     double entry_within_15 = std::nan(""), exit_within_15 = std::nan("");
   };
   std::vector<SlabRecovery> slab_recovery;
+  // Any material against a Monte Carlo truth: the held-out relative RMSE over the texels of each of
+  // the truth's slab materials (what one model gains or loses on which kind of slab).
+  struct TruthSlabError {
+    std::string label;
+    size_t texels = 0;
+    double heldout_rel_rmse = std::nan("");
+  };
+  std::vector<TruthSlabError> heldout_by_truth_slab;
 };
 
 // Spearman's rank correlation of two equally long samples (ties take their mean rank); NaN for
