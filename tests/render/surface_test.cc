@@ -127,6 +127,7 @@ TEST(MaterialSurface, ASlabTexelIsTheEvaluatorsSlabTexel) {
   m.slab_entry_roughness = common::FloatImage(3, 2, 1, 0.3f);
   m.slab_exit_roughness = common::FloatImage(3, 2, 1, 0.12f);
   m.slab_entry_roughness_se = m.slab_exit_roughness_se = common::FloatImage(3, 2, 1, 0.01f);
+  m.slab_internal_reflection = common::FloatImage(3, 2, 1, 1.2f);
   const MaterialSurface surface(m, 0.03, 0.02, "slab");
   BsdfScratch scratch;
   EXPECT_LT(RelativeL2(surface.At(1, 1, scratch), fit::MaterialEvaluator(m).Texel(1, 1)), 1e-9);
