@@ -123,7 +123,8 @@ def test_fit_model_slab_writes_both_interfaces_and_evaluates_as_the_command_line
     svbtdf.fit(tiny.processed, out, model="slab", representatives=0.05)
     material = svbtdf.Material.load(out)
     assert material.btdf == "slab"
-    for name in ("slab_entry_roughness", "slab_exit_roughness", "slab_entry_roughness_se", "slab_exit_roughness_se"):
+    for name in ("slab_entry_roughness", "slab_exit_roughness", "slab_entry_roughness_se", "slab_exit_roughness_se",
+                 "slab_internal_reflection"):
         array = getattr(material, name)
         assert array.shape == (material.height, material.width) and array.dtype == np.float32, name
     assert (material.slab_entry_roughness > 0).all() and (material.slab_exit_roughness > 0).all()

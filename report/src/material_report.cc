@@ -200,6 +200,10 @@ void AddSlabInterfaceMaps(const fit::Material& material, const MapFunction& map)
       "GGX alpha");
   map("slab_exit_roughness.png", ScalarMap(material.slab_exit_roughness, 0, 0, roughness_max),
       "GGX roughness of the slab's exit, the side facing the camera (same scale)", 0, roughness_max, "GGX alpha");
+  const double halo_max = std::max(1e-3, MaxOf(material.slab_internal_reflection));
+  map("slab_internal_reflection.png", ScalarMap(material.slab_internal_reflection, 0, 0, halo_max),
+      "weight of the light reflected inside the slab against the light transmitted straight through (0: none)", 0,
+      halo_max, "unitless");
   for (const auto& [file, se, value, side] :
        {std::tuple{"slab_entry_roughness_se.png", &material.slab_entry_roughness_se, &material.slab_entry_roughness, "entry"},
         std::tuple{"slab_exit_roughness_se.png", &material.slab_exit_roughness_se, &material.slab_exit_roughness, "exit"}}) {
