@@ -128,16 +128,22 @@ nlohmann::json BaselineToJson(const BaselineFitResult& f) {
           {"relative_rmse", f.relative_rmse}, {"converged", f.converged}};
 }
 
+// The fields the parametric fits (baseline, slab) share: the scale and how well the fit matches.
+template <typename ParametricFit>
+void ReadScaleAndResiduals(const nlohmann::json& j, ParametricFit* f) {
+  f->k_s = j.at("k_s").get<double>();
+  f->k_s_rgb = j.at("k_s_rgb").get<std::array<double, 3>>();
+  f->log_rms = j.at("log_rms").get<double>();
+  f->relative_rmse = j.at("relative_rmse").get<double>();
+  f->converged = j.at("converged").get<bool>();
+}
+
 BaselineFitResult BaselineFromJson(const nlohmann::json& j) {
   BaselineFitResult f;
   f.alpha_x = j.at("alpha_x").get<double>();
   f.alpha_y = j.at("alpha_y").get<double>();
   f.azimuth = j.at("azimuth").get<double>();
-  f.k_s = j.at("k_s").get<double>();
-  f.k_s_rgb = j.at("k_s_rgb").get<std::array<double, 3>>();
-  f.log_rms = j.at("log_rms").get<double>();
-  f.relative_rmse = j.at("relative_rmse").get<double>();
-  f.converged = j.at("converged").get<bool>();
+  ReadScaleAndResiduals(j, &f);
   return f;
 }
 
@@ -271,11 +277,7 @@ SlabFitResult SlabFromJson(const nlohmann::json& j) {
   f.entry_roughness_se = j.at("entry_roughness_se").get<double>();
   f.exit_roughness_se = j.at("exit_roughness_se").get<double>();
   f.roughness_correlation = j.at("roughness_correlation").get<double>();
-  f.k_s = j.at("k_s").get<double>();
-  f.k_s_rgb = j.at("k_s_rgb").get<std::array<double, 3>>();
-  f.log_rms = j.at("log_rms").get<double>();
-  f.relative_rmse = j.at("relative_rmse").get<double>();
-  f.converged = j.at("converged").get<bool>();
+  ReadScaleAndResiduals(j, &f);
   return f;
 }
 

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "sampling_check.h"
+#include "light_hemisphere.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/model/beckmann.h"
 #include "svbtdf/model/bsdf.h"
@@ -24,17 +25,7 @@ namespace {
 
 Vec3 Direction(double theta_deg, double phi_deg) { return SphericalDirection(theta_deg * kPi / 180, phi_deg * kPi / 180); }
 
-// The energy the term sends to the viewer o, by quadrature over the light hemisphere.
-template <typename F>
-double EnergyOverLights(const F& rho, int resolution) {
-  const Hemicube grid(resolution);
-  double energy = 0;
-  for (int c = 0; c < grid.num_cells(); ++c) {
-    const Vec3 i = FlipZ(grid.CellCenter(c));
-    energy += rho(i) * std::abs(i.z()) * grid.CellSolidAngle(c);
-  }
-  return energy;
-}
+using testing::EnergyOverLights;
 
 // A nearly smooth slab sends (1 - F)^2 F^2 of the light through one internal round trip, F the
 // air-side Fresnel reflectance of the view angle (both internal reflections see the in-slab

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "light_hemisphere.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/model/beckmann.h"
 #include "svbtdf/model/dual_microfacet.h"
@@ -53,16 +54,7 @@ double RelativeL2(const F& f, const G& g, int resolution = 24) {
   return std::sqrt(difference / norm);
 }
 
-template <typename F>
-double EnergyOverLights(const F& rho, int resolution = 48) {
-  const Hemicube grid(resolution);
-  double energy = 0;
-  for (int c = 0; c < grid.num_cells(); ++c) {
-    const Vec3 i = FlipZ(grid.CellCenter(c));
-    energy += rho(i) * std::abs(i.z()) * grid.CellSolidAngle(c);
-  }
-  return energy;
-}
+using testing::EnergyOverLights;
 
 // With one interface nearly flat (GGX 0.0005, a blur of a few hundredths of a degree), the integral is the
 // other side's exact configuration: the exit's sampling resolves a narrow exit, the entry's a
