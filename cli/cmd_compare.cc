@@ -3,6 +3,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -51,11 +52,15 @@ void PrintSummary(const report::CompareMetrics& m) {
   // A slab material: each true slab's interfaces against the fitted ones (medians over its texels).
   const auto roughness = [](double v) { return std::isfinite(v) ? std::to_string(v).substr(0, 5) : std::string("-"); };
   for (const report::CompareMetrics::SlabRecovery& r : m.slab_recovery) {
-    std::printf("slab %s (%zu texels): entry %s (true %s, within 15%% on %s, se %s), exit %s (true %s, within 15%% on %s, se %s)\n",
-                r.label.substr(0, r.label.find(':')).c_str(), r.texels, roughness(r.entry_median).c_str(),
-                roughness(r.true_entry).c_str(), percent(r.entry_within_15).c_str(), roughness(r.entry_se_median).c_str(),
-                roughness(r.exit_median).c_str(), roughness(r.true_exit).c_str(), percent(r.exit_within_15).c_str(),
-                roughness(r.exit_se_median).c_str());
+    const auto side = [&](double median, const std::array<double, 2>& axes, double truth, const std::array<double, 2>& true_axes,
+                          double within, double se) {
+      return roughness(median) + " (" + roughness(axes[0]) + " x " + roughness(axes[1]) + "; true " + roughness(truth) +
+             (std::isfinite(true_axes[0]) ? " (" + roughness(true_axes[0]) + " x " + roughness(true_axes[1]) + ")" : "") +
+             ", within 15% on " + percent(within) + ", se " + roughness(se) + ")";
+    };
+    std::printf("slab %s (%zu texels): entry %s, exit %s\n", r.label.substr(0, r.label.find(':')).c_str(), r.texels,
+                side(r.entry_median, r.entry_axes_median, r.true_entry, r.true_entry_axes, r.entry_within_15, r.entry_se_median).c_str(),
+                side(r.exit_median, r.exit_axes_median, r.true_exit, r.true_exit_axes, r.exit_within_15, r.exit_se_median).c_str());
   }
 }
 

@@ -39,8 +39,11 @@ model::Vec3 Direction(const std::vector<double>& xyz, const char* flag, bool tow
 nlohmann::json ModelTerms(const fit::TexelBtdf& texel, const model::Vec3& wi, const model::Vec3& wo) {
   const model::DualMicrofacetParams& p = texel.params();
   if (const auto& slab = texel.slab()) {
-    return {{"slab_entry_roughness", slab->entry_roughness},
-            {"slab_exit_roughness", slab->exit_roughness},
+    const auto side = [](const fit::SlabSide& s) {
+      return nlohmann::json{{"alpha_x", s.alpha_x}, {"alpha_y", s.alpha_y}, {"azimuth", s.azimuth}, {"roughness", s.Roughness()}};
+    };
+    return {{"slab_entry", side(slab->entry)},
+            {"slab_exit", side(slab->exit)},
             {"slab_internal_reflection", slab->internal_reflection},
             {"rho", fit::SlabShape(*slab, p.eta, wi, wo)}};
   }
@@ -71,9 +74,14 @@ void PrintSummary(const model::Rgb& value, const nlohmann::json& terms) {
   if (terms.contains("baseline_alpha_x")) {
     std::printf("(walter-ggx: alpha_x %.4f, alpha_y %.4f, azimuth %.3f)\n", terms["baseline_alpha_x"].get<double>(),
                 terms["baseline_alpha_y"].get<double>(), terms["baseline_azimuth"].get<double>());
-  } else if (terms.contains("slab_entry_roughness")) {
-    std::printf("(slab: entry roughness %.4f, exit roughness %.4f, rho %.6g)\n", terms["slab_entry_roughness"].get<double>(),
-                terms["slab_exit_roughness"].get<double>(), terms["rho"].get<double>());
+  } else if (terms.contains("slab_entry")) {
+    const auto side = [&](const char* key) {
+      const nlohmann::json& s = terms[key];
+      return std::to_string(s["alpha_x"].get<double>()).substr(0, 6) + " x " + std::to_string(s["alpha_y"].get<double>()).substr(0, 6) +
+             " at " + std::to_string(std::lround(s["azimuth"].get<double>() * 180 / model::kPi)) + " deg";
+    };
+    std::printf("(slab: entry %s, exit %s, internal reflection %.3f, rho %.6g)\n", side("slab_entry").c_str(),
+                side("slab_exit").c_str(), terms["slab_internal_reflection"].get<double>(), terms["rho"].get<double>());
   } else {
     std::printf("(rho_T %.6g, rho_B %.6g, alpha %.3f", terms["rho_T"].get<double>(), terms["rho_B"].get<double>(),
                 terms["alpha"].get<double>());

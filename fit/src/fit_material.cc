@@ -43,6 +43,9 @@ void CheckOptions(const FitMaterialOptions& options, double eta) {
   }
   const int pool = options.standard_errors.model_error_pool_radius;
   if (pool < 0) common::ThrowInvalidInput("--model-error-pool", "must be >= 0 texels, got " + std::to_string(pool));
+  if (!options.slab_anisotropic && options.model != MaterialModel::kSlab) {
+    common::ThrowInvalidInput("--isotropic-sides", "is an option of --model slab");
+  }
   if (options.internal_reflection && options.model != MaterialModel::kDualMicrofacet) {
     common::ThrowInvalidInput("--internal-reflection", std::string("is a term of the dual-microfacet model; --model ") +
                                                            (options.model == MaterialModel::kSlab ? "slab" : "ggx") + " has none");
@@ -261,7 +264,8 @@ std::vector<int64_t> FailedTexels(const std::vector<int64_t>& reps, const std::v
 }
 
 nlohmann::json SlabToJson(const SlabFitResult& f) {
-  return {{"entry_roughness", f.interfaces.entry_roughness}, {"exit_roughness", f.interfaces.exit_roughness},
+  const auto side = [](const SlabSide& s) { return nlohmann::json{s.alpha_x, s.alpha_y, s.azimuth}; };
+  return {{"entry", side(f.interfaces.entry)}, {"exit", side(f.interfaces.exit)},
           {"internal_reflection", f.interfaces.internal_reflection},
           {"entry_roughness_se", f.entry_roughness_se},     {"exit_roughness_se", f.exit_roughness_se},
           {"roughness_correlation", f.roughness_correlation}, {"k_s", f.k_s},
@@ -271,8 +275,12 @@ nlohmann::json SlabToJson(const SlabFitResult& f) {
 
 SlabFitResult SlabFromJson(const nlohmann::json& j) {
   SlabFitResult f;
-  f.interfaces.entry_roughness = j.at("entry_roughness").get<double>();
-  f.interfaces.exit_roughness = j.at("exit_roughness").get<double>();
+  const auto side = [&](const char* key) {
+    const std::array<double, 3> v = j.at(key).get<std::array<double, 3>>();
+    return SlabSide{v[0], v[1], v[2]};
+  };
+  f.interfaces.entry = side("entry");
+  f.interfaces.exit = side("exit");
   f.interfaces.internal_reflection = j.at("internal_reflection").get<double>();
   f.entry_roughness_se = j.at("entry_roughness_se").get<double>();
   f.exit_roughness_se = j.at("exit_roughness_se").get<double>();
@@ -285,7 +293,8 @@ SlabFitResult SlabFromJson(const nlohmann::json& j) {
 class RepresentativeFits {
  public:
   RepresentativeFits(double eta, const FitMaterialOptions& options, size_t count)
-      : model_(options.model), dual_(eta, DualOptions(options)), baseline_(eta), slab_(eta), results_(count) {}
+      : model_(options.model), dual_(eta, DualOptions(options)), baseline_(eta), slab_(eta, SlabOptions(options)),
+        results_(count) {}
 
   // Fits one slice (svbtdf::Error kNumerical when it cannot be fitted).
   nlohmann::json Fit(const TexelSlice& slice, FitWorkspace* workspace) const {
@@ -323,6 +332,12 @@ class RepresentativeFits {
   }
 
  private:
+  static SlabFitOptions SlabOptions(const FitMaterialOptions& options) {
+    SlabFitOptions slab;
+    slab.anisotropic = options.slab_anisotropic;
+    return slab;
+  }
+
   static TexelFitOptions DualOptions(const FitMaterialOptions& options) {
     TexelFitOptions fit_options;
     fit_options.ndf_resolution = options.ndf_resolution;
@@ -417,6 +432,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
   // Only when set, so that journals written before the option existed still resume.
   if (options.free_horizon) identity["free_horizon"] = true;
   if (options.internal_reflection) identity["internal_reflection"] = true;
+  if (options.model == MaterialModel::kSlab && !options.slab_anisotropic) identity["slab_isotropic"] = true;
   Checkpoint checkpoint(options.checkpoint, identity);
   RepresentativeFits fits(eta, options, reps.size());
   const size_t resumed = checkpoint.done().size();
@@ -465,6 +481,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
         {"free_horizon", options.free_horizon},
         {"uncertainty", options.uncertainty},
         {"internal_reflection", options.internal_reflection},
+        {"slab_anisotropic", options.model == MaterialModel::kSlab && options.slab_anisotropic},
         {"seed", options.seed}}},
       {"statistics",
        {{"texels", store.geometry().num_texels()},

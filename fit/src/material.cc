@@ -40,8 +40,12 @@ const MapSpec kBaselineMaps[] = {
 
 // The slab's interface maps (slab materials only, version 5).
 const MapSpec kSlabMaps[] = {
-    {"slab_entry_roughness", "slab_entry_roughness.exr", &Material::slab_entry_roughness, 1},
-    {"slab_exit_roughness", "slab_exit_roughness.exr", &Material::slab_exit_roughness, 1},
+    {"slab_entry_alpha_x", "slab_entry_alpha_x.exr", &Material::slab_entry_alpha_x, 1},
+    {"slab_entry_alpha_y", "slab_entry_alpha_y.exr", &Material::slab_entry_alpha_y, 1},
+    {"slab_exit_alpha_x", "slab_exit_alpha_x.exr", &Material::slab_exit_alpha_x, 1},
+    {"slab_exit_alpha_y", "slab_exit_alpha_y.exr", &Material::slab_exit_alpha_y, 1},
+    {"slab_entry_azimuth", "slab_entry_azimuth.exr", &Material::slab_entry_azimuth, 1},
+    {"slab_exit_azimuth", "slab_exit_azimuth.exr", &Material::slab_exit_azimuth, 1},
     {"slab_entry_roughness_se", "slab_entry_roughness_se.exr", &Material::slab_entry_roughness_se, 1},
     {"slab_exit_roughness_se", "slab_exit_roughness_se.exr", &Material::slab_exit_roughness_se, 1},
     {"slab_internal_reflection", "slab_internal_reflection.exr", &Material::slab_internal_reflection, 1},
@@ -73,8 +77,8 @@ const char* ModelFormula(MaterialModel model) {
       return "walter-ggx: R = k_s f_Walter(GGX(baseline_alpha_x, baseline_alpha_y) rotated by baseline_azimuth; i, o, "
              "1, eta) + rho_d";
     case MaterialModel::kSlab:
-      return "slab: R = k_s (rho_TT + slab_internal_reflection IR)(GGX(slab_entry_roughness), GGX(slab_exit_roughness); "
-             "i, o, eta) + rho_d (docs/model.md, \"Two rough interfaces\")";
+      return "slab: R = k_s (rho_TT + slab_internal_reflection IR)(entry GGX(slab_entry_alpha_x, slab_entry_alpha_y) "
+             "turned by slab_entry_azimuth, exit likewise; i, o, eta) + rho_d (docs/model.md, \"Two rough interfaces\")";
     case MaterialModel::kDualMicrofacet:
       break;
   }
@@ -277,7 +281,9 @@ Material AssembleSlabMaterial(int width, int height, double eta, int ndf_resolut
   std::vector<BaselineFitResult> as_baseline(representative_fits.size());
   for (size_t r = 0; r < representative_fits.size(); ++r) {
     const SlabFitResult& f = representative_fits[r];
-    as_baseline[r].alpha_x = as_baseline[r].alpha_y = f.interfaces.exit_roughness;
+    as_baseline[r].alpha_x = f.interfaces.exit.alpha_x;
+    as_baseline[r].alpha_y = f.interfaces.exit.alpha_y;
+    as_baseline[r].azimuth = f.interfaces.exit.azimuth;
     as_baseline[r].k_s = f.k_s;
     as_baseline[r].k_s_rgb = f.k_s_rgb;
     as_baseline[r].relative_rmse = f.relative_rmse;
@@ -285,15 +291,18 @@ Material AssembleSlabMaterial(int width, int height, double eta, int ndf_resolut
   Material m = AssembleBaselineMaterial(width, height, eta, ndf_resolution, clustering, as_baseline, rho_d);
   m.model = MaterialModel::kSlab;
   for (common::FloatImage* map : {&m.baseline_alpha_x, &m.baseline_alpha_y, &m.baseline_azimuth}) *map = common::FloatImage();
-  for (common::FloatImage* map : {&m.slab_entry_roughness, &m.slab_exit_roughness, &m.slab_entry_roughness_se,
-                                  &m.slab_exit_roughness_se, &m.slab_internal_reflection}) {
-    *map = common::FloatImage(width, height, 1);
-  }
+  for (const MapSpec& spec : kSlabMaps) m.*spec.image = common::FloatImage(width, height, 1);
   // Every texel takes its cluster's representative whole (AssembleBaselineMaterial's weights).
   for (int64_t t = 0; t < static_cast<int64_t>(width) * height; ++t) {
     const SlabFitResult& f = representative_fits.at(clustering.cluster[t]);
-    m.slab_entry_roughness.pixels[t] = static_cast<float>(f.interfaces.entry_roughness);
-    m.slab_exit_roughness.pixels[t] = static_cast<float>(f.interfaces.exit_roughness);
+    const SlabSide& entry = f.interfaces.entry;
+    const SlabSide& exit = f.interfaces.exit;
+    m.slab_entry_alpha_x.pixels[t] = static_cast<float>(entry.alpha_x);
+    m.slab_entry_alpha_y.pixels[t] = static_cast<float>(entry.alpha_y);
+    m.slab_entry_azimuth.pixels[t] = static_cast<float>(entry.azimuth);
+    m.slab_exit_alpha_x.pixels[t] = static_cast<float>(exit.alpha_x);
+    m.slab_exit_alpha_y.pixels[t] = static_cast<float>(exit.alpha_y);
+    m.slab_exit_azimuth.pixels[t] = static_cast<float>(exit.azimuth);
     m.slab_entry_roughness_se.pixels[t] = static_cast<float>(f.entry_roughness_se);
     m.slab_exit_roughness_se.pixels[t] = static_cast<float>(f.exit_roughness_se);
     m.slab_internal_reflection.pixels[t] = static_cast<float>(f.interfaces.internal_reflection);
@@ -435,7 +444,7 @@ Material ReadMaterial(const fs::path& folder) {
     common::ThrowFormatError(manifest_path.string(), "has a slab btdf, which needs material format version 5");
   }
   if (m.model == MaterialModel::kSlab) {
-    for (const MapSpec& spec : {kSlabMaps[0], kSlabMaps[1]}) {
+    for (const MapSpec& spec : {kSlabMaps[0], kSlabMaps[1], kSlabMaps[2], kSlabMaps[3]}) {
       const common::FloatImage& map = m.*spec.image;
       if (*std::min_element(map.pixels.begin(), map.pixels.end()) <= 0.0f) {
         common::ThrowFormatError((folder / spec.file).string(), "holds a GGX roughness <= 0");
@@ -474,6 +483,12 @@ model::DualMicrofacetParams TexelParams(const Material& material, int x, int y) 
   }
   params.internal_reflection = material.internal_reflection;
   return params;
+}
+
+SlabInterfaces TexelSlab(const Material& m, int x, int y) {
+  return SlabInterfaces{{m.slab_entry_alpha_x.at(x, y), m.slab_entry_alpha_y.at(x, y), m.slab_entry_azimuth.at(x, y)},
+                        {m.slab_exit_alpha_x.at(x, y), m.slab_exit_alpha_y.at(x, y), m.slab_exit_azimuth.at(x, y)},
+                        m.slab_internal_reflection.at(x, y)};
 }
 
 std::vector<double> RepresentativeScales(const Material& material) {
@@ -518,8 +533,7 @@ TexelBtdf TexelBtdf::UnitShape() const {
 
 std::optional<SlabInterfaces> MaterialEvaluator::Slab(int x, int y) const {
   if (material_.model != MaterialModel::kSlab) return std::nullopt;
-  return SlabInterfaces{material_.slab_entry_roughness.at(x, y), material_.slab_exit_roughness.at(x, y),
-                        material_.slab_internal_reflection.at(x, y)};
+  return TexelSlab(material_, x, y);
 }
 
 std::optional<BaselineLobe> MaterialEvaluator::Lobe(int x, int y) const {
@@ -533,7 +547,7 @@ model::TabulatedNdf MaterialEvaluator::TexelNdf(int x, int y) const {
   if (const std::optional<BaselineLobe> lobe = Lobe(x, y)) return model::TabulatedNdf(grid_, BaselineLnD(grid_, *lobe));
   // A slab's is its exit interface's GGX (the tables hold the representatives' exits).
   if (const std::optional<SlabInterfaces> slab = Slab(x, y)) {
-    return model::TabulatedNdf(grid_, BaselineLnD(grid_, {slab->exit_roughness, slab->exit_roughness, 0.0}));
+    return model::TabulatedNdf(grid_, BaselineLnD(grid_, {slab->exit.alpha_x, slab->exit.alpha_y, slab->exit.azimuth}));
   }
   std::vector<double> ln_d = TexelCellD(x, y);
   for (double& value : ln_d) value = std::log(value);

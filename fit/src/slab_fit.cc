@@ -11,38 +11,78 @@
 
 #include "svbtdf/common/error.h"
 #include "svbtdf/model/dual_microfacet.h"
-#include "svbtdf/model/ggx.h"
 #include "svbtdf/model/slab_transmission.h"
 #include "small_problem.h"
 
 namespace svbtdf::fit {
 namespace {
 
-// Parameters: ln entry roughness, ln exit roughness. The scale k and the internal reflection's
-// amount are linear: for any pair of roughnesses their best values are found in closed form
-// (variable projection), so the optimiser searches two dimensions only.
-constexpr int kNumParameters = 2;
 // GGX alphas the fit may take: narrower than 0.01 no dot spacing resolves, wider than 1.5 is
 // flatter than a Lambertian sheet's lobe.
 const double kLowerLnRoughness = std::log(0.01), kUpperLnRoughness = std::log(1.5);
 
+// How the optimiser sees the interfaces. The scale k and the internal reflection's amount are
+// linear: for any interfaces their best values are found in closed form (variable projection),
+// so only the interfaces' shape is searched.
+//  - isotropic: ln r per side (2 parameters);
+//  - anisotropic: per side the log-Cholesky factor (a, b, c) of the slope covariance
+//    M = L L^T, L = [[e^a, 0], [c, e^b]] = R diag(alpha_x^2, alpha_y^2) R^T: smooth everywhere,
+//    isotropy included, with no azimuth to wrap (6 parameters). ln Roughness() = (a + b) / 2.
+enum class Parameterisation { kIsotropic, kAnisotropic };
+
+int NumParameters(Parameterisation p) { return p == Parameterisation::kIsotropic ? 2 : 6; }
+
+SlabSide SideFromCholesky(const double* abc) {
+  Eigen::Matrix2d factor;
+  factor << std::exp(abc[0]), 0.0, abc[2], std::exp(abc[1]);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(factor * factor.transpose());
+  const Eigen::Vector2d axis = eigen.eigenvectors().col(1);  // the larger eigenvalue: alpha_x
+  SlabSide side;
+  side.alpha_x = std::sqrt(std::max(eigen.eigenvalues()[1], 1e-12));
+  side.alpha_y = std::sqrt(std::max(eigen.eigenvalues()[0], 1e-12));
+  side.azimuth = std::remainder(std::atan2(axis.y(), axis.x()), model::kPi);
+  if (side.azimuth <= -model::kPi / 2) side.azimuth += model::kPi;
+  return side;
+}
+
+SlabInterfaces InterfacesOf(Parameterisation p, const double* x) {
+  SlabInterfaces slab;
+  if (p == Parameterisation::kIsotropic) {
+    slab.entry = SlabSide::Isotropic(std::exp(x[0]));
+    slab.exit = SlabSide::Isotropic(std::exp(x[1]));
+  } else {
+    slab.entry = SideFromCholesky(x);
+    slab.exit = SideFromCholesky(x + 3);
+  }
+  return slab;
+}
+
+// The anisotropic parameters of an isotropic fit's interfaces.
+std::vector<double> CholeskyOfIsotropic(const std::vector<double>& isotropic) {
+  return {isotropic[0], isotropic[0], 0.0, isotropic[1], isotropic[1], 0.0};
+}
+
 double Weight(const TexelSlice& slice, int k) { return slice.weight.empty() ? 1.0 : slice.weight[k]; }
 
-// rho_TT of every row at unit scale, for one pair of roughnesses.
+// rho_TT of every row at unit scale.
 void RowShapes(const SlabInterfaces& slab, double eta, const TexelSlice& slice, const std::vector<int>& rows,
                std::vector<double>* shapes) {
-  const model::GgxNdf entry(slab.entry_roughness), exit(slab.exit_roughness);
-  const model::SlabTransmission transmission(entry, exit, eta);
+  std::optional<model::GgxNdf> entry_ggx, exit_ggx;
+  std::optional<model::EllipsoidNdf> entry_turned, exit_turned;
+  const model::SlabTransmission transmission(SideNdf(slab.entry, &entry_ggx, &entry_turned),
+                                             SideNdf(slab.exit, &exit_ggx, &exit_turned), eta);
   const model::SlabTransmission::ForViewer viewer = transmission.Viewer(slice.view);
   shapes->resize(rows.size());
   for (size_t j = 0; j < rows.size(); ++j) (*shapes)[j] = viewer.Rho(slice.light[rows[j]]);
 }
 
-// The internal reflection's shape at every row, for one pair of roughnesses.
+// The internal reflection's shape at every row.
 std::vector<double> RowInternalReflection(const SlabInterfaces& slab, double eta, const TexelSlice& slice,
                                           const std::vector<int>& rows) {
-  const model::GgxNdf entry(slab.entry_roughness), exit(slab.exit_roughness);
-  const model::SlabInternalReflection paths(entry, exit, eta);
+  std::optional<model::GgxNdf> entry_ggx, exit_ggx;
+  std::optional<model::EllipsoidNdf> entry_turned, exit_turned;
+  const model::SlabInternalReflection paths(SideNdf(slab.entry, &entry_ggx, &entry_turned),
+                                            SideNdf(slab.exit, &exit_ggx, &exit_turned), eta);
   std::vector<double> values(rows.size());
   for (size_t j = 0; j < rows.size(); ++j) values[j] = paths.Rho(slice.light[rows[j]], slice.view);
   return values;
@@ -72,7 +112,7 @@ LinearAmounts BestAmounts(const TexelSlice& slice, const std::vector<int>& rows,
     const Eigen::Vector2d both = normal.ldlt().solve(right);
     if (both[0] >= 0 && both[1] >= 0) return {both[0], both[1]};
   }
-  // The halo alone (a negative amount of the direct light means no lobe) or the direct light alone.
+  // The direct light alone (a negative amount of either means the other explains more).
   amounts.direct = normal(0, 0) > 0 ? std::max(0.0, right[0] / normal(0, 0)) : 0.0;
   return amounts;
 }
@@ -80,23 +120,23 @@ LinearAmounts BestAmounts(const TexelSlice& slice, const std::vector<int>& rows,
 // The residuals are differences of rho relative to the slice's brightest sample, not of its
 // logarithm (as the dual-microfacet fit's linear ln D system needs). The slab's parameters shape
 // the whole lobe, so the fit should weigh the samples by what they hold: in log residuals the
-// dim far tails, where a real slab sends the broad halo of light reflected inside it (which the
-// model lacks, docs/model.md), pulled the exit's roughness of the Monte Carlo truth from 0.18
-// to 0.55 and left the lobe's peak 60% short. It is also what `svbtdf compare` measures.
+// dim far tails, where a real slab sends the broad halo of light reflected inside it, pulled the
+// exit's roughness of the Monte Carlo truth from 0.18 to 0.55 and left the lobe's peak 60% short.
+// It is also what `svbtdf compare` measures.
 //
-// `halo`: the internal reflection's shape at every row, held fixed while the roughnesses move
-// (it is recomputed between passes), or null.
+// `halo`: the internal reflection's shape at every row, held fixed while the interfaces move (it
+// is recomputed between passes), or null.
 struct SlabResidual {
   const TexelSlice* slice;
   const std::vector<int>* rows;
   double eta;
   double brightest;
+  Parameterisation parameterisation;
   const std::vector<double>* halo;
 
   bool operator()(double const* const* parameters, double* residuals) const {
-    const double* p = parameters[0];
     std::vector<double> shapes;
-    RowShapes({std::exp(p[0]), std::exp(p[1])}, eta, *slice, *rows, &shapes);
+    RowShapes(InterfacesOf(parameterisation, parameters[0]), eta, *slice, *rows, &shapes);
     const LinearAmounts amounts = BestAmounts(*slice, *rows, shapes, halo);
     for (size_t j = 0; j < rows->size(); ++j) {
       const int row = (*rows)[j];
@@ -115,21 +155,43 @@ double Cost(const TexelSlice& slice, const std::vector<int>& rows, const std::ve
   return cost;
 }
 
-// The least-cost start on a coarse grid of roughness pairs: the cost has a long valley along
-// which one side's roughness trades for the other's, and LM started on the wrong side of a
+// The least-cost isotropic start on a coarse grid of roughness pairs: the cost has a long valley
+// along which one side's roughness trades for the other's, and LM started on the wrong side of a
 // shallow ridge stays there.
-std::array<double, kNumParameters> CoarseStart(const TexelSlice& slice, const std::vector<int>& rows, double eta) {
-  std::array<double, kNumParameters> best = {std::log(0.2), std::log(0.2)};
+std::vector<double> CoarseStart(const TexelSlice& slice, const std::vector<int>& rows, double eta) {
+  std::vector<double> best = {std::log(0.2), std::log(0.2)};
   double best_cost = std::numeric_limits<double>::infinity();
   std::vector<double> shapes;
   for (double entry : {0.03, 0.07, 0.15, 0.3, 0.6}) {
     for (double exit : {0.03, 0.07, 0.15, 0.3, 0.6}) {
-      RowShapes({entry, exit}, eta, slice, rows, &shapes);
+      RowShapes({SlabSide::Isotropic(entry), SlabSide::Isotropic(exit)}, eta, slice, rows, &shapes);
       const double cost = Cost(slice, rows, shapes);
       if (cost < best_cost) best_cost = cost, best = {std::log(entry), std::log(exit)};
     }
   }
   return best;
+}
+
+// Levenberg-Marquardt over the interfaces from `x`, the halo's shape held fixed (or none), in
+// `problem` (kept for the standard errors).
+ceres::Solver::Summary SolveInterfaces(const TexelSlice& slice, const std::vector<int>& rows, double eta, double brightest,
+                                       Parameterisation parameterisation, const std::vector<double>* halo,
+                                       std::vector<double>* x, ceres::Problem* problem) {
+  auto* cost = new ceres::DynamicNumericDiffCostFunction<SlabResidual, ceres::CENTRAL>(
+      new SlabResidual{&slice, &rows, eta, brightest, parameterisation, halo});
+  cost->AddParameterBlock(static_cast<int>(x->size()));
+  cost->SetNumResiduals(static_cast<int>(rows.size()));
+  problem->AddResidualBlock(cost, nullptr, x->data());
+  // The log roughnesses (isotropic) or the log-Cholesky diagonals (anisotropic: each axis's alpha
+  // then stays above the lower bound) are bounded; the off-diagonals are free.
+  for (int k = 0; k < static_cast<int>(x->size()); ++k) {
+    if (parameterisation == Parameterisation::kAnisotropic && k % 3 == 2) continue;
+    problem->SetParameterLowerBound(x->data(), k, kLowerLnRoughness);
+    problem->SetParameterUpperBound(x->data(), k, kUpperLnRoughness);
+  }
+  ceres::Solver::Summary summary;
+  ceres::Solve(SmallProblemOptions(50), problem, &summary);
+  return summary;
 }
 
 // Per-channel scales by linear least squares against the fitted shape (as the dual fit does).
@@ -147,42 +209,78 @@ std::array<double, 3> ChannelScales(double k_s, const TexelSlice& slice, const s
   return {model_data[0] / model_model, model_data[1] / model_model, model_data[2] / model_model};
 }
 
-// Standard errors of the two roughnesses and their correlation from the Jacobian J of the
-// projected residuals r at the solution (Golub and Pereyra: the scale's own uncertainty is
-// eliminated, not ignored), by the sandwich (J^T J)^-1 (sum_k r_k^2 J_k^T J_k) (J^T J)^-1 of
-// ln r: the residuals are not equally noisy (a camera's noise grows with the signal), which
-// s^2 (J^T J)^-1 would assume. Then se(r) = r se(ln r).
-void MeasureUncertainty(ceres::Problem* problem, int num_rows, int num_linear, SlabFitResult* result) {
+// Standard errors of the two sides' Roughness() and their correlation from the Jacobian J of the
+// projected residuals r at the solution (Golub and Pereyra: the linear amounts' own uncertainty
+// is eliminated, not ignored), by the sandwich (J^T J)^-1 (sum_k r_k^2 J_k^T J_k) (J^T J)^-1: the
+// residuals are not equally noisy (a camera's noise grows with the signal), which s^2 (J^T J)^-1
+// would assume. The covariance of the parameters is carried to (ln r_entry, ln r_exit) by their
+// linear map G, then se(r) = r se(ln r).
+void MeasureUncertainty(ceres::Problem* problem, Parameterisation parameterisation, int num_rows, int num_linear,
+                        SlabFitResult* result) {
   double cost = 0;
   std::vector<double> residuals;
   ceres::CRSMatrix crs;
   if (!problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost, &residuals, nullptr, &crs)) return;
-  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+  const int n = crs.num_cols;
+  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(crs.num_rows, n);
   for (int r = 0; r < crs.num_rows; ++r) {
     for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) jacobian(r, crs.cols[k]) = crs.values[k];
   }
-  const Eigen::Matrix2d normal = jacobian.transpose() * jacobian;
-  const int dof = num_rows - kNumParameters - num_linear;  // the linear amounts are parameters too
-  if (dof <= 0 || !(normal.determinant() > 0)) return;
-  Eigen::Matrix2d meat = Eigen::Matrix2d::Zero();
-  for (int r = 0; r < crs.num_rows; ++r) {
-    const Eigen::Vector2d row = jacobian.row(r).transpose();
-    meat += model::Square(residuals[r]) * row * row.transpose();
-  }
-  const Eigen::Matrix2d bread = normal.inverse();
+  const int dof = num_rows - n - num_linear;  // the linear amounts are parameters too
+  const Eigen::MatrixXd normal = jacobian.transpose() * jacobian;
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(normal);
+  if (dof <= 0 || !lu.isInvertible()) return;
+  Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(n, n);
+  for (int r = 0; r < crs.num_rows; ++r) meat += model::Square(residuals[r]) * jacobian.row(r).transpose() * jacobian.row(r);
+  const Eigen::MatrixXd bread = lu.inverse();
   // The small-sample correction n / dof of the sandwich (HC1).
-  const Eigen::Matrix2d covariance = (static_cast<double>(num_rows) / dof) * bread * meat * bread;
-  if (!(covariance(0, 0) >= 0) || !(covariance(1, 1) >= 0)) return;
-  result->entry_roughness_se = result->interfaces.entry_roughness * std::sqrt(covariance(0, 0));
-  result->exit_roughness_se = result->interfaces.exit_roughness * std::sqrt(covariance(1, 1));
-  const double scale = std::sqrt(covariance(0, 0) * covariance(1, 1));
-  result->roughness_correlation = scale > 0 ? covariance(0, 1) / scale : 0.0;
+  const Eigen::MatrixXd covariance = (static_cast<double>(num_rows) / dof) * bread * meat * bread;
+  Eigen::MatrixXd g = Eigen::MatrixXd::Zero(2, n);
+  if (parameterisation == Parameterisation::kIsotropic) {
+    g(0, 0) = g(1, 1) = 1.0;
+  } else {
+    g(0, 0) = g(0, 1) = g(1, 3) = g(1, 4) = 0.5;
+  }
+  const Eigen::Matrix2d roughness = g * covariance * g.transpose();
+  if (!(roughness(0, 0) >= 0) || !(roughness(1, 1) >= 0)) return;
+  result->entry_roughness_se = result->interfaces.entry.Roughness() * std::sqrt(roughness(0, 0));
+  result->exit_roughness_se = result->interfaces.exit.Roughness() * std::sqrt(roughness(1, 1));
+  const double scale = std::sqrt(roughness(0, 0) * roughness(1, 1));
+  result->roughness_correlation = scale > 0 ? roughness(0, 1) / scale : 0.0;
 }
+
+// One stage of the fit: a parameterisation, its parameters from the last solve, the halo's
+// shape it holds (empty: none yet) and the solved problem (kept for the standard errors).
+struct Stage {
+  Parameterisation parameterisation;
+  std::vector<double> x;
+  std::vector<double> halo = {};
+  std::unique_ptr<ceres::Problem> problem = nullptr;
+  ceres::Solver::Summary summary = {};
+
+  // Fits again from x, with the halo's shape recomputed at the current interfaces first when
+  // asked, else the one held.
+  void Refit(const SlabFitter& fitter, const TexelSlice& slice, const std::vector<int>& rows, double brightest,
+             bool recompute_halo);
+  SlabFitResult Result(double eta, const TexelSlice& slice, const std::vector<int>& rows, double dark_fraction,
+                       double brightest) const;
+};
 
 }  // namespace
 
+double SlabSide::Roughness() const { return std::sqrt(alpha_x * alpha_y); }
+
+const model::Ndf& SideNdf(const SlabSide& side, std::optional<model::GgxNdf>* ggx, std::optional<model::EllipsoidNdf>* turned) {
+  if (side.azimuth == 0.0) return ggx->emplace(side.alpha_x, side.alpha_y);
+  // The Ellipsoid NDF without skew is anisotropic GGX whose x axis it turns to -theta_z.
+  return turned->emplace(side.alpha_x, side.alpha_y, 0.0, 0.0, -side.azimuth);
+}
+
 double SlabShape(const SlabInterfaces& slab, double eta, const model::Vec3& i, const model::Vec3& o) {
-  const model::GgxNdf entry(slab.entry_roughness), exit(slab.exit_roughness);
+  std::optional<model::GgxNdf> entry_ggx, exit_ggx;
+  std::optional<model::EllipsoidNdf> entry_turned, exit_turned;
+  const model::Ndf& entry = SideNdf(slab.entry, &entry_ggx, &entry_turned);
+  const model::Ndf& exit = SideNdf(slab.exit, &exit_ggx, &exit_turned);
   double rho = model::SlabTransmission(entry, exit, eta).Rho(i, o);
   if (slab.internal_reflection > 0) rho += slab.internal_reflection * model::SlabInternalReflection(entry, exit, eta).Rho(i, o);
   return rho;
@@ -192,31 +290,53 @@ SlabFitter::SlabFitter(double eta, SlabFitOptions options) : eta_(eta), options_
   model::DualMicrofacetModel validate_eta(eta);
 }
 
-double SlabFitter::Rho(const SlabFitResult& fit, const model::Vec3& i, const model::Vec3& o) const {
-  return fit.k_s * SlabShape(fit.interfaces, eta_, i, o);
-}
-
 namespace {
 
-// Levenberg-Marquardt over the two roughnesses from `p`, the halo's shape held fixed (or none).
-ceres::Solver::Summary SolveRoughnesses(const TexelSlice& slice, const std::vector<int>& rows, double eta, double brightest,
-                                        const std::vector<double>* halo, std::array<double, kNumParameters>* p,
-                                        ceres::Problem* problem) {
-  auto* cost = new ceres::DynamicNumericDiffCostFunction<SlabResidual, ceres::CENTRAL>(
-      new SlabResidual{&slice, &rows, eta, brightest, halo});
-  cost->AddParameterBlock(kNumParameters);
-  cost->SetNumResiduals(static_cast<int>(rows.size()));
-  problem->AddResidualBlock(cost, nullptr, p->data());
-  for (int side = 0; side < kNumParameters; ++side) {
-    problem->SetParameterLowerBound(p->data(), side, kLowerLnRoughness);
-    problem->SetParameterUpperBound(p->data(), side, kUpperLnRoughness);
+void Stage::Refit(const SlabFitter& fitter, const TexelSlice& slice, const std::vector<int>& rows, double brightest,
+                  bool recompute_halo) {
+  if (recompute_halo) halo = RowInternalReflection(InterfacesOf(parameterisation, x.data()), fitter.eta(), slice, rows);
+  problem = std::make_unique<ceres::Problem>();
+  summary = SolveInterfaces(slice, rows, fitter.eta(), brightest, parameterisation, halo.empty() ? nullptr : &halo, &x,
+                            problem.get());
+}
+
+SlabFitResult Stage::Result(double eta, const TexelSlice& slice, const std::vector<int>& rows, double dark_fraction,
+                            double brightest) const {
+  const std::vector<double>* fitted_halo = halo.empty() ? nullptr : &halo;
+  SlabFitResult result;
+  result.interfaces = InterfacesOf(parameterisation, x.data());
+  result.converged = summary.IsSolutionUsable();
+  MeasureUncertainty(problem.get(), parameterisation, static_cast<int>(rows.size()), fitted_halo ? 2 : 1, &result);
+
+  std::vector<double> shapes;
+  RowShapes(result.interfaces, eta, slice, rows, &shapes);
+  const LinearAmounts amounts = BestAmounts(slice, rows, shapes, fitted_halo);
+  result.k_s = amounts.direct;
+  result.interfaces.internal_reflection = amounts.direct > 0 ? amounts.internal / amounts.direct : 0.0;
+  // The shape the material will evaluate, with the halo at its weight.
+  std::vector<double> model_shapes = shapes;
+  if (fitted_halo) {
+    for (size_t j = 0; j < rows.size(); ++j) model_shapes[j] += result.interfaces.internal_reflection * halo[j];
   }
-  ceres::Solver::Summary summary;
-  ceres::Solve(SmallProblemOptions(50), problem, &summary);
-  return summary;
+  double squared_error = 0, squared_rho = 0, squared_log = 0;
+  size_t logged = 0;
+  for (size_t j = 0; j < rows.size(); ++j) {
+    const double rho = slice.rho[rows[j]], predicted = result.k_s * model_shapes[j];
+    squared_error += model::Square(predicted - rho);
+    squared_rho += model::Square(rho);
+    if (rho >= dark_fraction * brightest && rho > 0 && predicted > 0) squared_log += model::Square(std::log(predicted / rho)), ++logged;
+  }
+  result.relative_rmse = squared_rho > 0 ? std::sqrt(squared_error / squared_rho) : 0.0;
+  result.log_rms = logged > 0 ? std::sqrt(squared_log / logged) : 0.0;
+  result.k_s_rgb = ChannelScales(result.k_s, slice, rows, model_shapes);
+  return result;
 }
 
 }  // namespace
+
+double SlabFitter::Rho(const SlabFitResult& fit, const model::Vec3& i, const model::Vec3& o) const {
+  return fit.k_s * SlabShape(fit.interfaces, eta_, i, o);
+}
 
 SlabFitResult SlabFitter::Fit(const TexelSlice& slice) const {
   if (slice.rho.size() != slice.light.size()) common::ThrowInvalidInput("texel slice", "rho and light sizes differ");
@@ -236,49 +356,23 @@ SlabFitResult SlabFitter::Fit(const TexelSlice& slice) const {
   if (bright < 8 || !(brightest > 0)) {
     throw common::Error(common::ErrorKind::kNumerical, "texel slice", "too few bright samples for the slab fit");
   }
-  std::array<double, kNumParameters> p = CoarseStart(slice, rows, eta_);
-  // The direct light first; then, with the internal reflection's shape at the last roughnesses,
-  // again (a fixed point: the shape moves little with them).
-  auto problem = std::make_unique<ceres::Problem>();
-  ceres::Solver::Summary summary = SolveRoughnesses(slice, rows, eta_, brightest, nullptr, &p, problem.get());
-  std::vector<double> halo;
+  // Isotropic sides first, the direct light alone; then, with the internal reflection's shape at
+  // the last interfaces, again (a fixed point: the shape moves little with them); then each
+  // side's anisotropy from there, with the halo once more at the end.
   const int passes = options_.internal_reflection ? options_.internal_reflection_passes : 0;
-  for (int pass = 0; pass < passes; ++pass) {
-    halo = RowInternalReflection({std::exp(p[0]), std::exp(p[1])}, eta_, slice, rows);
-    problem = std::make_unique<ceres::Problem>();
-    summary = SolveRoughnesses(slice, rows, eta_, brightest, &halo, &p, problem.get());
-  }
-  const std::vector<double>* fitted_halo = passes > 0 ? &halo : nullptr;
-
-  SlabFitResult result;
-  result.interfaces = {std::exp(p[0]), std::exp(p[1])};
-  result.converged = summary.IsSolutionUsable();
-  MeasureUncertainty(problem.get(), static_cast<int>(rows.size()), fitted_halo ? 2 : 1, &result);
-
-  std::vector<double> shapes;
-  RowShapes(result.interfaces, eta_, slice, rows, &shapes);
-  const LinearAmounts amounts = BestAmounts(slice, rows, shapes, fitted_halo);
-  result.k_s = amounts.direct;
-  result.interfaces.internal_reflection = amounts.direct > 0 ? amounts.internal / amounts.direct : 0.0;
-  // The shape the material will evaluate, with the halo at its weight.
-  std::vector<double> model_shapes = shapes;
-  if (fitted_halo) {
-    for (size_t j = 0; j < rows.size(); ++j) model_shapes[j] += result.interfaces.internal_reflection * halo[j];
-  }
-  double squared_error = 0, squared_rho = 0, squared_log = 0;
-  size_t logged = 0;
-  for (size_t j = 0; j < rows.size(); ++j) {
-    const double rho = slice.rho[rows[j]], predicted = result.k_s * model_shapes[j];
-    squared_error += model::Square(predicted - rho);
-    squared_rho += model::Square(rho);
-    if (rho >= options_.dark_fraction * brightest && rho > 0 && predicted > 0) {
-      squared_log += model::Square(std::log(predicted / rho)), ++logged;
-    }
-  }
-  result.relative_rmse = squared_rho > 0 ? std::sqrt(squared_error / squared_rho) : 0.0;
-  result.log_rms = logged > 0 ? std::sqrt(squared_log / logged) : 0.0;
-  result.k_s_rgb = ChannelScales(result.k_s, slice, rows, model_shapes);
-  return result;
+  Stage isotropic{Parameterisation::kIsotropic, CoarseStart(slice, rows, eta_)};
+  isotropic.Refit(*this, slice, rows, brightest, false);
+  for (int pass = 0; pass < passes; ++pass) isotropic.Refit(*this, slice, rows, brightest, true);
+  SlabFitResult result = isotropic.Result(eta_, slice, rows, options_.dark_fraction, brightest);
+  if (!options_.anisotropic) return result;
+  Stage anisotropic{Parameterisation::kAnisotropic, CholeskyOfIsotropic(isotropic.x), isotropic.halo};
+  anisotropic.Refit(*this, slice, rows, brightest, false);  // with the isotropic fit's halo
+  if (passes > 0) anisotropic.Refit(*this, slice, rows, brightest, true);
+  const SlabFitResult turned = anisotropic.Result(eta_, slice, rows, options_.dark_fraction, brightest);
+  // Four more parameters fit a little more of anything, model error included: on a traced
+  // isotropic slab they turned the exit into 0.164 x 0.118 (its roughness 16% off, against 1.4%
+  // isotropic) for 2% less error. They are kept only where they earn it.
+  return turned.relative_rmse <= options_.anisotropy_gain * result.relative_rmse ? turned : result;
 }
 
 }  // namespace svbtdf::fit

@@ -360,13 +360,23 @@ void BindMaterial(py::module_& m) {
                              "float32 (H, W) for a walter-ggx material, else None")
       .def_property_readonly("baseline_azimuth", [](const Material& m) { return MapOrNone(m.material().baseline_azimuth); },
                              "float32 (H, W) for a walter-ggx material, else None")
-      .def_property_readonly("slab_entry_roughness", [](const Material& m) { return MapOrNone(m.material().slab_entry_roughness); },
-                             "float32 (H, W): GGX roughness of the side facing the light, for a slab material, else None")
-      .def_property_readonly("slab_exit_roughness", [](const Material& m) { return MapOrNone(m.material().slab_exit_roughness); },
-                             "float32 (H, W): GGX roughness of the side facing the camera, for a slab material, else None")
+      .def_property_readonly("slab_entry_alpha_x", [](const Material& m) { return MapOrNone(m.material().slab_entry_alpha_x); },
+                             "float32 (H, W): GGX alpha along the first axis of the side facing the light, for a slab "
+                             "material, else None")
+      .def_property_readonly("slab_entry_alpha_y", [](const Material& m) { return MapOrNone(m.material().slab_entry_alpha_y); },
+                             "float32 (H, W): across it, for a slab material, else None")
+      .def_property_readonly("slab_entry_azimuth", [](const Material& m) { return MapOrNone(m.material().slab_entry_azimuth); },
+                             "float32 (H, W): the first axis's angle from +x, radians, for a slab material, else None")
+      .def_property_readonly("slab_exit_alpha_x", [](const Material& m) { return MapOrNone(m.material().slab_exit_alpha_x); },
+                             "float32 (H, W): the same for the side facing the camera, for a slab material, else None")
+      .def_property_readonly("slab_exit_alpha_y", [](const Material& m) { return MapOrNone(m.material().slab_exit_alpha_y); },
+                             "float32 (H, W): for a slab material, else None")
+      .def_property_readonly("slab_exit_azimuth", [](const Material& m) { return MapOrNone(m.material().slab_exit_azimuth); },
+                             "float32 (H, W): for a slab material, else None")
       .def_property_readonly("slab_entry_roughness_se",
                              [](const Material& m) { return MapOrNone(m.material().slab_entry_roughness_se); },
-                             "float32 (H, W): its standard error (-1: not known), for a slab material, else None")
+                             "float32 (H, W): standard error of the entry's roughness sqrt(alpha_x alpha_y) (-1: not known), "
+                             "for a slab material, else None")
       .def_property_readonly("slab_exit_roughness_se",
                              [](const Material& m) { return MapOrNone(m.material().slab_exit_roughness_se); },
                              "float32 (H, W): its standard error (-1: not known), for a slab material, else None")

@@ -123,11 +123,12 @@ def test_fit_model_slab_writes_both_interfaces_and_evaluates_as_the_command_line
     svbtdf.fit(tiny.processed, out, model="slab", representatives=0.05)
     material = svbtdf.Material.load(out)
     assert material.btdf == "slab"
-    for name in ("slab_entry_roughness", "slab_exit_roughness", "slab_entry_roughness_se", "slab_exit_roughness_se",
-                 "slab_internal_reflection"):
+    for name in ("slab_entry_alpha_x", "slab_entry_alpha_y", "slab_entry_azimuth", "slab_exit_alpha_x", "slab_exit_alpha_y",
+                 "slab_exit_azimuth", "slab_entry_roughness_se", "slab_exit_roughness_se", "slab_internal_reflection"):
         array = getattr(material, name)
         assert array.shape == (material.height, material.width) and array.dtype == np.float32, name
-    assert (material.slab_entry_roughness > 0).all() and (material.slab_exit_roughness > 0).all()
+    assert (material.slab_entry_alpha_y > 0).all() and (material.slab_exit_alpha_y > 0).all()
+    assert (material.slab_entry_alpha_x >= material.slab_entry_alpha_y).all()
     assert material.baseline_alpha_x is None
     wi, wo = np.array([0.0, 0.3, -1.0]), np.array([0.0, -0.7, 0.7])
     value = material.eval(np.array([2, 3]), wi, wo)

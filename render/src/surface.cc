@@ -52,10 +52,10 @@ const model::Bsdf& MaterialSurface::At(int col, int row, BsdfScratch& scratch) c
     return scratch.walter.emplace(*scratch.ggx, 1.0, m.eta, params.k_s, params.rho_d, m.baseline_azimuth.at(col, row));
   }
   if (m.model == fit::MaterialModel::kSlab) {
-    scratch.ggx.emplace(m.slab_entry_roughness.at(col, row));
-    scratch.ggx_exit.emplace(m.slab_exit_roughness.at(col, row));
-    return scratch.slab.emplace(*scratch.ggx, *scratch.ggx_exit, m.eta, params.k_s, params.rho_d,
-                                m.slab_internal_reflection.at(col, row));
+    const fit::SlabInterfaces slab = fit::TexelSlab(m, col, row);
+    const model::Ndf& entry = fit::SideNdf(slab.entry, &scratch.ggx, &scratch.ellipsoid);
+    const model::Ndf& exit = fit::SideNdf(slab.exit, &scratch.ggx_exit, &scratch.ellipsoid_exit);
+    return scratch.slab.emplace(entry, exit, m.eta, params.k_s, params.rho_d, slab.internal_reflection);
   }
   // D = sum_j c_j D_j with c_j = w_j s_j / S, as MaterialEvaluator::TexelNdf blends the cells
   // (docs/material-format.md), except that the sum is taken after interpolation.

@@ -1,6 +1,7 @@
 #include "svbtdf/report/compare.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -123,12 +124,31 @@ void RequireSameSize(const fit::Material& material, const std::string& material_
 
 namespace {
 
-// The true GGX roughness of a slab interface, or NaN where it is not isotropic GGX.
-double IsotropicGgxRoughness(const simulate::SlabInterfaceSpec& spec) {
+// The true roughness sqrt(alpha_x alpha_y) of a slab interface and its two axes (long first), or
+// NaN where it is not a GGX lobe about the normal (the fit's family).
+std::array<double, 3> TrueGgxSide(const simulate::SlabInterfaceSpec& spec) {
   const model::AnalyticNdfParams& p = spec.params;
-  const bool isotropic = p.alpha_x == p.alpha_y && p.theta_x == 0 && p.theta_y == 0;
-  return spec.ndf == "ggx" && isotropic ? p.alpha_x : std::nan("");
+  if (spec.ndf != "ggx" || p.theta_x != 0 || p.theta_y != 0) return {std::nan(""), std::nan(""), std::nan("")};
+  return {std::sqrt(p.alpha_x * p.alpha_y), std::max(p.alpha_x, p.alpha_y), std::min(p.alpha_x, p.alpha_y)};
 }
+
+// The medians of one side's fitted roughness, axes and standard error over some texels.
+struct SideMedians {
+  std::vector<double> roughness, alpha_x, alpha_y, se;
+  void Add(const fit::SlabSide& side, double standard_error) {
+    roughness.push_back(side.Roughness());
+    alpha_x.push_back(side.alpha_x);
+    alpha_y.push_back(side.alpha_y);
+    se.push_back(standard_error);
+  }
+  // The fraction of the texels whose roughness is within 15% of `truth` (NaN without one).
+  double Within15(double truth) const {
+    if (!std::isfinite(truth)) return std::nan("");
+    std::vector<double> errors;
+    for (double v : roughness) errors.push_back(std::abs(v / truth - 1.0));
+    return FractionWithin(errors, 0.15);
+  }
+};
 
 // Each true slab material's texels among `texels`, their fitted interfaces against the truth's.
 std::vector<CompareMetrics::SlabRecovery> SlabRecoveries(const fit::Material& material, const simulate::MonteCarloTruth& truth,
@@ -138,31 +158,29 @@ std::vector<CompareMetrics::SlabRecovery> SlabRecoveries(const fit::Material& ma
     const simulate::SlabMaterial& slab = truth.materials()[m];
     CompareMetrics::SlabRecovery r;
     r.label = slab.label;
-    r.true_entry = IsotropicGgxRoughness(slab.entry);
-    r.true_exit = IsotropicGgxRoughness(slab.exit);
-    std::vector<double> entry, exit, entry_se, exit_se;
+    const std::array<double, 3> true_entry = TrueGgxSide(slab.entry), true_exit = TrueGgxSide(slab.exit);
+    r.true_entry = true_entry[0];
+    r.true_exit = true_exit[0];
+    r.true_entry_axes = {true_entry[1], true_entry[2]};
+    r.true_exit_axes = {true_exit[1], true_exit[2]};
+    SideMedians entry, exit;
     for (int t : texels) {
       if (truth.material_of(t) != static_cast<int>(m)) continue;
       const int x = t % material.width, y = t / material.width;
-      entry.push_back(material.slab_entry_roughness.at(x, y));
-      exit.push_back(material.slab_exit_roughness.at(x, y));
-      entry_se.push_back(material.slab_entry_roughness_se.at(x, y));
-      exit_se.push_back(material.slab_exit_roughness_se.at(x, y));
+      const fit::SlabInterfaces fitted = fit::TexelSlab(material, x, y);
+      entry.Add(fitted.entry, material.slab_entry_roughness_se.at(x, y));
+      exit.Add(fitted.exit, material.slab_exit_roughness_se.at(x, y));
     }
-    r.texels = entry.size();
-    if (entry.empty()) continue;
-    const auto within = [](const std::vector<double>& fitted, double truth_value) {
-      if (!std::isfinite(truth_value)) return std::nan("");
-      std::vector<double> errors;
-      for (double v : fitted) errors.push_back(std::abs(v / truth_value - 1.0));
-      return FractionWithin(errors, 0.15);
-    };
-    r.entry_within_15 = within(entry, r.true_entry);
-    r.exit_within_15 = within(exit, r.true_exit);
-    r.entry_median = common::Median(entry);
-    r.exit_median = common::Median(exit);
-    r.entry_se_median = common::Median(entry_se);
-    r.exit_se_median = common::Median(exit_se);
+    r.texels = entry.roughness.size();
+    if (entry.roughness.empty()) continue;
+    r.entry_within_15 = entry.Within15(r.true_entry);
+    r.exit_within_15 = exit.Within15(r.true_exit);
+    r.entry_median = common::Median(entry.roughness);
+    r.exit_median = common::Median(exit.roughness);
+    r.entry_axes_median = {common::Median(entry.alpha_x), common::Median(entry.alpha_y)};
+    r.exit_axes_median = {common::Median(exit.alpha_x), common::Median(exit.alpha_y)};
+    r.entry_se_median = common::Median(entry.se);
+    r.exit_se_median = common::Median(exit.se);
     recoveries.push_back(r);
   }
   return recoveries;
@@ -286,7 +304,11 @@ nlohmann::json SlabRecoveriesToJson(const std::vector<CompareMetrics::SlabRecove
                     {"entry_roughness_se_median", NumberOrNull(r.entry_se_median)},
                     {"exit_roughness_se_median", NumberOrNull(r.exit_se_median)},
                     {"entry_within_15_percent", NumberOrNull(r.entry_within_15)},
-                    {"exit_within_15_percent", NumberOrNull(r.exit_within_15)}});
+                    {"exit_within_15_percent", NumberOrNull(r.exit_within_15)},
+                    {"true_entry_axes", {NumberOrNull(r.true_entry_axes[0]), NumberOrNull(r.true_entry_axes[1])}},
+                    {"true_exit_axes", {NumberOrNull(r.true_exit_axes[0]), NumberOrNull(r.true_exit_axes[1])}},
+                    {"entry_axes_median", {NumberOrNull(r.entry_axes_median[0]), NumberOrNull(r.entry_axes_median[1])}},
+                    {"exit_axes_median", {NumberOrNull(r.exit_axes_median[0]), NumberOrNull(r.exit_axes_median[1])}}});
   }
   return list;
 }

@@ -189,29 +189,46 @@ void AddUncertaintyMaps(const fit::Material& material, const MapFunction& map) {
       "relative");
 }
 
-// A slab material's two interfaces (`svbtdf fit --model slab`): each side's GGX roughness on one
-// scale, and their standard errors relative to them (a side the dots do not constrain shows up
-// bright there).
+// A slab material's two interfaces (`svbtdf fit --model slab`): each side's roughness
+// sqrt(alpha_x alpha_y) on one scale, how anisotropic it is (alpha_y / alpha_x: 1 isotropic),
+// the standard errors relative to the roughness (a side the dots do not constrain shows up bright
+// there) and the internal reflection's weight.
 template <typename MapFunction>
 void AddSlabInterfaceMaps(const fit::Material& material, const MapFunction& map) {
-  const double roughness_max = std::max({1e-3, MaxOf(material.slab_entry_roughness), MaxOf(material.slab_exit_roughness)});
-  map("slab_entry_roughness.png", ScalarMap(material.slab_entry_roughness, 0, 0, roughness_max),
-      "GGX roughness of the slab's entry, the side facing the light (docs/fitting.md, \"The slab fit\")", 0, roughness_max,
-      "GGX alpha");
-  map("slab_exit_roughness.png", ScalarMap(material.slab_exit_roughness, 0, 0, roughness_max),
-      "GGX roughness of the slab's exit, the side facing the camera (same scale)", 0, roughness_max, "GGX alpha");
+  const int w = material.width, h = material.height;
+  common::FloatImage roughness[2] = {common::FloatImage(w, h, 1), common::FloatImage(w, h, 1)};
+  common::FloatImage ratio[2] = {common::FloatImage(w, h, 1), common::FloatImage(w, h, 1)};
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const fit::SlabInterfaces slab = fit::TexelSlab(material, x, y);
+      int k = 0;
+      for (const fit::SlabSide* side : {&slab.entry, &slab.exit}) {
+        roughness[k].at(x, y) = static_cast<float>(side->Roughness());
+        ratio[k].at(x, y) = static_cast<float>(side->alpha_y / side->alpha_x);
+        ++k;
+      }
+    }
+  }
+  const double roughness_max = std::max({1e-3, MaxOf(roughness[0]), MaxOf(roughness[1])});
+  const char* sides[2] = {"entry, the side facing the light", "exit, the side facing the camera"};
+  const char* names[2] = {"entry", "exit"};
+  const common::FloatImage* se[2] = {&material.slab_entry_roughness_se, &material.slab_exit_roughness_se};
+  for (int k = 0; k < 2; ++k) {
+    map(std::string("slab_") + names[k] + "_roughness.png", ScalarMap(roughness[k], 0, 0, roughness_max),
+        std::string("GGX roughness sqrt(alpha_x alpha_y) of the slab's ") + sides[k] +
+            " (docs/fitting.md, \"The slab fit\"; both sides on one scale)",
+        0, roughness_max, "GGX alpha");
+    map(std::string("slab_") + names[k] + "_anisotropy.png", ScalarMap(ratio[k], 0, 0, 1),
+        std::string("anisotropy of the ") + names[k] + ": alpha_y / alpha_x (1: isotropic)", 0, 1, "ratio");
+    const common::FloatImage relative = KnownOnly(*se[k], &roughness[k]);
+    const double hi = UpperScale(relative, 1e-3);
+    map(std::string("slab_") + names[k] + "_roughness_se.png", ScalarMap(relative, 0, 0, hi),
+        std::string("relative standard error of the ") + names[k] + "'s roughness (white: not known)", 0, hi, "relative");
+  }
   const double halo_max = std::max(1e-3, MaxOf(material.slab_internal_reflection));
   map("slab_internal_reflection.png", ScalarMap(material.slab_internal_reflection, 0, 0, halo_max),
       "weight of the light reflected inside the slab against the light transmitted straight through (0: none)", 0,
       halo_max, "unitless");
-  for (const auto& [file, se, value, side] :
-       {std::tuple{"slab_entry_roughness_se.png", &material.slab_entry_roughness_se, &material.slab_entry_roughness, "entry"},
-        std::tuple{"slab_exit_roughness_se.png", &material.slab_exit_roughness_se, &material.slab_exit_roughness, "exit"}}) {
-    const common::FloatImage relative = KnownOnly(*se, value);
-    const double hi = UpperScale(relative, 1e-3);
-    map(file, ScalarMap(relative, 0, 0, hi),
-        std::string("relative standard error of the ") + side + "'s roughness (white: not known)", 0, hi, "relative");
-  }
 }
 
 void AddMaps(Page& page, const fit::Material& material, const simulate::Truth* truth, const std::string& lobe_error_file) {

@@ -353,15 +353,20 @@ TEST_F(FitMaterialTest, TheSlabModelIsFittedWrittenAsVersion5AndReadBack) {
   std::vector<bool> use_dot(kDots * kDots, true);
   for (int q : HeldOutDots(kDots * kDots, 0.1, 1)) use_dot[q] = false;
   const SlabFitResult own = SlabFitter(1.5).Fit(Store().MakeTexelSlice(rep, use_dot));
-  EXPECT_NEAR(slab.slab_entry_roughness.at(x, y), own.interfaces.entry_roughness, 1e-5);
-  EXPECT_NEAR(slab.slab_exit_roughness.at(x, y), own.interfaces.exit_roughness, 1e-5);
+  const SlabInterfaces held = TexelSlab(slab, x, y);
+  EXPECT_NEAR(held.entry.alpha_x, own.interfaces.entry.alpha_x, 1e-5);
+  EXPECT_NEAR(held.entry.alpha_y, own.interfaces.entry.alpha_y, 1e-5);
+  EXPECT_NEAR(held.exit.alpha_x, own.interfaces.exit.alpha_x, 1e-5);
+  EXPECT_NEAR(held.exit.azimuth, own.interfaces.exit.azimuth, 1e-5);
+  EXPECT_NEAR(held.internal_reflection, own.interfaces.internal_reflection, 1e-5);
   EXPECT_NEAR(slab.slab_exit_roughness_se.at(x, y), own.exit_roughness_se, 1e-5);
   EXPECT_GT(own.exit_roughness_se, 0.0);
   // Every texel holds its cluster's representative's interfaces.
   for (int64_t t = 0; t < 256; ++t) {
     const int r = static_cast<int>(slab.cluster.pixels[t]);
     const int64_t own_rep = slab.representative_texels[r];
-    EXPECT_EQ(slab.slab_entry_roughness.pixels[t], slab.slab_entry_roughness.pixels[own_rep]);
+    EXPECT_EQ(slab.slab_entry_alpha_x.pixels[t], slab.slab_entry_alpha_x.pixels[own_rep]);
+    EXPECT_EQ(slab.slab_exit_azimuth.pixels[t], slab.slab_exit_azimuth.pixels[own_rep]);
   }
   // The slab describes the dual truth only roughly, but it is a fit of it (measured 9.2%).
   const Scores scores = Score(slab, truth_, Store(), slab.representative_texels);
@@ -374,7 +379,8 @@ TEST_F(FitMaterialTest, TheSlabModelIsFittedWrittenAsVersion5AndReadBack) {
   EXPECT_EQ(manifest["btdf"], "slab");
   const Material read = ReadMaterial(dir_ / "slab");
   EXPECT_EQ(read.model, MaterialModel::kSlab);
-  EXPECT_EQ(read.slab_exit_roughness.pixels, slab.slab_exit_roughness.pixels);
+  EXPECT_EQ(read.slab_exit_alpha_y.pixels, slab.slab_exit_alpha_y.pixels);
+  EXPECT_EQ(read.slab_internal_reflection.pixels, slab.slab_internal_reflection.pixels);
   const MaterialEvaluator before(slab), after(read);
   const model::Vec3 o = Store().geometry().View(rep), i = Store().geometry().Light(rep, 300);
   const TexelBtdf texel = after.Texel(x, y);
@@ -395,12 +401,12 @@ TEST_F(FitMaterialTest, TheSlabModelIsFittedWrittenAsVersion5AndReadBack) {
       },
       common::Error);
   common::WriteTextAtomically(dir_ / "slab" / "material.json", manifest.dump(), /*overwrite=*/true);
-  common::FloatImage zero = slab.slab_entry_roughness;
+  common::FloatImage zero = slab.slab_entry_alpha_x;
   zero.pixels[3] = 0.0f;
-  common::WriteFloatImage(dir_ / "slab" / "slab_entry_roughness.exr", zero, false, true);
+  common::WriteFloatImage(dir_ / "slab" / "slab_entry_alpha_x.exr", zero, false, true);
   EXPECT_THROW(
       try { ReadMaterial(dir_ / "slab"); } catch (const common::Error& e) {
-        EXPECT_NE(std::string(e.what()).find("slab_entry_roughness.exr"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("slab_entry_alpha_x.exr"), std::string::npos) << e.what();
         throw;
       },
       common::Error);

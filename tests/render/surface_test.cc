@@ -124,8 +124,11 @@ TEST(MaterialSurface, ABaselineTexelIsTheEvaluatorsWalterTexel) {
 TEST(MaterialSurface, ASlabTexelIsTheEvaluatorsSlabTexel) {
   fit::Material m = SmallMaterial(3, 2);
   m.model = fit::MaterialModel::kSlab;
-  m.slab_entry_roughness = common::FloatImage(3, 2, 1, 0.3f);
-  m.slab_exit_roughness = common::FloatImage(3, 2, 1, 0.12f);
+  m.slab_entry_alpha_x = common::FloatImage(3, 2, 1, 0.3f);
+  m.slab_entry_alpha_y = common::FloatImage(3, 2, 1, 0.1f);
+  m.slab_entry_azimuth = common::FloatImage(3, 2, 1, 0.4f);  // turned: the Ellipsoid NDF
+  m.slab_exit_alpha_x = m.slab_exit_alpha_y = common::FloatImage(3, 2, 1, 0.12f);
+  m.slab_exit_azimuth = common::FloatImage(3, 2, 1, 0.0f);
   m.slab_entry_roughness_se = m.slab_exit_roughness_se = common::FloatImage(3, 2, 1, 0.01f);
   m.slab_internal_reflection = common::FloatImage(3, 2, 1, 1.2f);
   const MaterialSurface surface(m, 0.03, 0.02, "slab");

@@ -186,8 +186,11 @@ TEST(Compare, ASlabMaterialIsScoredOnEachTrueSlabsRoughnesses) {
     std::fill(image.pixels.begin(), image.pixels.end(), value);
     return image;
   };
-  slab.slab_entry_roughness = map(0.31f);  // the frosted slab's 0.30 within 15%
-  slab.slab_exit_roughness = map(0.16f);   // its 0.12 not
+  slab.slab_entry_alpha_x = slab.slab_entry_alpha_y = map(0.31f);  // the frosted slab's 0.30 within 15%
+  slab.slab_exit_alpha_x = map(0.2f);                               // its 0.12 not: sqrt(0.2 x 0.128) = 0.16
+  slab.slab_exit_alpha_y = map(0.128f);
+  slab.slab_entry_azimuth = map(0.0f);
+  slab.slab_exit_azimuth = map(0.5f);
   slab.slab_entry_roughness_se = slab.slab_exit_roughness_se = map(0.01f);
   slab.slab_internal_reflection = map(0.0f);  // the halo is not what this test scores (and costs 8 s)
   const CompareMetrics metrics = Compare(slab, montecarlo, Named("m"));
@@ -196,14 +199,24 @@ TEST(Compare, ASlabMaterialIsScoredOnEachTrueSlabsRoughnesses) {
   for (const CompareMetrics::SlabRecovery& r : metrics.slab_recovery) {
     texels += r.texels;
     EXPECT_NEAR(r.entry_median, 0.31, 1e-6);
+    EXPECT_NEAR(r.exit_median, 0.16, 1e-6);
+    EXPECT_NEAR(r.exit_axes_median[0], 0.2, 1e-6);
+    EXPECT_NEAR(r.exit_axes_median[1], 0.128, 1e-6);
     if (r.label.rfind("frosted", 0) == 0) {
       EXPECT_DOUBLE_EQ(r.true_entry, 0.30);
       EXPECT_DOUBLE_EQ(r.true_exit, 0.12);
       EXPECT_DOUBLE_EQ(r.entry_within_15, 1.0);
       EXPECT_DOUBLE_EQ(r.exit_within_15, 0.0);
     }
-    if (r.label.rfind("brushed", 0) == 0) {  // anisotropic GGX at the entry, Beckmann at the exit
-      EXPECT_TRUE(std::isnan(r.true_entry) && std::isnan(r.true_exit) && std::isnan(r.entry_within_15));
+    if (r.label.rfind("brushed", 0) == 0) {  // anisotropic GGX at the entry (0.08 x 0.35), Beckmann at the exit
+      EXPECT_NEAR(r.true_entry, std::sqrt(0.08 * 0.35), 1e-12);
+      EXPECT_DOUBLE_EQ(r.true_entry_axes[0], 0.35);
+      EXPECT_DOUBLE_EQ(r.true_entry_axes[1], 0.08);
+      EXPECT_TRUE(std::isnan(r.true_exit) && std::isnan(r.exit_within_15));
+    }
+    if (r.label.rfind("skewed", 0) == 0) {  // a tilted ellipsoid at the entry: not in the family
+      EXPECT_TRUE(std::isnan(r.true_entry) && std::isnan(r.entry_within_15));
+      EXPECT_DOUBLE_EQ(r.true_exit, 0.20);
     }
   }
   EXPECT_EQ(texels, metrics.texels_compared);

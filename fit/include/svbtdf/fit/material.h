@@ -62,10 +62,12 @@ struct Material {
   // kWalterGgx only (1 channel each, interpolated like alpha): the GGX lobe of every texel. The NDF
   // tables then hold that lobe tabulated, and alpha and the shadowing roughness are unused (0).
   common::FloatImage baseline_alpha_x, baseline_alpha_y, baseline_azimuth;
-  // kSlab only (1 channel each): every texel's two interfaces (SlabInterfaces) and the standard
-  // errors of their roughnesses (-1: not known). The NDF tables then hold the exit's GGX, and
-  // alpha and the shadowing roughness are unused (0).
-  common::FloatImage slab_entry_roughness, slab_exit_roughness;
+  // kSlab only (1 channel each): every texel's two interfaces (SlabSide: alpha_x, alpha_y and
+  // the azimuth of the first axis per side), the standard errors of each side's Roughness()
+  // (-1: not known) and the internal reflection's weight. The NDF tables then hold the exit's
+  // GGX, and alpha and the shadowing roughness are unused (0).
+  common::FloatImage slab_entry_alpha_x, slab_entry_alpha_y, slab_entry_azimuth;
+  common::FloatImage slab_exit_alpha_x, slab_exit_alpha_y, slab_exit_azimuth;
   common::FloatImage slab_entry_roughness_se, slab_exit_roughness_se;
   common::FloatImage slab_internal_reflection;  // SlabInterfaces::internal_reflection (>= 0)
   // Version 3, dual-microfacet: standard errors per texel (docs/fitting.md, "Uncertainty"); all
@@ -116,6 +118,9 @@ Material ReadMaterial(const std::filesystem::path& folder);
 // material's eta, alpha clamped to [0, 1], the Smith roughness (0: no shadowing), k_s, rho_d and
 // whether rho includes the light reflected inside the slab.
 model::DualMicrofacetParams TexelParams(const Material& material, int x, int y);
+
+// Texel (x, y)'s two interfaces and internal-reflection weight, for a slab material.
+SlabInterfaces TexelSlab(const Material& material, int x, int y);
 
 // Each representative's scale s_j (its own texel's k_s, channel mean), by which a texel's blend
 // weighs the representative's D (docs/material-format.md).

@@ -1,39 +1,58 @@
 #pragma once
 // The physically parameterised fit (`svbtdf fit --model slab`): every texel as a slab with two
-// rough interfaces, isotropic GGX of its own roughness on each side, R = k_s rho + rho_d with rho
-// the light the two interfaces transmit without reflecting inside (model/slab_transmission.h).
-// A lab learns the two sides' roughnesses ("entry 0.30, exit 0.12") instead of an NDF table and
-// a blend weight. Fitted with Ceres on the residuals of rho itself (not of its logarithm, as the
-// dual-microfacet fit and the baseline do; slab_fit.cc says why), k_s in closed form
-// (docs/fitting.md, "The slab fit").
+// rough interfaces, an anisotropic GGX of its own on each side, R = k_s rho + rho_d with rho the
+// light the two interfaces transmit without reflecting inside (model/slab_transmission.h) plus a
+// fitted weight of the light reflected inside. A lab learns how rough each side is ("entry 0.30,
+// exit 0.12", or "entry 0.08 x 0.35 along y") instead of an NDF table and a blend weight. Fitted
+// with Ceres on the residuals of rho itself (not of its logarithm, as the dual-microfacet fit and
+// the baseline do; slab_fit.cc says why), the linear amounts in closed form (docs/fitting.md,
+// "The slab fit").
 
 #include <array>
+#include <optional>
 
 #include "svbtdf/fit/texel_fit.h"
+#include "svbtdf/model/ellipsoid_ndf.h"
+#include "svbtdf/model/ggx.h"
 #include "svbtdf/model/vec.h"
 
 namespace svbtdf::fit {
 
-// The two interfaces of a texel: GGX alphas (not perceptual roughness).
+// One interface: GGX with alpha_x along the axis at `azimuth` (radians from +x toward +y, in
+// (-pi/2, pi/2]) and alpha_y across it, alpha_x >= alpha_y; isotropic when they are equal. GGX
+// alphas, not perceptual roughness.
+struct SlabSide {
+  double alpha_x = 0.2, alpha_y = 0.2;
+  double azimuth = 0.0;
+
+  static SlabSide Isotropic(double roughness) { return {roughness, roughness, 0.0}; }
+  // sqrt(alpha_x alpha_y): the isotropic roughness whose slopes spread over the same area.
+  double Roughness() const;
+};
+
+// The two interfaces of a texel.
 struct SlabInterfaces {
-  double entry_roughness = 0.2;  // the side facing the light (the monitor)
-  double exit_roughness = 0.2;   // the side facing the camera
+  SlabSide entry = {};  // the side facing the light (the monitor)
+  SlabSide exit = {};   // the side facing the camera
   // Weight of the light reflected inside the slab (model::SlabInternalReflection's shape) against
   // the light transmitted straight through; 0: none.
   double internal_reflection = 0.0;
 };
 
-// rho(i, o) of the slab with unit scale: SlabTransmission(GGX(entry), GGX(exit), eta) with the
-// default quadrature, plus internal_reflection x SlabInternalReflection of the same interfaces.
-// The one evaluation of the slab model: the fitter and fitted materials (MaterialEvaluator)
-// share it.
+// The NDF of one side, built in whichever of the two slots it needs (an axis-aligned GGX, or the
+// Ellipsoid NDF that is GGX turned about z) and returned; valid while the slot is.
+const model::Ndf& SideNdf(const SlabSide& side, std::optional<model::GgxNdf>* ggx, std::optional<model::EllipsoidNdf>* turned);
+
+// rho(i, o) of the slab with unit scale: SlabTransmission(entry, exit, eta) with the default
+// quadrature, plus internal_reflection x SlabInternalReflection of the same interfaces. The one
+// evaluation of the slab model: the fitter and fitted materials (MaterialEvaluator) share it.
 double SlabShape(const SlabInterfaces& slab, double eta, const model::Vec3& i, const model::Vec3& o);
 
 struct SlabFitResult {
   SlabInterfaces interfaces;
-  // Standard errors of the two roughnesses from the fit's normal equations (the inverse of
-  // J^T J scaled by the residuals' variance; -1 where it could not be computed). A roughness whose
-  // standard error is large against its value is one the dots do not constrain.
+  // Standard errors of each side's Roughness() from the fit's Jacobian (the sandwich estimate,
+  // slab_fit.cc; -1 where it could not be computed). A roughness whose standard error is large
+  // against its value is one the dots do not constrain.
   double entry_roughness_se = -1.0, exit_roughness_se = -1.0;
   // Their correlation: near -1 where the data fix only a combination of the two (the lobe's
   // width), not how it is shared between the sides.
@@ -46,9 +65,15 @@ struct SlabFitResult {
 };
 
 struct SlabFitOptions {
+  // Fit each side's anisotropy (alpha_x, alpha_y, azimuth) after the isotropic fit; false keeps
+  // both sides isotropic.
+  bool anisotropic = true;
+  // The anisotropic fit is kept only when its relative RMSE is at most this fraction of the
+  // isotropic fit's (slab_fit.cc says why).
+  double anisotropy_gain = 0.9;
   // Fit the weight of the light reflected inside the slab too (SlabInterfaces::internal_reflection).
   bool internal_reflection = true;
-  // Its shape depends on the roughnesses: it is computed at the last fit's and the fit repeated,
+  // Its shape depends on the interfaces: it is computed at the last fit's and the fit repeated,
   // this many times (a fixed-point iteration).
   int internal_reflection_passes = 2;
   double dark_fraction = 2e-3;  // samples below this fraction of the brightest do not count as a lobe
@@ -61,6 +86,7 @@ class SlabFitter {
   // Throws svbtdf::common::Error(kNumerical) for a slice with too few bright samples.
   SlabFitResult Fit(const TexelSlice& slice) const;
   double Rho(const SlabFitResult& fit, const model::Vec3& i, const model::Vec3& o) const;
+  double eta() const { return eta_; }
 
  private:
   double eta_;

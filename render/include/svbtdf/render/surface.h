@@ -28,7 +28,8 @@ struct BsdfScratch {
   std::optional<model::TabulatedNdfBlend> blend;
   std::optional<model::GgxNdf> ggx;
   std::optional<model::GgxNdf> ggx_exit;  // a slab texel's exit (ggx holds its entry)
-  std::optional<model::EllipsoidNdf> ellipsoid;  // a rotated GGX lobe (LobeSurface)
+  std::optional<model::EllipsoidNdf> ellipsoid;  // a rotated GGX lobe (LobeSurface; a slab texel's turned entry)
+  std::optional<model::EllipsoidNdf> ellipsoid_exit;  // a slab texel's turned exit
   std::optional<model::DualMicrofacetBsdf> dual;
   std::optional<model::WalterBsdf> walter;
   std::optional<model::SlabBsdf> slab;

@@ -55,13 +55,17 @@ struct CompareMetrics {
   // same for the fit's residual (residual.exr). NaN without.
   double heldout_rank_correlation = std::nan(""), residual_rank_correlation = std::nan("");
   // A slab material (`fit --model slab`) against a Monte Carlo truth: per slab material of the
-  // truth, its texels' fitted interfaces against the true ones. A true roughness is NaN where that
-  // interface is not isotropic GGX (the fit's family), so that no number pretends to compare.
+  // truth, its texels' fitted interfaces against the true ones. Roughness is each side's
+  // sqrt(alpha_x alpha_y) (fit::SlabSide::Roughness), axes are (long, short). A true value is NaN
+  // where that interface is not a GGX lobe about the normal (the fit's family), so that no number
+  // pretends to compare.
   struct SlabRecovery {
     std::string label;
     size_t texels = 0;
     double true_entry = std::nan(""), true_exit = std::nan("");
     double entry_median = std::nan(""), exit_median = std::nan("");  // of the fitted roughnesses
+    std::array<double, 2> true_entry_axes = {std::nan(""), std::nan("")}, true_exit_axes = {std::nan(""), std::nan("")};
+    std::array<double, 2> entry_axes_median = {std::nan(""), std::nan("")}, exit_axes_median = {std::nan(""), std::nan("")};
     double entry_se_median = std::nan(""), exit_se_median = std::nan("");
     // Fraction of the texels whose fitted roughness lies within 15% of the true one.
     double entry_within_15 = std::nan(""), exit_within_15 = std::nan("");
