@@ -50,6 +50,15 @@ class Material:
     baseline_alpha_x: Optional[F32]  # (H, W), walter-ggx only
     baseline_alpha_y: Optional[F32]
     baseline_azimuth: Optional[F32]
+    slab_entry_alpha_x: Optional[F32]  # (H, W), slab only: the side facing the light, along its first axis
+    slab_entry_alpha_y: Optional[F32]  # across it
+    slab_entry_azimuth: Optional[F32]  # the first axis from +x, radians
+    slab_exit_alpha_x: Optional[F32]  # the side facing the camera
+    slab_exit_alpha_y: Optional[F32]
+    slab_exit_azimuth: Optional[F32]
+    slab_entry_roughness_se: Optional[F32]  # of sqrt(alpha_x alpha_y); -1 where not known
+    slab_exit_roughness_se: Optional[F32]
+    slab_internal_reflection: Optional[F32]  # weight of the light reflected inside the slab
     def eval(self, texels: ArrayLike, wi: ArrayLike, wo: ArrayLike, threads: int = 0) -> F64:
         """R (N, 3) as `svbtdf eval`; texels (N, 2) of (column, row) or (2,); wi, wo (N, 3) or (3,)."""
     def bsdf_eval(self, texels: ArrayLike, wi: ArrayLike, wo: ArrayLike, threads: int = 0) -> F64: ...
