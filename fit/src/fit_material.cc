@@ -43,8 +43,8 @@ void CheckOptions(const FitMaterialOptions& options, double eta) {
   }
   const int pool = options.standard_errors.model_error_pool_radius;
   if (pool < 0) common::ThrowInvalidInput("--model-error-pool", "must be >= 0 texels, got " + std::to_string(pool));
-  if (!options.slab_anisotropic && options.model != MaterialModel::kSlab) {
-    common::ThrowInvalidInput("--isotropic-sides", "is an option of --model slab");
+  if (options.slab_anisotropic && options.model != MaterialModel::kSlab) {
+    common::ThrowInvalidInput("--anisotropic-sides", "is an option of --model slab");
   }
   if (options.internal_reflection && options.model != MaterialModel::kDualMicrofacet) {
     common::ThrowInvalidInput("--internal-reflection", std::string("is a term of the dual-microfacet model; --model ") +
@@ -432,7 +432,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
   // Only when set, so that journals written before the option existed still resume.
   if (options.free_horizon) identity["free_horizon"] = true;
   if (options.internal_reflection) identity["internal_reflection"] = true;
-  if (options.model == MaterialModel::kSlab && !options.slab_anisotropic) identity["slab_isotropic"] = true;
+  if (options.model == MaterialModel::kSlab && options.slab_anisotropic) identity["slab_anisotropic"] = true;
   Checkpoint checkpoint(options.checkpoint, identity);
   RepresentativeFits fits(eta, options, reps.size());
   const size_t resumed = checkpoint.done().size();

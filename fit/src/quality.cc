@@ -31,6 +31,23 @@ double Percent(int64_t part, int64_t whole) { return whole > 0 ? 100.0 * part / 
 
 namespace {
 
+// The likely causes of a poor fit, by what the model can describe.
+const char* ResidualCause(MaterialModel model) {
+  switch (model) {
+    case MaterialModel::kWalterGgx:
+      return "the single-interface baseline (--model ggx) cannot describe this slab's lobes (it refracts once; "
+             "expected for a slab with two rough interfaces: fit --model dual), or wrong light directions (see the "
+             "calibration's dot residuals)";
+    case MaterialModel::kSlab:
+      return "an interface the slab model cannot describe (a tilted or skewed lobe, or one far from GGX: fit --model "
+             "dual), or wrong light directions (see the calibration's dot residuals)";
+    case MaterialModel::kDualMicrofacet:
+      break;
+  }
+  return "wrong light directions (the dots may be mislabelled or misplaced: see the calibration's dot residuals), "
+         "samples too noisy (the exposure is too low), or a material the model cannot describe";
+}
+
 std::string TexelName(int64_t texel, int width) {
   return FormatFigures("(%lld, %lld)", static_cast<long long>(texel % width), static_cast<long long>(texel / width));
 }
@@ -184,13 +201,7 @@ std::vector<QualityWarning> CheckMaterial(const Material& m, const fs::path& fol
                                "%.3f, max %.3f",
                                static_cast<long long>(bad), static_cast<long long>(known), Percent(bad, known),
                                100 * kMaxBadResidualFraction, kMaxTexelRelativeRmse, median, worst),
-                        m.model == MaterialModel::kWalterGgx
-                            ? "the single-interface baseline (--model ggx) cannot describe this slab's lobes (it "
-                              "refracts once; expected for a slab with two rough interfaces: fit --model dual), or "
-                              "wrong light directions (see the calibration's dot residuals)"
-                            : "wrong light directions (the dots may be mislabelled or misplaced: see the calibration's "
-                              "dot residuals), samples too noisy (the exposure is too low), or a material the model "
-                              "cannot describe"});
+                        ResidualCause(m.model)});
   }
 
   // k_s: a transmission scale, about 1 for a physical slab.

@@ -47,7 +47,7 @@ TEST_F(FitCommand, BadArgumentsExitWithTwoNamingTheArgument) {
                {"--internal-reflection", "--fixed-horizon"},
                {"--internal-reflection --fixed-horizon --model ggx", "--internal-reflection"},
                {"--internal-reflection --fixed-horizon --model slab", "--internal-reflection"},
-               {"--isotropic-sides", "--isotropic-sides"}};
+               {"--anisotropic-sides", "--anisotropic-sides"}};
   for (const auto& c : cases) {
     const auto result = RunSvbtdf(Fit("bad", c.options));
     EXPECT_EQ(result.exit_code, 2) << c.options << ": " << result.output;
@@ -85,8 +85,8 @@ TEST_F(FitCommand, GgxBaselineIsFittedWrittenAndEvaluated) {
 // interfaces, R = k_s rho + rho_d through the library's one path; `svbtdf export` refuses it in
 // one line naming its manifest, and writes nothing.
 TEST_F(FitCommand, TheSlabModelIsWrittenEvaluatedAndNotExported) {
-  // Isotropic sides: the anisotropic search is the library's to test (tests/fit), and halves the time.
-  const auto fitted = RunSvbtdf(Fit("slab", "--model slab --isotropic-sides --representatives 0.25 --holdout 0.1"));
+  // Isotropic sides (the default): the anisotropic search is the library's to test (tests/fit).
+  const auto fitted = RunSvbtdf(Fit("slab", "--model slab --representatives 0.25 --holdout 0.1"));
   ASSERT_EQ(fitted.exit_code, 0) << fitted.output;
   const nlohmann::json manifest = nlohmann::json::parse(common::ReadTextFile(root_ / "slab" / "material.json"));
   EXPECT_EQ(manifest["btdf"], "slab");

@@ -42,9 +42,8 @@ struct FitMaterialOptions {
   // Dual-microfacet: fit and write the light reflected inside the slab as part of every texel's
   // rho (TexelFitOptions::internal_reflection; material format version 4).
   bool internal_reflection = false;
-  // Slab: fit each side's anisotropy too (SlabFitOptions::anisotropic); false keeps both sides
-  // isotropic, which is about half the fit's time.
-  bool slab_anisotropic = true;
+  // Slab: fit each side's anisotropy too (SlabFitOptions::anisotropic; `--anisotropic-sides`).
+  bool slab_anisotropic = false;
 };
 
 // A representative whose fit fails (kNumerical) takes the fit of the nearest one that succeeded

@@ -66,8 +66,10 @@ struct SlabFitResult {
 
 struct SlabFitOptions {
   // Fit each side's anisotropy (alpha_x, alpha_y, azimuth) after the isotropic fit; false keeps
-  // both sides isotropic.
-  bool anisotropic = true;
+  // both sides isotropic. Off by default: it fits anisotropic samples far better, but on
+  // isotropic ones it finds anisotropy in the model's own errors (docs/validation.md, "The slab
+  // fit"), and it takes several times as long.
+  bool anisotropic = false;
   // The anisotropic fit is kept only when its relative RMSE is at most this fraction of the
   // isotropic fit's (slab_fit.cc says why).
   double anisotropy_gain = 0.9;
