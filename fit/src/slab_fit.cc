@@ -260,44 +260,15 @@ struct Stage {
 
   // Fits again from x, with the halo's shape recomputed at the current interfaces first when
   // asked, else the one held.
-  void Refit(const SlabFitter& fitter, const TexelSlice& slice, const std::vector<int>& rows, double brightest,
-             bool recompute_halo);
+  void Refit(double eta, const TexelSlice& slice, const std::vector<int>& rows, double brightest, bool recompute_halo);
   SlabFitResult Result(double eta, const TexelSlice& slice, const std::vector<int>& rows, double dark_fraction,
                        double brightest) const;
 };
 
-}  // namespace
-
-double SlabSide::Roughness() const { return std::sqrt(alpha_x * alpha_y); }
-
-const model::Ndf& SideNdf(const SlabSide& side, std::optional<model::GgxNdf>* ggx, std::optional<model::EllipsoidNdf>* turned) {
-  if (side.azimuth == 0.0) return ggx->emplace(side.alpha_x, side.alpha_y);
-  // The Ellipsoid NDF without skew is anisotropic GGX whose x axis it turns to -theta_z.
-  return turned->emplace(side.alpha_x, side.alpha_y, 0.0, 0.0, -side.azimuth);
-}
-
-double SlabShape(const SlabInterfaces& slab, double eta, const model::Vec3& i, const model::Vec3& o) {
-  std::optional<model::GgxNdf> entry_ggx, exit_ggx;
-  std::optional<model::EllipsoidNdf> entry_turned, exit_turned;
-  const model::Ndf& entry = SideNdf(slab.entry, &entry_ggx, &entry_turned);
-  const model::Ndf& exit = SideNdf(slab.exit, &exit_ggx, &exit_turned);
-  double rho = model::SlabTransmission(entry, exit, eta).Rho(i, o);
-  if (slab.internal_reflection > 0) rho += slab.internal_reflection * model::SlabInternalReflection(entry, exit, eta).Rho(i, o);
-  return rho;
-}
-
-SlabFitter::SlabFitter(double eta, SlabFitOptions options) : eta_(eta), options_(options) {
-  model::DualMicrofacetModel validate_eta(eta);
-}
-
-namespace {
-
-void Stage::Refit(const SlabFitter& fitter, const TexelSlice& slice, const std::vector<int>& rows, double brightest,
-                  bool recompute_halo) {
-  if (recompute_halo) halo = RowInternalReflection(InterfacesOf(parameterisation, x.data()), fitter.eta(), slice, rows);
+void Stage::Refit(double eta, const TexelSlice& slice, const std::vector<int>& rows, double brightest, bool recompute_halo) {
+  if (recompute_halo) halo = RowInternalReflection(InterfacesOf(parameterisation, x.data()), eta, slice, rows);
   problem = std::make_unique<ceres::Problem>();
-  summary = SolveInterfaces(slice, rows, fitter.eta(), brightest, parameterisation, halo.empty() ? nullptr : &halo, &x,
-                            problem.get());
+  summary = SolveInterfaces(slice, rows, eta, brightest, parameterisation, halo.empty() ? nullptr : &halo, &x, problem.get());
 }
 
 SlabFitResult Stage::Result(double eta, const TexelSlice& slice, const std::vector<int>& rows, double dark_fraction,
@@ -334,6 +305,28 @@ SlabFitResult Stage::Result(double eta, const TexelSlice& slice, const std::vect
 
 }  // namespace
 
+double SlabSide::Roughness() const { return std::sqrt(alpha_x * alpha_y); }
+
+const model::Ndf& SideNdf(const SlabSide& side, std::optional<model::GgxNdf>* ggx, std::optional<model::EllipsoidNdf>* turned) {
+  if (side.azimuth == 0.0) return ggx->emplace(side.alpha_x, side.alpha_y);
+  // The Ellipsoid NDF without skew is anisotropic GGX whose x axis it turns to -theta_z.
+  return turned->emplace(side.alpha_x, side.alpha_y, 0.0, 0.0, -side.azimuth);
+}
+
+double SlabShape(const SlabInterfaces& slab, double eta, const model::Vec3& i, const model::Vec3& o) {
+  std::optional<model::GgxNdf> entry_ggx, exit_ggx;
+  std::optional<model::EllipsoidNdf> entry_turned, exit_turned;
+  const model::Ndf& entry = SideNdf(slab.entry, &entry_ggx, &entry_turned);
+  const model::Ndf& exit = SideNdf(slab.exit, &exit_ggx, &exit_turned);
+  double rho = model::SlabTransmission(entry, exit, eta).Rho(i, o);
+  if (slab.internal_reflection > 0) rho += slab.internal_reflection * model::SlabInternalReflection(entry, exit, eta).Rho(i, o);
+  return rho;
+}
+
+SlabFitter::SlabFitter(double eta, SlabFitOptions options) : eta_(eta), options_(options) {
+  model::DualMicrofacetModel validate_eta(eta);
+}
+
 double SlabFitter::Rho(const SlabFitResult& fit, const model::Vec3& i, const model::Vec3& o) const {
   return fit.k_s * SlabShape(fit.interfaces, eta_, i, o);
 }
@@ -361,13 +354,13 @@ SlabFitResult SlabFitter::Fit(const TexelSlice& slice) const {
   // side's anisotropy from there, with the halo once more at the end.
   const int passes = options_.internal_reflection ? options_.internal_reflection_passes : 0;
   Stage isotropic{Parameterisation::kIsotropic, CoarseStart(slice, rows, eta_)};
-  isotropic.Refit(*this, slice, rows, brightest, false);
-  for (int pass = 0; pass < passes; ++pass) isotropic.Refit(*this, slice, rows, brightest, true);
+  isotropic.Refit(eta_, slice, rows, brightest, false);
+  for (int pass = 0; pass < passes; ++pass) isotropic.Refit(eta_, slice, rows, brightest, true);
   SlabFitResult result = isotropic.Result(eta_, slice, rows, options_.dark_fraction, brightest);
   if (!options_.anisotropic) return result;
   Stage anisotropic{Parameterisation::kAnisotropic, CholeskyOfIsotropic(isotropic.x), isotropic.halo};
-  anisotropic.Refit(*this, slice, rows, brightest, false);  // with the isotropic fit's halo
-  if (passes > 0) anisotropic.Refit(*this, slice, rows, brightest, true);
+  anisotropic.Refit(eta_, slice, rows, brightest, false);  // with the isotropic fit's halo
+  if (passes > 0) anisotropic.Refit(eta_, slice, rows, brightest, true);
   const SlabFitResult turned = anisotropic.Result(eta_, slice, rows, options_.dark_fraction, brightest);
   // Four more parameters fit a little more of anything, model error included: on a traced
   // isotropic slab they turned the exit into 0.164 x 0.118 (its roughness 16% off, against 1.4%

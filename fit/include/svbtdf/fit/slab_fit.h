@@ -88,7 +88,6 @@ class SlabFitter {
   // Throws svbtdf::common::Error(kNumerical) for a slice with too few bright samples.
   SlabFitResult Fit(const TexelSlice& slice) const;
   double Rho(const SlabFitResult& fit, const model::Vec3& i, const model::Vec3& o) const;
-  double eta() const { return eta_; }
 
  private:
   double eta_;
