@@ -30,8 +30,6 @@ const double kLowerLnRoughness = std::log(0.01), kUpperLnRoughness = std::log(1.
 //    isotropy included, with no azimuth to wrap (6 parameters). ln Roughness() = (a + b) / 2.
 enum class Parameterisation { kIsotropic, kAnisotropic };
 
-int NumParameters(Parameterisation p) { return p == Parameterisation::kIsotropic ? 2 : 6; }
-
 SlabSide SideFromCholesky(const double* abc) {
   Eigen::Matrix2d factor;
   factor << std::exp(abc[0]), 0.0, abc[2], std::exp(abc[1]);
