@@ -64,9 +64,7 @@ double SlabTransmission::ExitPdf(const Vec3& o, const Vec3& d) const {
 }
 
 SlabTransmission::ForViewer SlabTransmission::Viewer(const Vec3& o) const {
-  ForViewer viewer;
-  viewer.slab_ = this;
-  viewer.o_ = o;
+  ForViewer viewer(*this, o);
   if (o.z() <= 0) return viewer;
   const int count = per_axis_ * per_axis_;
   viewer.exit_nodes_.reserve(count);
@@ -84,7 +82,7 @@ SlabTransmission::ForViewer SlabTransmission::Viewer(const Vec3& o) const {
 }
 
 double SlabTransmission::ForViewer::Rho(const Vec3& i) const {
-  const SlabTransmission& slab = *slab_;
+  const SlabTransmission& slab = slab_;
   if (i.z() >= 0 || o_.z() <= 0) return 0.0;
   const int count = slab.per_axis_ * slab.per_axis_;
   double sum = 0.0;

@@ -39,6 +39,10 @@ const ModelColumn kColumns[] = {
      &simulate::ModelErrors::blend_internal},
     {"blend_internal_fitted", "blend + internal reflection, fitted", {188, 189, 34},
      &simulate::ValidationCase::blend_internal_fitted, &simulate::ModelErrors::blend_internal_fitted},
+    {"two_interfaces", "two interfaces, exact (no internal reflection)", {127, 127, 127},
+     &simulate::ValidationCase::two_interfaces, &simulate::ModelErrors::two_interfaces},
+    {"two_interfaces_internal", "two interfaces + internal reflection, fitted weight", {0, 0, 0},
+     &simulate::ValidationCase::two_interfaces_internal, &simulate::ModelErrors::two_interfaces_internal},
 };
 
 nlohmann::json ErrorsToJson(const simulate::ModelErrors& errors) {
@@ -61,6 +65,7 @@ nlohmann::json CaseToJson(const simulate::ValidationCase& c) {
       {"blend_internal", {{"alpha", c.best_alpha_internal}}},
       {"blend_internal_fitted",
        {{"alpha", c.blend_internal_fitted_alpha}, {"roughness", c.blend_internal_fitted_roughness}}},
+      {"two_interfaces_internal", {{"weight", c.two_interfaces_internal_weight}}},
       {"view_direction", {c.o.x(), c.o.y(), c.o.z()}},
       {"monte_carlo",
        {{"paths", c.mc.paths},

@@ -11,6 +11,7 @@
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/shadowing.h"
 #include "svbtdf/model/slab_lobe.h"
+#include "svbtdf/model/slab_transmission.h"
 
 namespace svbtdf::simulate {
 namespace {
@@ -316,6 +317,43 @@ void FitBlendRoughness(const ValidationContext& context, ValidationCase* result)
   result->blend_fitted_alpha = fitted_blend(log_roughness, &result->blend_fitted);
 }
 
+// The slab's exact two-interface transmission, and the same plus the internal reflection's shape
+// at its least-squares weight over the cells (w >= 0).
+void TwoInterfaceColumns(const ValidationContext& context, ValidationCase* result) {
+  const ValidationOptions& options = context.options;
+  const std::unique_ptr<model::Ndf> flat = options.make_ndf(5e-4);
+  const model::Ndf& entry = result->rough_sides == RoughSides::kExit ? *flat : context.ndf;
+  const model::Ndf& exit = result->rough_sides == RoughSides::kEntry ? *flat : context.ndf;
+  const model::SlabTransmission::ForViewer direct =
+      model::SlabTransmission(entry, exit, options.eta).Viewer(result->o);
+  // On the internal term's points (2 x 2 a cell by default): each value is an integral, and the
+  // lobes of a slab with a rough side are wide.
+  result->two_interfaces = context.halo_averager->Average([&](const model::Vec3& i) { return direct.Rho(i); });
+  // A flat side has no T R R T term of its own: the shape is the rough side's alone.
+  const model::InternalReflection paths(options.eta, {12, 12});
+  const model::SlabInternalReflection both(entry, exit, options.eta);
+  const std::vector<double> halo = context.halo_averager->Average([&](const model::Vec3& i) {
+    switch (result->rough_sides) {
+      case RoughSides::kEntry:
+        return paths.RoughEntry(entry, i, result->o);
+      case RoughSides::kExit:
+        return paths.RoughExit(exit, i, result->o);
+      case RoughSides::kBoth:
+        break;
+    }
+    return both.Rho(i, result->o);
+  });
+  double halo_residual = 0, halo_halo = 0;
+  for (size_t c = 0; c < halo.size(); ++c) {
+    const double w = context.solid_angles[c];
+    halo_residual += w * halo[c] * (result->mc.rho[c] - result->two_interfaces[c]);
+    halo_halo += w * halo[c] * halo[c];
+  }
+  result->two_interfaces_internal_weight = halo_halo > 0 ? std::max(0.0, halo_residual / halo_halo) : 0.0;
+  result->two_interfaces_internal = result->two_interfaces;
+  for (size_t c = 0; c < halo.size(); ++c) result->two_interfaces_internal[c] += result->two_interfaces_internal_weight * halo[c];
+}
+
 void ComputeErrors(const std::vector<double>& solid_angles, ValidationCase* result) {
   const std::vector<double>& mc = result->mc.rho;
   const auto both = [&](const std::vector<double>& predicted, double* error, double* scale_free_error) {
@@ -334,6 +372,8 @@ void ComputeErrors(const std::vector<double>& solid_angles, ValidationCase* resu
   both(result->slab_lobe, &e.slab_lobe, &f.slab_lobe);
   both(result->blend_internal, &e.blend_internal, &f.blend_internal);
   both(result->blend_internal_fitted, &e.blend_internal_fitted, &f.blend_internal_fitted);
+  both(result->two_interfaces, &e.two_interfaces, &f.two_interfaces);
+  both(result->two_interfaces_internal, &e.two_interfaces_internal, &f.two_interfaces_internal);
 }
 
 ValidationCase RunCase(const ValidationContext& context, const SlabTracer& tracer, RoughSides sides,
@@ -371,6 +411,7 @@ ValidationCase RunCase(const ValidationContext& context, const SlabTracer& trace
         result.mc.rho, context.solid_angles, 101, &result.blend_internal);
     if (options.fit_blend_roughness) FitBlendInternalRoughness(context, &result);
   }
+  if (options.two_interfaces) TwoInterfaceColumns(context, &result);
   ComputeErrors(context.solid_angles, &result);
   return result;
 }

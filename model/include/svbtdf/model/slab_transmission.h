@@ -49,23 +49,8 @@ class SlabTransmission {
   // rho of the T T paths for a light direction i (i.z < 0) and a viewer o (o.z > 0); 0 otherwise.
   double Rho(const Vec3& i, const Vec3& o) const;
 
-  // rho at many light directions for one viewer: the exit's directions depend only on o, so they
-  // are found once (what a fit of one texel, whose view is fixed, evaluates over and over).
-  class ForViewer {
-   public:
-    double Rho(const Vec3& i) const;
-
-   private:
-    friend class SlabTransmission;
-    struct ExitNode {
-      Vec3 d;         // in-slab direction, travelling up
-      double value;   // f_exit(-d, o) |d.z| exp(-tau / d.z)
-      double pdf;     // density of d under the exit's sampling
-    };
-    const SlabTransmission* slab_ = nullptr;
-    Vec3 o_;
-    std::vector<ExitNode> exit_nodes_;
-  };
+  // rho at many light directions for one viewer (below).
+  class ForViewer;
   ForViewer Viewer(const Vec3& o) const;
 
  private:
@@ -79,6 +64,26 @@ class SlabTransmission {
   double eta_;
   double optical_depth_;
   int per_axis_;
+};
+
+// rho at many light directions for one viewer: the exit's directions depend only on o, so they
+// are found once (what a fit of one texel, whose view is fixed, evaluates over and over). It
+// holds a copy of the slab, so it may outlive it (not the NDFs).
+class SlabTransmission::ForViewer {
+ public:
+  double Rho(const Vec3& i) const;
+
+ private:
+  friend class SlabTransmission;
+  struct ExitNode {
+    Vec3 d;         // in-slab direction, travelling up
+    double value;   // f_exit(-d, o) |d.z| exp(-tau / d.z)
+    double pdf;     // density of d under the exit's sampling
+  };
+  ForViewer(const SlabTransmission& slab, const Vec3& o) : slab_(slab), o_(o) {}
+  SlabTransmission slab_;
+  Vec3 o_;
+  std::vector<ExitNode> exit_nodes_;
 };
 
 // The shape of the light a slab with two rough interfaces reflects inside before it leaves toward

@@ -80,6 +80,12 @@ struct ModelErrors {
   // the same alpha), alpha refitted; and the same with the NDF roughness fitted too.
   double blend_internal = 0.0;
   double blend_internal_fitted = 0.0;
+  // The exact transmission of the slab's two interfaces without internal reflection
+  // (model/slab_transmission.h; a flat side is the NDF at roughness 5e-4), and the same plus the
+  // internal reflection's shape at its least-squares weight (what `svbtdf fit --model slab`
+  // fits): the rough side's T R R T term for one rough side, SlabInternalReflection for both.
+  double two_interfaces = 0.0;
+  double two_interfaces_internal = 0.0;
 };
 
 // Relative L2 error of s * model after the best scale s > 0: what remains once the overall
@@ -100,6 +106,7 @@ struct ValidationCase {
   double best_alpha_internal = 0.5;    // blend weight of blend_internal
   double blend_internal_fitted_alpha = 0.5;
   double blend_internal_fitted_roughness = 0.0;
+  double two_interfaces_internal_weight = 0.0;  // the internal reflection's fitted weight
   ModelErrors errors;             // relative L2 against MC
   ModelErrors scale_free_errors;  // the same after each model's best overall scale
   // The relative L2 distance that MC noise alone would produce: sqrt(sum Omega se^2 / sum Omega mc^2).
@@ -108,6 +115,7 @@ struct ValidationCase {
   // Cell averages of each model over the slice (hemicube cell order).
   std::vector<double> rho_T, rho_B, blend, single_same_ndf, single_fitted, blend_fitted;
   std::vector<double> slab_lobe, blend_internal, blend_internal_fitted;  // empty when not computed
+  std::vector<double> two_interfaces, two_interfaces_internal;
 };
 
 struct ValidationOptions {
@@ -128,6 +136,8 @@ struct ValidationOptions {
   // blend_internal_fitted when fit_blend_roughness is set too).
   bool slab_lobe = true;
   bool internal_reflection = true;
+  // The two-interface columns (two_interfaces, two_interfaces_internal).
+  bool two_interfaces = true;
   // The internal-reflection term is smooth: it is averaged on k x k points per cell, with this
   // quadrature (a coarser one, on cell centres, inside the roughness search; the final fitted
   // column is evaluated with this one).
