@@ -39,9 +39,9 @@ const ModelColumn kColumns[] = {
      &simulate::ModelErrors::blend_internal},
     {"blend_internal_fitted", "blend + internal reflection, fitted", {188, 189, 34},
      &simulate::ValidationCase::blend_internal_fitted, &simulate::ModelErrors::blend_internal_fitted},
-    {"two_interfaces", "two interfaces, exact (no internal reflection)", {127, 127, 127},
+    {"two_interfaces", "two interfaces, exact (no internal reflection)", {150, 150, 150},
      &simulate::ValidationCase::two_interfaces, &simulate::ModelErrors::two_interfaces},
-    {"two_interfaces_internal", "two interfaces + internal reflection, fitted weight", {0, 0, 0},
+    {"two_interfaces_internal", "two interfaces + internal reflection, fitted weight", {0, 60, 150},
      &simulate::ValidationCase::two_interfaces_internal, &simulate::ModelErrors::two_interfaces_internal},
 };
 
