@@ -122,7 +122,8 @@ nlohmann::json FitToJson(const TexelFitResult& f) {
           {"ndf_width", f.ndf_width},
           {"ndf_width_se", f.ndf_width_se},
           {"alpha_profile_se", f.alpha_profile_se},
-          {"k_s_profile_relative_se", f.k_s_profile_relative_se}};
+          {"k_s_profile_relative_se", f.k_s_profile_relative_se},
+          {"horizon_fixed_instead", f.horizon_fixed_instead}};
 }
 
 nlohmann::json BaselineToJson(const BaselineFitResult& f) {
@@ -167,6 +168,7 @@ TexelFitResult FitFromJson(const nlohmann::json& j, const std::string& source) {
   f.ndf_width_se = j.value("ndf_width_se", -1.0);
   f.alpha_profile_se = j.value("alpha_profile_se", -1.0);
   f.k_s_profile_relative_se = j.value("k_s_profile_relative_se", -1.0);
+  f.horizon_fixed_instead = j.value("horizon_fixed_instead", false);
   return f;
 }
 
@@ -304,6 +306,11 @@ class RepresentativeFits {
   }
   void Set(size_t r, nlohmann::json result) { results_[r] = std::move(result); }
   double RelativeRmse(size_t r) const { return results_[r].at("relative_rmse").get<double>(); }
+  // Dual-microfacet fits whose free horizon left k_s implausible, fitted fixed instead.
+  int64_t HorizonFixedInstead() const {
+    return std::count_if(results_.begin(), results_.end(),
+                         [](const nlohmann::json& j) { return j.value("horizon_fixed_instead", false); });
+  }
 
   // A failed representative takes its lender's fit; its residual says it is not its own (-1).
   void Lend(const std::vector<int>& lender) {
@@ -490,6 +497,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
         {"failed_fits", failures},
         {"failed_representatives", FailedTexels(reps, failed)},
         {"resumed_fits", resumed},
+        {"horizon_fixed_instead", fits.HorizonFixedInstead()},
         {"median_relative_rmse", common::Median(residuals)},
         {"refined_representatives", refined.representatives},
         // The interpolated texels' residuals on their own samples, before and after refinement.

@@ -12,6 +12,7 @@
 #include "svbtdf/common/error.h"
 #include "svbtdf/common/minimize.h"
 #include "svbtdf/fit/ndf_error.h"
+#include "svbtdf/fit/quality.h"
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/internal_reflection.h"
 #include "svbtdf/model/tabulated_ndf.h"
@@ -192,11 +193,18 @@ TexelFitter::TexelFitter(double eta, const TexelFitOptions& options)
   if (!(options.alpha_tolerance > 0) || options.max_alternations < 1) {
     common::ThrowInvalidInput("alpha search", "needs a positive tolerance and at least one alternation");
   }
+  system_ = BuildGridSystem(options.free_horizon);
+  // The paper's fixed horizon, for the free-horizon fits whose scale escapes (Fit).
+  if (options.free_horizon) fixed_horizon_system_ = BuildGridSystem(false);
+}
+
+std::shared_ptr<const TexelFitter::GridSystem> TexelFitter::BuildGridSystem(bool free_horizon) const {
+  const TexelFitOptions& options = options_;
   auto system = std::make_shared<GridSystem>();
   const int cells = grid_.num_cells();
   system->column.assign(cells, -1);
   for (int c = 0; c < cells; ++c) {
-    if (options.free_horizon || !grid_.IsHorizon(c)) system->column[c] = system->num_unknowns++;
+    if (free_horizon || !grid_.IsHorizon(c)) system->column[c] = system->num_unknowns++;
   }
   const int n = system->num_unknowns;
 
@@ -232,7 +240,7 @@ TexelFitter::TexelFitter(double eta, const TexelFitOptions& options)
   }
   Eigen::VectorXd unused_rhs;
   system->symmetry_normal = NormalMatrix(symmetry, n, &unused_rhs);
-  system_ = std::move(system);
+  return system;
 }
 
 namespace {
@@ -385,13 +393,21 @@ void MeasureResiduals(const TexelSlice& slice, const std::vector<Sample>& sample
 }  // namespace
 
 TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace) const {
-  TexelFitResult result = FitDualTerms(slice, workspace);
+  TexelFitResult result = FitDualTerms(slice, *system_, workspace);
+  // A free horizon lets the table's mass escape into cells no dot looks at; the normalisation then
+  // shrinks D where the dots do look and k_s grows to make up for it (k_s of 1e4-1e12 on a Monte
+  // Carlo slab truth, docs/validation.md). The paper's fixed horizon pins that mass.
+  if (fixed_horizon_system_ && !(result.k_s <= kMaxPlausibleKs)) {
+    result = FitDualTerms(slice, *fixed_horizon_system_, workspace);
+    result.horizon_fixed_instead = true;
+  }
   if (!options_.internal_reflection) return result;
   // The term is small beside the direct paths (a few percent of rho), so a fit that ignores it
   // is a close start, and each refit moves D, alpha and k_s a little less.
   for (int pass = 0; pass < options_.internal_reflection_passes; ++pass) {
     const model::TabulatedNdf ndf(grid_, result.ln_d);
-    result = FitDualTerms(WithoutInternalReflection(slice, ndf, eta_, result.alpha, result.k_s, result.k_s_rgb), workspace);
+    result = FitDualTerms(WithoutInternalReflection(slice, ndf, eta_, result.alpha, result.k_s, result.k_s_rgb), *system_,
+                          workspace);
   }
   // Residuals and channel scales against what was measured, the term included.
   MeasureResiduals(slice, PrepareSamples(slice, options_.dark_fraction), Model(result), &result);
@@ -413,7 +429,8 @@ TexelSlice WithoutInternalReflection(const TexelSlice& slice, const model::Ndf& 
   return remaining;
 }
 
-TexelFitResult TexelFitter::FitDualTerms(const TexelSlice& slice, FitWorkspace* workspace) const {
+TexelFitResult TexelFitter::FitDualTerms(const TexelSlice& slice, const GridSystem& system,
+                                         FitWorkspace* workspace) const {
   FitWorkspace local_workspace;
   FitWorkspace::State* state = (workspace ? workspace : &local_workspace)->state_.get();
   const std::vector<Sample> samples = PrepareSamples(slice, options_.dark_fraction);
@@ -424,7 +441,6 @@ TexelFitResult TexelFitter::FitDualTerms(const TexelSlice& slice, FitWorkspace* 
                 "only " + std::to_string(used) + " samples are bright enough to fit",
                 "check the exposure and the validity mask of this texel");
   }
-  const GridSystem& system = *system_;
   const model::Vec3 measured_mean = WeightedMeanDirection(samples, [&](size_t k) { return samples[k].rho; });
 
   double shadowing_roughness = options_.initial_shadowing_roughness;

@@ -51,11 +51,18 @@ void SayWhatWasFitted(const fit::Material& material, const fs::path& out, const 
                        statistics["seconds_per_fit"].get<double>(),
                        statistics["median_relative_rmse"].is_number() ? statistics["median_relative_rmse"].get<double>()
                                                                       : -1.0));
+  if (statistics.value("horizon_fixed_instead", int64_t{0}) > 0) {
+    Say(listener, Format("%s representatives fitted with the NDF's horizon fixed: the free horizon left their k_s "
+                         "implausible (docs/fitting.md, \"Horizon\")",
+                         statistics["horizon_fixed_instead"].dump().c_str()));
+  }
   if (statistics["refined_representatives"].get<int64_t>() > 0) {
     Say(listener, "refined alpha and k_s of " + statistics["refined_representatives"].dump() + " representatives");
   }
   if (statistics["refined_texels"].get<int64_t>() > 0) {
-    Say(listener, Format("refined alpha, k_s and weights of %s interpolated texels: median residual %.3f -> %.3f",
+    // A parametric lobe (ggx, slab) keeps its cluster's shape: only its scale is refitted.
+    const char* refined = material.model == fit::MaterialModel::kDualMicrofacet ? "alpha, k_s and weights" : "k_s";
+    Say(listener, Format("refined %s of %s interpolated texels: median residual %.3f -> %.3f", refined,
                          statistics["refined_texels"].dump().c_str(),
                          statistics["median_relative_rmse_blended"].get<double>(),
                          statistics["median_relative_rmse_refined"].get<double>()));

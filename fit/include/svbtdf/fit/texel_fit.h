@@ -61,7 +61,10 @@ struct TexelFitOptions {
   // data) instead of held at horizon_ln_d. A rough lobe (GGX roughness above about 0.3) keeps
   // much of its mass near the horizon, which the paper's 1e-6 pulls down through the smoothness
   // rows: on a synthetic rice-paper-like material the NDF error falls from 21% to 11.5%
-  // (docs/validation.md). Off here, the paper's solver; FitMaterialOptions turns it on.
+  // (docs/validation.md). Where the free fit's k_s comes out implausible (above
+  // kMaxPlausibleKs, quality.h: the table's mass went where no dot looks), the texel is fitted
+  // again with the horizon fixed (TexelFitResult::horizon_fixed_instead). Off here, the paper's
+  // solver; FitMaterialOptions turns it on.
   bool free_horizon = false;
   double dark_fraction = 2e-3;      // samples below this fraction of the slice maximum are too
                                     // dark for their logarithm to mean anything: dropped from (1)
@@ -94,6 +97,7 @@ struct TexelFitResult {
   double relative_rmse = 0.0;            // sqrt(sum (model - rho)^2 / sum rho^2) over all samples
   int alternations = 0;
   int samples_used = 0;
+  bool horizon_fixed_instead = false;    // free_horizon's fit left k_s implausible: fitted fixed
   // Standard errors (docs/fitting.md, "Uncertainty"); -1 where not known.
   double shadowing_roughness_se = -1.0;  // the sandwich covariance of the shadowing fit (step 4)
   double ndf_width = -1.0;               // NdfWidth of the fitted table (ndf_error.h)
@@ -156,13 +160,16 @@ class TexelFitter {
  private:
   struct GridSystem;  // the rows that do not depend on the data, built once per fitter
 
-  // Steps 1-4: the dual-microfacet terms alone.
-  TexelFitResult FitDualTerms(const TexelSlice& slice, FitWorkspace* workspace) const;
+  std::shared_ptr<const GridSystem> BuildGridSystem(bool free_horizon) const;
+
+  // Steps 1-4: the dual-microfacet terms alone, on the ln D system `system`.
+  TexelFitResult FitDualTerms(const TexelSlice& slice, const GridSystem& system, FitWorkspace* workspace) const;
 
   double eta_;
   TexelFitOptions options_;
   model::Hemicube grid_;
   std::shared_ptr<const GridSystem> system_;
+  std::shared_ptr<const GridSystem> fixed_horizon_system_;  // only with free_horizon
 };
 
 // `slice` with the light reflected inside the slab taken out of its values: the term of `ndf`
