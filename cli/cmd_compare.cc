@@ -27,16 +27,17 @@ struct CompareCommandOptions {
 };
 
 void PrintSummary(const report::CompareMetrics& m) {
+  const auto percent = [](double v) { return std::isfinite(v) ? std::to_string(std::lround(1000 * v) / 10.0).substr(0, 5) + "%" : std::string("-"); };
   if (m.truth_has_parameters) {
-    std::printf("compared %zu texels (%s): alpha within 0.05 on %.1f%%, NDF rel. L2 median %.3f, ", m.texels_compared,
-                m.btdf.c_str(), 100 * m.alpha_within_0_05, m.ndf_rel_l2_median);
+    // A parametric material (ggx, slab) has no alpha: "-", not "nan%".
+    std::printf("compared %zu texels (%s): alpha within 0.05 on %s, NDF rel. L2 median %.3f, ", m.texels_compared,
+                m.btdf.c_str(), percent(m.alpha_within_0_05).c_str(), m.ndf_rel_l2_median);
   } else {
     std::printf("compared %zu texels with a %s truth (no true alpha or NDF): ", m.texels_compared, m.truth_kind.c_str());
   }
   std::printf("held-out rel. RMSE %.4f, all-dots rel. RMSE %.4f%s\n", m.heldout_rel_rmse, m.all_dots_rel_rmse,
               m.holdout_recorded ? "" : " (no held-out dots recorded: all dots)");
   // A material with standard errors: how often the truth lies within 2 of them.
-  const auto percent = [](double v) { return std::isfinite(v) ? std::to_string(std::lround(1000 * v) / 10.0).substr(0, 5) + "%" : std::string("-"); };
   if (std::isfinite(m.coverage_rho_d) || std::isfinite(m.coverage_alpha)) {
     std::printf("truth within 2 standard errors: alpha %s, k_s %s, rho_d %s, shadowing %s, NDF width %s; "
                 "rank correlation of the predicted and the held-out error %.2f (of the residual %.2f)\n",
