@@ -393,24 +393,33 @@ void MeasureResiduals(const TexelSlice& slice, const std::vector<Sample>& sample
 }  // namespace
 
 TexelFitResult TexelFitter::Fit(const TexelSlice& slice, FitWorkspace* workspace) const {
-  TexelFitResult result = FitDualTerms(slice, *system_, workspace);
-  // A free horizon lets the table's mass escape into cells no dot looks at; the normalisation then
-  // shrinks D where the dots do look and k_s grows to make up for it (k_s of 1e4-1e12 on a Monte
-  // Carlo slab truth, docs/validation.md). The paper's fixed horizon pins that mass.
-  if (fixed_horizon_system_ && !(result.k_s <= kMaxPlausibleKs)) {
-    result = FitDualTerms(slice, *fixed_horizon_system_, workspace);
-    result.horizon_fixed_instead = true;
-  }
+  const GridSystem* system = system_.get();
+  TexelFitResult result = FitDualTermsOrFixHorizon(slice, &system, workspace);
   if (!options_.internal_reflection) return result;
   // The term is small beside the direct paths (a few percent of rho), so a fit that ignores it
   // is a close start, and each refit moves D, alpha and k_s a little less.
   for (int pass = 0; pass < options_.internal_reflection_passes; ++pass) {
     const model::TabulatedNdf ndf(grid_, result.ln_d);
-    result = FitDualTerms(WithoutInternalReflection(slice, ndf, eta_, result.alpha, result.k_s, result.k_s_rgb), *system_,
-                          workspace);
+    result = FitDualTermsOrFixHorizon(WithoutInternalReflection(slice, ndf, eta_, result.alpha, result.k_s, result.k_s_rgb),
+                                      &system, workspace);
   }
   // Residuals and channel scales against what was measured, the term included.
   MeasureResiduals(slice, PrepareSamples(slice, options_.dark_fraction), Model(result), &result);
+  return result;
+}
+
+TexelFitResult TexelFitter::FitDualTermsOrFixHorizon(const TexelSlice& slice, const GridSystem** system,
+                                                     FitWorkspace* workspace) const {
+  TexelFitResult result = FitDualTerms(slice, **system, workspace);
+  // A free horizon lets the table's mass escape into cells no dot looks at; the normalisation then
+  // shrinks D where the dots do look and k_s grows to make up for it (k_s of 1e4-1e12 on a Monte
+  // Carlo slab truth, docs/validation.md). The paper's fixed horizon pins that mass, and the
+  // texel keeps it for the rest of its fit.
+  if (*system != fixed_horizon_system_.get() && fixed_horizon_system_ && !(result.k_s <= kMaxPlausibleKs)) {
+    *system = fixed_horizon_system_.get();
+    result = FitDualTerms(slice, **system, workspace);
+  }
+  result.horizon_fixed_instead = *system == fixed_horizon_system_.get();
   return result;
 }
 

@@ -166,7 +166,8 @@ TEST(TexelFit, InternalReflectionTermIsFittedWhereTheSlabHasIt) {
 // at a 20 x 20 dot grid. It is outside the dual-microfacet family, and with the horizon free the
 // fit moved the table's mass where no dot looks: k_s above 1e3 (as on half of `small`'s Monte
 // Carlo representatives). The fitter must then fit it again with the paper's fixed horizon, say
-// so, and return exactly that fit (measured: k_s 18, relative RMSE 0.066, 2026-12-06).
+// so, and return exactly that fit (measured: k_s 18, relative RMSE 0.066, 2026-12-06), with the
+// internal-reflection term's refits too.
 TEST(TexelFit, AFreeHorizonWhoseScaleEscapesIsFittedFixedInstead) {
   const model::GgxNdf entry(0.30), exit(0.12);
   simulate::Slab slab;
@@ -196,6 +197,14 @@ TEST(TexelFit, AFreeHorizonWhoseScaleEscapesIsFittedFixedInstead) {
   EXPECT_LE(free.k_s, kMaxPlausibleKs);
   EXPECT_EQ(free.k_s, fixed.k_s);
   EXPECT_EQ(free.ln_d, fixed.ln_d);
+  // With the internal-reflection term's refits the texel stays on the fixed horizon it fell back to.
+  free_options.internal_reflection = true;
+  TexelFitOptions fixed_with_term;
+  fixed_with_term.internal_reflection = true;
+  const TexelFitResult free_term = TexelFitter(slab.eta, free_options).Fit(slice);
+  const TexelFitResult fixed_term = TexelFitter(slab.eta, fixed_with_term).Fit(slice);
+  EXPECT_TRUE(free_term.horizon_fixed_instead);
+  EXPECT_EQ(free_term.ln_d, fixed_term.ln_d);
 }
 
 }  // namespace

@@ -164,6 +164,10 @@ class TexelFitter {
 
   // Steps 1-4: the dual-microfacet terms alone, on the ln D system `system`.
   TexelFitResult FitDualTerms(const TexelSlice& slice, const GridSystem& system, FitWorkspace* workspace) const;
+  // The same on *system, and again on the fixed horizon's system (which *system then becomes) when
+  // a free horizon leaves k_s implausible.
+  TexelFitResult FitDualTermsOrFixHorizon(const TexelSlice& slice, const GridSystem** system,
+                                          FitWorkspace* workspace) const;
 
   double eta_;
   TexelFitOptions options_;
