@@ -229,8 +229,9 @@ std::vector<QualityWarning> CheckMaterial(const Material& m, const fs::path& fol
                                Percent(implausible, texels), kMaxPlausibleKs, worst_k_s,
                                TexelName(worst_texel, m.width).c_str()),
                         "the fitted NDF put its mass where no dot looks and k_s compensates: the dots may be "
-                        "misplaced (see the calibration), or they do not sample the lobe's peak (widen or densify "
-                        "the dot grid)"});
+                        "misplaced (see the calibration), they may not sample the lobe's peak (widen or densify "
+                        "the dot grid), or the sample is a slab the model cannot describe (try svbtdf fit "
+                        "--model slab)"});
   }
 
   // alpha stuck at its bounds (dual-microfacet only: the baseline has no alpha).
