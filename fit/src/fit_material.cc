@@ -455,6 +455,8 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
   for (size_t r = 0; r < reps.size(); ++r) {
     if (!failed[r]) residuals.push_back(fits.RelativeRmse(r));
   }
+  // Counted before lending: a failed representative that borrows a refitted fit was not refitted itself.
+  const int64_t horizon_fixed_instead = fits.HorizonFixedInstead();
   fits.Lend(LenderOfFailed(reps, store.info().texels_x, failed));
 
   Material material = fits.Assemble(store, eta, options.ndf_resolution, clustering);
@@ -498,7 +500,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
         {"failed_fits", failures},
         {"failed_representatives", FailedTexels(reps, failed)},
         {"resumed_fits", resumed},
-        {"horizon_fixed_instead", fits.HorizonFixedInstead()},
+        {"horizon_fixed_instead", horizon_fixed_instead},
         {"median_relative_rmse", common::Median(residuals)},
         {"refined_representatives", refined.representatives},
         // The interpolated texels' residuals on their own samples, before and after refinement.
