@@ -359,6 +359,38 @@ struct ShadowingResidual {
   }
 };
 
+// The shadowing roughness's standard error with D free: its profile over the final ln D pass.
+// Each data row r of that pass is w_r (alpha ln f_T + (1 - alpha) ln f_B + [ln D terms] - ln rho),
+// its configurations' factors f carrying G, so the rows' derivative in the roughness is
+// g_r = w_r d/dr (alpha ln f_T + (1 - alpha) ln f_B) (central differences) and, as for alpha's
+// profile, var = s^2 / (g^T g - u^T N^-1 u), u = A^T g. -1 where the data do not pin it down.
+template <typename SolveFinal>
+double ShadowingProfileStandardError(const std::vector<Sample>& samples, const model::Vec3& view, double eta,
+                                     double alpha, double roughness, const SparseRows& data,
+                                     const std::vector<int>& row_sample, int num_unknowns, double data_ssr,
+                                     int data_rows, const SolveFinal& solve_final) {
+  const double step = 1e-4 * std::max(roughness, 0.05);
+  const auto configurations = [&](double r) {
+    return ComputeConfigurations(model::DualMicrofacetModel(eta, ShadowingFor(r)), samples, view);
+  };
+  const Configurations above = configurations(roughness + step), below = configurations(roughness - step);
+  const auto ln_factor = [](const model::VirtualConfiguration& c) { return c.valid && c.factor > 0 ? std::log(c.factor) : 0.0; };
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(data.rows);
+  for (int r = 0; r < data.rows; ++r) {
+    const int k = row_sample[r];
+    if (!samples[k].used || !(samples[k].weight > 0)) continue;
+    const double up = alpha * ln_factor(above.entry[k]) + (1 - alpha) * ln_factor(above.exit[k]);
+    const double down = alpha * ln_factor(below.entry[k]) + (1 - alpha) * ln_factor(below.exit[k]);
+    g[r] = std::sqrt(samples[k].weight) * (up - down) / (2 * step);
+  }
+  SparseMatrix a(data.rows, num_unknowns);
+  a.setFromTriplets(data.triplets.begin(), data.triplets.end());
+  const Eigen::VectorXd u = a.transpose() * g;
+  const double schur = g.squaredNorm() - u.dot(solve_final(u));
+  const double s2 = data_ssr / std::max(1, data_rows - 2);
+  return schur > 0 && s2 > 0 ? std::sqrt(s2 / schur) : -1.0;
+}
+
 // The relative RMSE and log RMS of `fitted` over the slice's samples, and the per-channel scales
 // k_s_rgb of its shape (the model with k_s = 1, `fitted` / result->k_s).
 void MeasureResiduals(const TexelSlice& slice, const std::vector<Sample>& samples, const FittedTexel& fitted,
@@ -661,6 +693,15 @@ TexelFitResult TexelFitter::FitDualTerms(const TexelSlice& slice, const GridSyst
     }
   }
   result.shadowing_roughness = shadowing_roughness;
+  // The sandwich above holds D fixed, but G and D trade much as alpha and D do (above): add the
+  // roughness's profile over the final ln D pass, whose rows are the same log residuals.
+  if (result.shadowing_roughness_se >= 0 && last_x.size() == system.num_unknowns && last_data.rows > 0) {
+    const double profile_se =
+        ShadowingProfileStandardError(samples, view, eta_, alpha, shadowing_roughness, last_data, last_row_sample,
+                                      system.num_unknowns, last_data_ssr, last_data_rows, solve_final);
+    // Where the data do not pin it down, half its bounds' range (as alpha's 0.5 above).
+    result.shadowing_roughness_se = profile_se >= 0 ? std::hypot(result.shadowing_roughness_se, profile_se) : 1.0;
+  }
 
   // Residuals and per-channel scales of the final model.
   MeasureResiduals(slice, samples, FittedTexel(grid_, eta_, result), &result);
