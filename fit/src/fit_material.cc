@@ -307,10 +307,11 @@ class RepresentativeFits {
   }
   void Set(size_t r, nlohmann::json result) { results_[r] = std::move(result); }
   double RelativeRmse(size_t r) const { return results_[r].at("relative_rmse").get<double>(); }
-  // Dual-microfacet fits whose free horizon left k_s implausible, fitted fixed instead.
+  // Dual-microfacet fits whose free horizon left k_s implausible, fitted fixed instead (a failed
+  // representative has no fit until it borrows one).
   int64_t HorizonFixedInstead() const {
     return std::count_if(results_.begin(), results_.end(),
-                         [](const nlohmann::json& j) { return j.value("horizon_fixed_instead", false); });
+                         [](const nlohmann::json& j) { return j.is_object() && j.value("horizon_fixed_instead", false); });
   }
 
   // A failed representative takes its lender's fit; its residual says it is not its own (-1).
