@@ -4,6 +4,9 @@
 // normal equations are analysed symbolically each time. Measured: the shared workspace of
 // `svbtdf fit`, which analyses the pattern once per thread. Reports seconds per texel, the ratio,
 // and what fitting 3,600 representatives (1% of 600 x 600 texels) takes on this machine's threads.
+// Then what the standard errors (docs/fitting.md, "Uncertainty"; TexelFitOptions::
+// profile_uncertainty) add to the measured fit: both settings timed twice, alternately, on the
+// same slices and threads, the faster of each pair kept (issue 20 asks for at most 20%).
 //
 //   bench_fit [TEXELS]   (default 24)
 
@@ -53,17 +56,27 @@ int main(int argc, char** argv) {
   const double baseline = Seconds(start) / texels;
   // Shared workspace, one per thread, as `svbtdf fit` runs it.
   const int threads = common::ThreadCount(0);
-  start = std::chrono::steady_clock::now();
-  std::vector<FitWorkspace> workspaces(threads);
-  std::atomic<int> next{0};
-  common::ParallelFor(threads, threads, 1, [&](int64_t worker, int64_t) {
-    for (int t = next++; t < texels; t = next++) fitter.Fit(slices[t], &workspaces[worker]);
-  });
-  const double shared_wall = Seconds(start) / texels;
+  const auto shared_workspaces = [&](const TexelFitter& f) {
+    const auto begin = std::chrono::steady_clock::now();
+    std::vector<FitWorkspace> workspaces(threads);
+    std::atomic<int> next{0};
+    common::ParallelFor(threads, threads, 1, [&](int64_t worker, int64_t) {
+      for (int t = next++; t < texels; t = next++) f.Fit(slices[t], &workspaces[worker]);
+    });
+    return Seconds(begin) / texels;
+  };
+  const double shared_wall = shared_workspaces(fitter);
+  TexelFitOptions without_options = options;
+  without_options.profile_uncertainty = false;
+  const TexelFitter without_errors(1.5, without_options);
+  const double without = std::min(shared_workspaces(without_errors), shared_workspaces(without_errors));
+  const double with = std::min(shared_wall, shared_workspaces(fitter));
   std::printf("texels fitted: %d (32x32 NDF hemicube, 1600 dots, 1%% noise)\n", texels);
   std::printf("baseline, fresh workspace, 1 thread:     %.3f s per texel\n", baseline);
   std::printf("shared workspace, %d threads (wall):      %.3f s per texel\n", threads, shared_wall);
   std::printf("ratio baseline / measured:               %.2f\n", baseline / shared_wall);
   std::printf("3,600 representatives at this rate:      %.1f min\n", 3600 * shared_wall / 60.0);
+  std::printf("without the standard errors (%d threads):  %.3f s per texel; they add %+.1f%%\n", threads, without,
+              100.0 * (with / without - 1.0));
   return 0;
 }

@@ -496,6 +496,9 @@ ProcessReport ProcessSession(const session::Session& session, const calib::Sessi
   finish.diffuse_threshold = options.diffuse_threshold;
   finish.threads = options.threads;
   finish.progress = options.progress;
+  if (polarisation.linear()) {
+    finish.polarisation_ratio = [&](const model::Vec3& light, int64_t texel) { return polarisation.Ratio(light, geometry.View(texel)); };
+  }
   writer.Finish(finish);
 
   const SliceStore store = SliceStore::Open(out);

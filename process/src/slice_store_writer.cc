@@ -303,8 +303,8 @@ TexelSamples GatherSamples(const TexelGeometry& geometry, const calib::MonitorCa
 // Diffuse separation: the floor of the samples (EstimateDiffuse) whose dot is not too dim in the
 // image for a uniform R (1 / s_q at least `diffuse_threshold` of the texel's largest): a choice
 // made on the geometry, not on the measured values, so that it does not bias the floor.
-model::Rgb SeparateDiffuse(const TexelSamples& samples, const std::vector<std::array<int, 2>>& neighbours,
-                    const SliceStoreWriter::FinishOptions& options) {
+model::Rgb SeparateDiffuse(int64_t texel, const TexelSamples& samples, const std::vector<std::array<int, 2>>& neighbours,
+                           const SliceStoreWriter::FinishOptions& options) {
   if (samples.rgb.empty()) return {0, 0, 0};
   double brightest = 0;
   for (double s : samples.noise_scale) brightest = std::max(brightest, 1.0 / s);
@@ -315,7 +315,9 @@ model::Rgb SeparateDiffuse(const TexelSamples& samples, const std::vector<std::a
   for (size_t s = 0; s < samples.rgb.size(); ++s) {
     if (1.0 / samples.noise_scale[s] < options.diffuse_threshold * brightest) continue;
     index[samples.dot[s]] = static_cast<int>(kept.size());
-    kept.push_back(samples.rgb[s]);
+    // Back to what the camera saw: the floor was not polarised (FinishOptions::polarisation_ratio).
+    const double ratio = options.polarisation_ratio ? options.polarisation_ratio(samples.light[s], texel) : 1.0;
+    kept.push_back({samples.rgb[s][0] * ratio, samples.rgb[s][1] * ratio, samples.rgb[s][2] * ratio});
     scale.push_back(samples.noise_scale[s]);
     kept_dots.push_back(samples.dot[s]);
   }
@@ -449,7 +451,9 @@ void SliceStoreWriter::Finish(const FinishOptions& options) {
   };
   // Pass 1: every texel with a dot beneath it (the others' slices wait for their diffuse term).
   std::vector<uint8_t> tile_has_unreached(NumTiles(s.info), 0);
-  const auto own_floor = [&](int64_t, const TexelSamples& samples) { return SeparateDiffuse(samples, neighbours, options); };
+  const auto own_floor = [&](int64_t texel, const TexelSamples& samples) {
+    return SeparateDiffuse(texel, samples, neighbours, options);
+  };
   for (int64_t t = 0; t < NumTiles(s.info); ++t) tile_has_unreached[t] = resample_tile(t, /*reached=*/true, own_floor);
   // Pass 2: a texel without a dot beneath it sees only the lobe's tails, whose floor is not its
   // diffuse term: it takes the diffuse term of the nearest texel that has a dot beneath it (0 when

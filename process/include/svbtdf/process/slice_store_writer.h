@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -41,6 +42,11 @@ class SliceStoreWriter {
     int min_valid_dots = 8;           // fewer valid samples: the texel is masked out
     int threads = 0;
     bool progress = true;
+    // For a polarised screen: what processing divided the sample of light direction `light` at
+    // `texel` by (the polarised over the unpolarised transmission of the lobe's configurations).
+    // The diffuse floor is the same for every polarisation (the model's rho_d, as the simulator
+    // renders it), so it is estimated from the samples multiplied back by it. Empty: unpolarised.
+    std::function<double(const model::Vec3& light, int64_t texel)> polarisation_ratio;
   };
   // After every dot: diffuse separation, push-pull slices, maps, manifest; the store is then
   // complete and SliceStore::Open accepts it.
