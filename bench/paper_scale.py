@@ -61,9 +61,10 @@ def number_after(label, text):
     return float(match.group(1))
 
 
-def simulate_once(svbtdf, preset, cache):
+def simulate_once(svbtdf, preset, cache, options=()):
     """The cached simulation, made first when missing (into a temporary folder, renamed when
-    complete, so that an interrupted simulation is never taken for a finished one)."""
+    complete, so that an interrupted simulation is never taken for a finished one). `options` are
+    more `svbtdf simulate` options (the cache folder must then be one for them)."""
     done = cache / "simulated"
     record = cache / "simulated.json"
     if done.is_dir() and record.is_file():
@@ -73,7 +74,7 @@ def simulate_once(svbtdf, preset, cache):
     partial = cache / "simulated.partial"
     shutil.rmtree(partial, ignore_errors=True)
     cache.mkdir(parents=True, exist_ok=True)
-    stage = run_stage("simulate", [svbtdf, "simulate", "--preset", preset, "--out", partial])
+    stage = run_stage("simulate", [svbtdf, "simulate", "--preset", preset, *options, "--out", partial])
     stage.pop("output")
     stage["date"] = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
     partial.rename(done)

@@ -23,14 +23,9 @@ struct CalibrateEmissionOptions {
 };
 
 void ParseGrid(const std::string& text, process::EmissionCalibrationOptions* options) {
-  int w = 0, h = 0;
-  char x = 0, extra = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || x != 'x' || w <= 0 || h <= 0 || w > 256 ||
-      h > 256) {
-    common::ThrowInvalidInput("--texels", "must be WIDTHxHEIGHT with numbers from 1 to 256, got '" + text + "'");
-  }
-  options->texels_x = w;
-  options->texels_y = h;
+  const GridSize texels = ParseGridSize(text, "--texels", 256);
+  options->texels_x = texels.cols;
+  options->texels_y = texels.rows;
 }
 
 void PrintProfile(const calib::EmissionFit& fit) {

@@ -25,13 +25,9 @@ struct ProcessCommandOptions {
 
 void ParseTexels(const std::string& text, process::ProcessOptions* options) {
   if (text.empty()) return;
-  int w = 0, h = 0;
-  char x = 0, extra = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || x != 'x' || w <= 0 || h <= 0) {
-    common::ThrowInvalidInput("--texels", "must be WIDTHxHEIGHT with positive numbers, got '" + text + "'");
-  }
-  options->texels_x = w;
-  options->texels_y = h;
+  const GridSize texels = ParseGridSize(text, "--texels", 100000);
+  options->texels_x = texels.cols;
+  options->texels_y = texels.rows;
 }
 
 void RunProcess(ProcessCommandOptions options) {

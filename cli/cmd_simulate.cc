@@ -43,6 +43,10 @@ void AddSimulateCommand(CLI::App& app) {
   simulate->add_option("--monitor-tilt", options->monitor_tilt_deg, "tilt the screen about the x axis (degrees) instead of the preset's");
   simulate->add_flag("--mirror-monitor", options->mirror_monitor,
                      "show a mirror image of the screen (a mirrored display mode), which calibration must refuse");
+  auto dots = std::make_shared<std::string>();
+  simulate->add_option("--dots", *dots,
+                       "the dot grid COLSxROWS instead of the preset's, over the same span of the screen (the same "
+                       "rig captured more or less densely)");
   auto emission = std::make_shared<std::string>();
   simulate->add_option("--monitor-emission", *emission,
                        "the screen's angular emission instead of the preset's: isotropic, lambertian or lcd:N (cos^N); "
@@ -55,7 +59,15 @@ void AddSimulateCommand(CLI::App& app) {
                        "the material instead of the preset's: smooth, grid-sheet, leaf-glass, rice-paper, or diffuser (a "
                        "Lambertian transmitter, for `svbtdf calibrate-emission`)");
   simulate->add_option("--threads", options->threads, "worker threads (0: all cores)")->capture_default_str();
-  simulate->callback([options, out, plan_file, rig_file, preset, emission, polarisation] {
+  simulate->callback([options, out, plan_file, rig_file, preset, dots, emission, polarisation] {
+    if (!dots->empty()) {
+      if (!plan_file->empty()) {
+        common::ThrowInvalidInput("--dots", "and --plan both give the dots", "leave one out: a plan lists its own dots");
+      }
+      const GridSize grid = ParseGridSize(*dots, "--dots", 1000);
+      options->dot_cols = grid.cols;
+      options->dot_rows = grid.rows;
+    }
     if (!emission->empty()) options->monitor_emission = simulate::EmissionProfile::Parse(*emission, "--monitor-emission");
     if (!polarisation->empty()) {
       options->monitor_polarisation = simulate::Polarisation::Parse(*polarisation, "--monitor-polarization");

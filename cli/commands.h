@@ -5,6 +5,7 @@
 // AddAllCommands (commands.cc) and in CMakeLists.txt.
 
 #include <CLI/CLI.hpp>
+#include <string>
 
 namespace svbtdf::cli {
 
@@ -27,5 +28,12 @@ void AddRunCommand(CLI::App& app);             // svbtdf run
 void AddSessionCommand(CLI::App& app);         // svbtdf session verify
 void AddSimulateCommand(CLI::App& app);        // svbtdf simulate
 void AddValidateModelCommand(CLI::App& app);  // svbtdf validate-model
+
+// A grid size given as COLSxROWS (`--texels 600x600`, `--dots 20x20`): each from 1 to `largest`.
+// Throws svbtdf::Error(kInvalidInput) naming `option` otherwise.
+struct GridSize {
+  int cols = 0, rows = 0;
+};
+GridSize ParseGridSize(const std::string& text, const std::string& option, int largest);
 
 }  // namespace svbtdf::cli

@@ -95,6 +95,14 @@ SimulationPreset PresetWithOptions(const SimulationOptions& options) {
   if (!std::isnan(options.monitor_orientation_deg)) preset.rig.monitor.orientation_deg = options.monitor_orientation_deg;
   if (!std::isnan(options.monitor_tilt_deg)) preset.rig.monitor.tilt_deg = options.monitor_tilt_deg;
   if (options.mirror_monitor) preset.rig.monitor.mirrored = true;
+  if (options.dot_cols != 0 || options.dot_rows != 0) {
+    if (options.dot_cols < 2 || options.dot_rows < 2 || options.dot_cols > 1000 || options.dot_rows > 1000) {
+      common::ThrowInvalidInput("--dots", "needs 2 to 1000 columns and rows, got " + std::to_string(options.dot_cols) +
+                                              "x" + std::to_string(options.dot_rows));
+    }
+    preset.rig.dots.cols = options.dot_cols;
+    preset.rig.dots.rows = options.dot_rows;
+  }
   if (options.monitor_emission) preset.rig.monitor.emission = *options.monitor_emission;
   if (options.monitor_polarisation) {
     if (options.monitor_polarisation->linear() && options.truth != "model") {
@@ -152,6 +160,12 @@ std::unique_ptr<SimulatedSetup> LoadSimulatedSetup(const fs::path& out, int thre
   preset.rig.monitor.orientation_deg = truth.monitor.orientation_deg;
   preset.rig.monitor.tilt_deg = truth.monitor.tilt_deg;
   preset.rig.monitor.mirrored = truth.monitor.mirrored;
+  // The dot grid as it was simulated (`svbtdf simulate --dots` may have replaced the preset's).
+  if (!truth.dots.empty()) preset.rig.dots.cols = preset.rig.dots.rows = 0;
+  for (const Dot& dot : truth.dots) {
+    preset.rig.dots.cols = std::max(preset.rig.dots.cols, dot.col + 1);
+    preset.rig.dots.rows = std::max(preset.rig.dots.rows, dot.row + 1);
+  }
   preset.rig.monitor.emission = truth.monitor.emission;
   preset.rig.monitor.polarisation = truth.monitor.polarisation;
   if (!truth.capture.pattern.empty()) preset.pattern = truth.capture.pattern;

@@ -194,5 +194,34 @@ TEST_F(SimulatedSession, APolarisedScreenIsRecordedInTheSessionAndTheTruth) {
   EXPECT_TRUE(SimulateSession(out, options).already_complete);
 }
 
+// `svbtdf simulate --dots 4x3`: the preset's rig captured with another dot grid over the same span
+// of the screen. The session plans one dot image per dot and bracket, the truth records the grid,
+// the simulation rebuilds from it (what `acquire --camera sim:OUT` does), and a rerun is complete.
+TEST_F(SimulatedSession, AnotherDotGridSpansTheSameScreen) {
+  const fs::path out = folder_->path() / "dots";
+  simulate::SimulationOptions options = Options();
+  options.dot_cols = 4;
+  options.dot_rows = 3;
+  SimulateSession(out, options);
+  const session::Session session = session::Session::Open(out / "session");
+  EXPECT_TRUE(session.Verify(true).complete()) << session.Verify().Summary();
+  const simulate::RigTruth truth = simulate::ReadRigTruth(out / "truth" / "rig.json");
+  const simulate::RigTruth preset = simulate::ReadRigTruth(Whole() / "truth" / "rig.json");
+  ASSERT_EQ(truth.dots.size(), 12u);
+  const size_t brackets = truth.capture.dot_exposures_s.size();
+  int dot_images = 0;
+  for (const std::string& key : session.planned_keys()) dot_images += key.rfind("dot/", 0) == 0;
+  EXPECT_EQ(dot_images, static_cast<int>(12 * brackets));
+  // The same span: the corner dots of both grids coincide (4 x 3 against the preset's 6 x 6).
+  // (within a monitor pixel: dots are drawn on pixel centres).
+  EXPECT_LT((truth.dots.front().position - preset.dots.front().position).norm(), 1e-3);
+  EXPECT_LT((truth.dots.back().position - preset.dots.back().position).norm(), 1e-3);
+  const auto rebuilt = simulate::LoadSimulatedSetup(out, 1);
+  EXPECT_EQ(rebuilt->rig->dots().size(), 12u);
+  EXPECT_TRUE(SimulateSession(out, options).already_complete);
+  options.dot_cols = 1;
+  EXPECT_THROW(SimulateSession(folder_->path() / "one_column", options), common::Error);
+}
+
 }  // namespace
 }  // namespace svbtdf::acquire

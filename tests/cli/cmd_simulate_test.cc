@@ -116,7 +116,9 @@ TEST_F(SimulateCommand, BadArgumentsAndFoldersAreClearErrors) {
   common::WriteTextAtomically(root_ / "busy" / "notes.txt", "mine");
   for (const std::string& arguments :
        {"simulate --preset nope --out " + (root_ / "x").string(), "simulate --preset tiny --out " + (root_ / "busy").string(),
-        "simulate --preset tiny --eta 0.9 --out " + (root_ / "y").string(), std::string("simulate --preset tiny")}) {
+        "simulate --preset tiny --eta 0.9 --out " + (root_ / "y").string(), std::string("simulate --preset tiny"),
+        "simulate --preset tiny --dots 20 --out " + (root_ / "z").string(),
+        "simulate --preset tiny --dots 1x20 --out " + (root_ / "z").string()}) {
     const auto result = RunSvbtdf(arguments);
     EXPECT_EQ(result.exit_code, 2) << arguments << "\n" << result.output;
     EXPECT_NE(result.output.find("svbtdf: error: "), std::string::npos) << result.output;

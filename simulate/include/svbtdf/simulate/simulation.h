@@ -28,6 +28,10 @@ struct SimulationOptions {
   double monitor_orientation_deg = std::numeric_limits<double>::quiet_NaN();
   double monitor_tilt_deg = std::numeric_limits<double>::quiet_NaN();
   bool mirror_monitor = false;  // a mirrored display, which calibration must refuse (tests)
+  // The dot grid's columns and rows instead of the preset's (`--dots 20x20`), laid over the same
+  // span of the screen: the same rig captured more or less densely (bench/scaling.py); 0: the
+  // preset's.
+  int dot_cols = 0, dot_rows = 0;
   // The screen's angular emission instead of the preset's (`--monitor-emission lcd:5`), and the
   // material pattern instead of the preset's (`--pattern diffuser`): together the diffuser
   // session and the sample session of one LCD rig (docs/simulator.md, "An LCD rig").

@@ -1,0 +1,136 @@
+#!/usr/bin/env python3
+"""How processing and fitting grow with texels and dots (docs/benchmarks.md, issue 19).
+
+Simulates a preset's rig once per dot grid (`svbtdf simulate --dots NxN`, the same span of the
+screen more or less densely; cached as paper_scale.py caches its simulation), then processes each session onto every texel grid (`bench_process SIM THREADS T
+T --keep STORE`, the true calibration) and fits the store with default options (`svbtdf fit`).
+Prints one table (each stage's wall time, the fit's CPU time and the peak memory), the exponents
+of time against texels and against dots, and what they predict for a larger session.
+
+  bench/scaling.py [--preset grid-sheet] [--dots 20 40] [--texels 150 300 600] [--cache DIR]
+                   [--build build] [--threads N] [--predict 2000 40]
+
+Each run's stores and materials go to DIR/scaling-TIMESTAMP (removed unless --keep); the table is
+written there as scaling.json.
+"""
+
+import argparse
+import datetime
+import json
+import math
+import os
+import shutil
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from paper_scale import duration, number_after, run_stage, simulate_once  # noqa: E402
+
+
+def slope(xs, ys):
+    """Least-squares slope of ln y against ln x: the exponent of a power law."""
+    lx = [math.log(x) for x in xs]
+    ly = [math.log(y) for y in ys]
+    mx, my = sum(lx) / len(lx), sum(ly) / len(ly)
+    return sum((a - mx) * (b - my) for a, b in zip(lx, ly)) / sum((a - mx) ** 2 for a in lx)
+
+
+def simulation_for(svbtdf, preset, dots, cache):
+    """The cached session of `preset` captured with a dots x dots grid."""
+    return simulate_once(svbtdf, preset, cache / f"{preset}-dots{dots}x{dots}", ["--dots", f"{dots}x{dots}"])
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--preset", default="grid-sheet")
+    parser.add_argument("--dots", type=int, nargs="+", default=[20, 40], help="dots per side of each grid")
+    parser.add_argument("--texels", type=int, nargs="+", default=[150, 300, 600], help="texels per side of each grid")
+    parser.add_argument("--cache", type=Path, default=Path(os.environ.get("SVBTDF_BENCH_CACHE", Path.home() / ".cache/svbtdf-bench")))
+    parser.add_argument("--build", type=Path, default=Path(__file__).resolve().parent.parent / "build")
+    parser.add_argument("--threads", type=int, default=0, help="worker threads (0: all cores)")
+    parser.add_argument("--predict", type=int, nargs=2, default=[2000, 40], metavar=("TEXELS", "DOTS"),
+                        help="texels and dots per side of the session to predict")
+    parser.add_argument("--keep", action="store_true", help="keep the stores and materials")
+    args = parser.parse_args()
+    if len(args.texels) < 2 and len(args.dots) < 2:
+        sys.exit("scaling: needs two or more texel grids or dot grids to measure a growth")
+
+    svbtdf = args.build / "cli/svbtdf"
+    bench_process = args.build / "bench/bench_process"
+    for tool in (svbtdf, bench_process):
+        if not tool.is_file():
+            sys.exit(f"scaling: {tool} is missing (cmake --build {args.build} --target svbtdf bench)")
+    run = args.cache / ("scaling-" + datetime.datetime.now().strftime("%Y%m%d-%H%M%S"))
+    run.mkdir(parents=True)
+
+    cells = []
+    for dots in sorted(args.dots):
+        simulated, simulate = simulation_for(svbtdf, args.preset, dots, args.cache)
+        for texels in sorted(args.texels):
+            name = f"{texels}x{texels}-dots{dots}"
+            store, material = run / name / "processed", run / name / "material"
+            store.parent.mkdir()
+            process = run_stage(f"process {name}", [bench_process, simulated, args.threads, texels, texels, "--keep", store],
+                                capture=True)
+            fit = run_stage(f"fit {name}", [svbtdf, "fit", store, "--out", material, "--threads", args.threads])
+            cells.append({
+                "texels": texels, "dots": dots,
+                "simulate_wall_s": simulate["wall_s"],
+                "decode_s": number_after("baseline, read every image once:", process["output"]),
+                "process_s": number_after("process:", process["output"]),
+                "process_peak_mb": process["peak_mb"],
+                "fit_s": fit["wall_s"], "fit_cpu_s": fit["cpu_s"], "fit_peak_mb": fit["peak_mb"],
+            })
+            if not args.keep:
+                shutil.rmtree(run / name)
+
+    print()
+    print(f"{args.preset}: {os.cpu_count()} cores, {datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%d %H:%M UTC')}")
+    print("| texels | dots | decode once | process | fit | fit CPU | process + fit | peak memory |")
+    print("|---|---|---|---|---|---|---|---|")
+    for c in cells:
+        peak = max(c["process_peak_mb"], c["fit_peak_mb"])
+        print(f"| {c['texels']}^2 | {c['dots']}^2 | {duration(c['decode_s'])} | {duration(c['process_s'])} | "
+              f"{duration(c['fit_s'])} | {duration(c['fit_cpu_s'])} | {duration(c['process_s'] + c['fit_s'])} | {peak:.0f} MB |")
+
+    exponents = {}
+    print("\nexponents (time ~ count^e, least squares in log-log; counts are texels and dots, not per side):")
+    for stage in ("process_s", "fit_s"):
+        for dots in sorted(args.dots):
+            row = [c for c in cells if c["dots"] == dots]
+            if len(row) >= 2:
+                e = slope([c["texels"] ** 2 for c in row], [c[stage] for c in row])
+                exponents[f"{stage} vs texels at {dots}^2 dots"] = e
+                print(f"  {stage[:-2]:8s} against texels at {dots}^2 dots: {e:.2f}")
+        for texels in sorted(args.texels):
+            column = [c for c in cells if c["texels"] == texels]
+            if len(column) >= 2:
+                e = slope([c["dots"] ** 2 for c in column], [c[stage] for c in column])
+                exponents[f"{stage} vs dots at {texels}^2 texels"] = e
+                print(f"  {stage[:-2]:8s} against dots at {texels}^2 texels: {e:.2f}")
+
+    # The prediction: from the largest measured cell, each stage scaled by its exponents at that
+    # cell's dots and texels.
+    largest = max(cells, key=lambda c: (c["texels"], c["dots"]))
+    want_texels, want_dots = args.predict
+    predicted = {}
+    for stage in ("process_s", "fit_s"):
+        t = largest[stage]
+        e_texels = exponents.get(f"{stage} vs texels at {largest['dots']}^2 dots")
+        e_dots = exponents.get(f"{stage} vs dots at {largest['texels']}^2 texels")
+        if e_texels is not None:
+            t *= (want_texels / largest["texels"]) ** (2 * e_texels)
+        if e_dots is not None:
+            t *= (want_dots / largest["dots"]) ** (2 * e_dots)
+        predicted[stage] = t
+    print(f"\npredicted for {want_texels}^2 texels and {want_dots}^2 dots on this machine: process "
+          f"{duration(predicted['process_s'])}, fit {duration(predicted['fit_s'])} (from the {largest['texels']}^2, "
+          f"{largest['dots']}^2 cell)")
+    summary = {"preset": args.preset, "cells": cells, "exponents": exponents,
+               "prediction": {"texels": want_texels, "dots": want_dots, **predicted}}
+    (run / "scaling.json").write_text(json.dumps(summary, indent=2) + "\n")
+    print(f"written: {run / 'scaling.json'}")
+
+
+if __name__ == "__main__":
+    main()
