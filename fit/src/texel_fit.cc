@@ -7,6 +7,8 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <optional>
 #include <string>
 
 #include "svbtdf/common/error.h"
@@ -359,36 +361,62 @@ struct ShadowingResidual {
   }
 };
 
-// The shadowing roughness's standard error with D free: its profile over the final ln D pass.
-// Each data row r of that pass is w_r (alpha ln f_T + (1 - alpha) ln f_B + [ln D terms] - ln rho),
-// its configurations' factors f carrying G, so the rows' derivative in the roughness is
-// g_r = w_r d/dr (alpha ln f_T + (1 - alpha) ln f_B) (central differences) and, as for alpha's
-// profile, var = s^2 / (g^T g - u^T N^-1 u), u = A^T g. -1 where the data do not pin it down.
-template <typename SolveFinal>
-double ShadowingProfileStandardError(const std::vector<Sample>& samples, const model::Vec3& view, double eta,
-                                     double alpha, double roughness, const SparseRows& data,
-                                     const std::vector<int>& row_sample, int num_unknowns, double data_ssr,
-                                     int data_rows, const SolveFinal& solve_final) {
+// The profile of one more parameter over the final ln D pass. That pass's data rows are
+// w_r (alpha ln f_T + (1 - alpha) ln f_B + [ln D terms] - ln rho); with the parameter free too its
+// Jacobian is [A g], g_r the rows' derivative in the parameter. The parameter's variance with D
+// free is s^2 / (g^T g - u^T N^-1 u), u = A^T g (the Schur complement of the pass's normal matrix
+// N, still factorised: one more back-substitution), and D moves with it by dx/dp = -N^-1 u. Built
+// once per texel for every parameter whose profile is taken (alpha's, the shadowing roughness's).
+class FinalPassProfile {
+ public:
+  using Solve = std::function<Eigen::VectorXd(const Eigen::VectorXd&)>;
+  // `data_ssr` over `data_rows`: the pass's data residuals, for s^2 (two more parameters than
+  // the table: the profiled one and the scale).
+  FinalPassProfile(const SparseRows& data, int num_unknowns, double data_ssr, int data_rows, Solve solve_final)
+      : a_(data.rows, num_unknowns), s2_(data_ssr / std::max(1, data_rows - 2)), solve_final_(std::move(solve_final)) {
+    a_.setFromTriplets(data.triplets.begin(), data.triplets.end());
+  }
+
+  int rows() const { return static_cast<int>(a_.rows()); }
+
+  struct Result {
+    double variance = -1;       // -1: the data do not pin the parameter down
+    Eigen::VectorXd n_inv_u;    // N^-1 u: minus D's move per unit of the parameter
+  };
+  Result Of(const Eigen::VectorXd& g) const {
+    Result result;
+    const Eigen::VectorXd u = a_.transpose() * g;
+    result.n_inv_u = solve_final_(u);
+    const double schur = g.squaredNorm() - u.dot(result.n_inv_u);
+    if (schur > 0 && s2_ > 0) result.variance = s2_ / schur;
+    return result;
+  }
+
+ private:
+  SparseMatrix a_;
+  double s2_;
+  Solve solve_final_;
+};
+
+// The final pass's rows' derivative in the shadowing roughness: the configurations' factors f
+// carry G, so g_r = w_r d/dr (alpha ln f_T + (1 - alpha) ln f_B), by central differences.
+Eigen::VectorXd ShadowingRowGradient(const std::vector<Sample>& samples, const model::Vec3& view, double eta,
+                                     double alpha, double roughness, const std::vector<int>& row_sample) {
   const double step = 1e-4 * std::max(roughness, 0.05);
   const auto configurations = [&](double r) {
     return ComputeConfigurations(model::DualMicrofacetModel(eta, ShadowingFor(r)), samples, view);
   };
   const Configurations above = configurations(roughness + step), below = configurations(roughness - step);
   const auto ln_factor = [](const model::VirtualConfiguration& c) { return c.valid && c.factor > 0 ? std::log(c.factor) : 0.0; };
-  Eigen::VectorXd g = Eigen::VectorXd::Zero(data.rows);
-  for (int r = 0; r < data.rows; ++r) {
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(row_sample.size()));
+  for (size_t r = 0; r < row_sample.size(); ++r) {
     const int k = row_sample[r];
     if (!samples[k].used || !(samples[k].weight > 0)) continue;
     const double up = alpha * ln_factor(above.entry[k]) + (1 - alpha) * ln_factor(above.exit[k]);
     const double down = alpha * ln_factor(below.entry[k]) + (1 - alpha) * ln_factor(below.exit[k]);
     g[r] = std::sqrt(samples[k].weight) * (up - down) / (2 * step);
   }
-  SparseMatrix a(data.rows, num_unknowns);
-  a.setFromTriplets(data.triplets.begin(), data.triplets.end());
-  const Eigen::VectorXd u = a.transpose() * g;
-  const double schur = g.squaredNorm() - u.dot(solve_final(u));
-  const double s2 = data_ssr / std::max(1, data_rows - 2);
-  return schur > 0 && s2 > 0 ? std::sqrt(s2 / schur) : -1.0;
+  return g;
 }
 
 // The relative RMSE and log RMS of `fitted` over the slice's samples, and the per-channel scales
@@ -604,17 +632,19 @@ TexelFitResult TexelFitter::FitDualTerms(const TexelSlice& slice, const GridSyst
     }
   }
 
-  // alpha's profile: with one view the data cannot tell how D is split between h_T and h_B
-  // (above), so alpha trades against D, and D's normalisation against k_s; a system with D held
-  // fixed cannot see that. The final pass with alpha free too has the Jacobian [A g], A the data
-  // rows' and g_i = w_i (ln rho_T,i - ln rho_B,i) their derivative in alpha; alpha's variance with
-  // D free is s^2 / (g^T g - u^T N^-1 u), u = A^T g (the Schur complement of the normal matrix N,
-  // still factorised: one more solve), and D moves with alpha by dx/dalpha = -N^-1 u, which moves
-  // ln k_s (D's mass) too.
+  // alpha's profile (FinalPassProfile): with one view the data cannot tell how D is split between
+  // h_T and h_B (above), so alpha trades against D, and D's normalisation against k_s; a system
+  // with D held fixed cannot see that. The rows' derivative in alpha is
+  // g_i = w_i (ln rho_T,i - ln rho_B,i), and D moves with alpha by -N^-1 u, which moves ln k_s
+  // (D's mass) too.
+  std::optional<FinalPassProfile> final_pass;
   if (options_.profile_uncertainty && last_x.size() == system.num_unknowns && last_data.rows > 0) {
+    final_pass.emplace(last_data, system.num_unknowns, last_data_ssr, last_data_rows, solve_final);
+  }
+  if (final_pass) {
     const model::TabulatedNdf table(grid_, ln_d);
-    Eigen::VectorXd g = Eigen::VectorXd::Zero(last_data.rows);
-    for (int r = 0; r < last_data.rows; ++r) {
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(final_pass->rows());
+    for (int r = 0; r < final_pass->rows(); ++r) {
       const int k = last_row_sample[r];
       const Sample& smp = samples[k];
       if (!smp.used || !(smp.weight > 0)) continue;
@@ -625,20 +655,15 @@ TexelFitResult TexelFitter::FitDualTerms(const TexelSlice& slice, const GridSyst
       const double ln_b = std::log(x.factor) + std::log(std::max(table.D(x.h), 1e-300));
       g[r] = std::sqrt(smp.weight) * (ln_t - ln_b);
     }
-    SparseMatrix a(last_data.rows, system.num_unknowns);
-    a.setFromTriplets(last_data.triplets.begin(), last_data.triplets.end());
-    const Eigen::VectorXd u = a.transpose() * g;
-    const Eigen::VectorXd z = solve_final(u);
-    const double schur = g.squaredNorm() - u.dot(z);
-    const double s2 = last_data_ssr / std::max(1, last_data_rows - 2);
-    if (schur > 0 && s2 > 0) {
-      result.alpha_profile_se = std::sqrt(s2 / schur);
+    const FinalPassProfile::Result profile = final_pass->Of(g);
+    if (profile.variance >= 0) {
+      result.alpha_profile_se = std::sqrt(profile.variance);
       double mass = 0, moved = 0;
       for (int c = 0; c < grid_.num_cells(); ++c) {
         if (system.column[c] < 0) continue;
         const double m = std::exp(ln_d[c]) * grid_.CellCenter(c).z() * grid_.CellSolidAngle(c);
         mass += m;
-        moved -= m * z[system.column[c]];
+        moved -= m * profile.n_inv_u[system.column[c]];
       }
       if (mass > 0) result.k_s_profile_relative_se = std::abs(moved / mass) * result.alpha_profile_se;
     } else {
@@ -695,12 +720,12 @@ TexelFitResult TexelFitter::FitDualTerms(const TexelSlice& slice, const GridSyst
   result.shadowing_roughness = shadowing_roughness;
   // The sandwich above holds D fixed, but G and D trade much as alpha and D do (above): add the
   // roughness's profile over the final ln D pass, whose rows are the same log residuals.
-  if (result.shadowing_roughness_se >= 0 && last_x.size() == system.num_unknowns && last_data.rows > 0) {
-    const double profile_se =
-        ShadowingProfileStandardError(samples, view, eta_, alpha, shadowing_roughness, last_data, last_row_sample,
-                                      system.num_unknowns, last_data_ssr, last_data_rows, solve_final);
+  if (result.shadowing_roughness_se >= 0 && final_pass) {
+    const FinalPassProfile::Result profile =
+        final_pass->Of(ShadowingRowGradient(samples, view, eta_, alpha, shadowing_roughness, last_row_sample));
     // Where the data do not pin it down, half its bounds' range (as alpha's 0.5 above).
-    result.shadowing_roughness_se = profile_se >= 0 ? std::hypot(result.shadowing_roughness_se, profile_se) : 1.0;
+    result.shadowing_roughness_se =
+        profile.variance >= 0 ? std::hypot(result.shadowing_roughness_se, std::sqrt(profile.variance)) : 1.0;
   }
 
   // Residuals and per-channel scales of the final model.
