@@ -96,18 +96,13 @@ def main():
     exponents = {}
     print("\nexponents (time ~ count^e, least squares in log-log; counts are texels and dots, not per side):")
     for stage in ("process_s", "fit_s"):
-        for dots in sorted(args.dots):
-            row = [c for c in cells if c["dots"] == dots]
-            if len(row) >= 2:
-                e = slope([c["texels"] ** 2 for c in row], [c[stage] for c in row])
-                exponents[f"{stage} vs texels at {dots}^2 dots"] = e
-                print(f"  {stage[:-2]:8s} against texels at {dots}^2 dots: {e:.2f}")
-        for texels in sorted(args.texels):
-            column = [c for c in cells if c["texels"] == texels]
-            if len(column) >= 2:
-                e = slope([c["dots"] ** 2 for c in column], [c[stage] for c in column])
-                exponents[f"{stage} vs dots at {texels}^2 texels"] = e
-                print(f"  {stage[:-2]:8s} against dots at {texels}^2 texels: {e:.2f}")
+        for axis, held in (("texels", "dots"), ("dots", "texels")):
+            for value in sorted({c[held] for c in cells}):
+                line = [c for c in cells if c[held] == value]
+                if len(line) >= 2:
+                    e = slope([c[axis] ** 2 for c in line], [c[stage] for c in line])
+                    exponents[f"{stage} vs {axis} at {value}^2 {held}"] = e
+                    print(f"  {stage[:-2]:8s} against {axis} at {value}^2 {held}: {e:.2f}")
 
     # The prediction: from the largest measured cell, each stage scaled by its exponents at that
     # cell's dots and texels.
