@@ -43,6 +43,9 @@ const ModelColumn kColumns[] = {
      &simulate::ValidationCase::two_interfaces, &simulate::ModelErrors::two_interfaces},
     {"two_interfaces_internal", "two interfaces + internal reflection, fitted weight", {0, 60, 150},
      &simulate::ValidationCase::two_interfaces_internal, &simulate::ModelErrors::two_interfaces_internal},
+    {"two_interfaces_internal_longer", "two interfaces + internal reflection + longer paths, fitted weights",
+     {230, 171, 2}, &simulate::ValidationCase::two_interfaces_internal_longer,
+     &simulate::ModelErrors::two_interfaces_internal_longer},
 };
 
 nlohmann::json ErrorsToJson(const simulate::ModelErrors& errors) {
@@ -66,6 +69,8 @@ nlohmann::json CaseToJson(const simulate::ValidationCase& c) {
       {"blend_internal_fitted",
        {{"alpha", c.blend_internal_fitted_alpha}, {"roughness", c.blend_internal_fitted_roughness}}},
       {"two_interfaces_internal", {{"weight", c.two_interfaces_internal_weight}}},
+      {"two_interfaces_internal_longer",
+       {{"internal_weight", c.longer_internal_weight}, {"longer_weight", c.longer_longer_weight}}},
       {"view_direction", {c.o.x(), c.o.y(), c.o.z()}},
       {"monte_carlo",
        {{"paths", c.mc.paths},

@@ -2,6 +2,7 @@
 
 #include "svbtdf/common/minimize.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -317,13 +318,43 @@ void FitBlendRoughness(const ValidationContext& context, ValidationCase* result)
   result->blend_fitted_alpha = fitted_blend(log_roughness, &result->blend_fitted);
 }
 
-// The slab's exact two-interface transmission, and the same plus the internal reflection's shape
-// at its least-squares weight over the cells (w >= 0).
+// The least-squares weights (>= 0) of `shapes` added to `base` against MC over the cells (solid
+// angle weighted): all of them where none comes out negative, else the best single one.
+std::vector<double> NonNegativeWeights(const ValidationCase& result, const std::vector<double>& base,
+                                       const std::vector<const std::vector<double>*>& shapes,
+                                       const std::vector<double>& solid_angles) {
+  const int n = static_cast<int>(shapes.size());
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd right = Eigen::VectorXd::Zero(n);
+  for (size_t c = 0; c < base.size(); ++c) {
+    for (int a = 0; a < n; ++a) {
+      right[a] += solid_angles[c] * (*shapes[a])[c] * (result.mc.rho[c] - base[c]);
+      for (int b = 0; b < n; ++b) normal(a, b) += solid_angles[c] * (*shapes[a])[c] * (*shapes[b])[c];
+    }
+  }
+  const Eigen::VectorXd all = normal.ldlt().solve(right);
+  if (all.allFinite() && (all.array() >= 0).all()) return {all.data(), all.data() + n};
+  std::vector<double> best(n, 0.0);
+  double best_gain = 0;  // the fall in the squared error, right^2 / normal for one shape
+  for (int a = 0; a < n; ++a) {
+    if (normal(a, a) > 0 && right[a] > 0 && right[a] * right[a] / normal(a, a) > best_gain) {
+      best_gain = right[a] * right[a] / normal(a, a);
+      std::fill(best.begin(), best.end(), 0.0);
+      best[a] = right[a] / normal(a, a);
+    }
+  }
+  return best;
+}
+
+// The slab's exact two-interface transmission; the same plus the internal reflection's shape at
+// its least-squares weight over the cells (w >= 0); and the same plus the longer paths' shape too.
 void TwoInterfaceColumns(const ValidationContext& context, ValidationCase* result) {
   const ValidationOptions& options = context.options;
   const std::unique_ptr<model::Ndf> flat = options.make_ndf(5e-4);
-  const model::Ndf& entry = result->rough_sides == RoughSides::kExit ? *flat : context.ndf;
-  const model::Ndf& exit = result->rough_sides == RoughSides::kEntry ? *flat : context.ndf;
+  const std::unique_ptr<model::Ndf> widened = options.make_ndf(options.longer_paths_widening * options.roughness);
+  const bool entry_rough = result->rough_sides != RoughSides::kExit, exit_rough = result->rough_sides != RoughSides::kEntry;
+  const model::Ndf& entry = entry_rough ? context.ndf : *flat;
+  const model::Ndf& exit = exit_rough ? context.ndf : *flat;
   const model::SlabTransmission::ForViewer direct =
       model::SlabTransmission(entry, exit, options.eta).Viewer(result->o);
   // On the internal term's points (2 x 2 a cell by default): each value is an integral, and the
@@ -331,27 +362,37 @@ void TwoInterfaceColumns(const ValidationContext& context, ValidationCase* resul
   result->two_interfaces = context.halo_averager->Average([&](const model::Vec3& i) { return direct.Rho(i); });
   // A flat side has no T R R T term of its own: the shape is the rough side's alone.
   const model::InternalReflection paths(options.eta, {12, 12});
-  const model::SlabInternalReflection both(entry, exit, options.eta);
-  const std::vector<double> halo = context.halo_averager->Average([&](const model::Vec3& i) {
-    switch (result->rough_sides) {
-      case RoughSides::kEntry:
-        return paths.RoughEntry(entry, i, result->o);
-      case RoughSides::kExit:
-        return paths.RoughExit(exit, i, result->o);
-      case RoughSides::kBoth:
-        break;
+  const auto halo_of = [&](const model::Ndf& rough_entry, const model::Ndf& rough_exit) {
+    const model::SlabInternalReflection both(rough_entry, rough_exit, options.eta);
+    return context.halo_averager->Average([&](const model::Vec3& i) {
+      switch (result->rough_sides) {
+        case RoughSides::kEntry:
+          return paths.RoughEntry(rough_entry, i, result->o);
+        case RoughSides::kExit:
+          return paths.RoughExit(rough_exit, i, result->o);
+        case RoughSides::kBoth:
+          break;
+      }
+      return both.Rho(i, result->o);
+    });
+  };
+  const std::vector<double> halo = halo_of(entry, exit);
+  const std::vector<double> longer = halo_of(entry_rough ? *widened : *flat, exit_rough ? *widened : *flat);
+  const auto with = [&](const std::vector<double>& weights, const std::vector<const std::vector<double>*>& shapes) {
+    std::vector<double> cells = result->two_interfaces;
+    for (size_t s = 0; s < shapes.size(); ++s) {
+      for (size_t c = 0; c < cells.size(); ++c) cells[c] += weights[s] * (*shapes[s])[c];
     }
-    return both.Rho(i, result->o);
-  });
-  double halo_residual = 0, halo_halo = 0;
-  for (size_t c = 0; c < halo.size(); ++c) {
-    const double w = context.solid_angles[c];
-    halo_residual += w * halo[c] * (result->mc.rho[c] - result->two_interfaces[c]);
-    halo_halo += w * halo[c] * halo[c];
-  }
-  result->two_interfaces_internal_weight = halo_halo > 0 ? std::max(0.0, halo_residual / halo_halo) : 0.0;
-  result->two_interfaces_internal = result->two_interfaces;
-  for (size_t c = 0; c < halo.size(); ++c) result->two_interfaces_internal[c] += result->two_interfaces_internal_weight * halo[c];
+    return cells;
+  };
+  const std::vector<double> one = NonNegativeWeights(*result, result->two_interfaces, {&halo}, context.solid_angles);
+  result->two_interfaces_internal_weight = one[0];
+  result->two_interfaces_internal = with(one, {&halo});
+  const std::vector<double> two =
+      NonNegativeWeights(*result, result->two_interfaces, {&halo, &longer}, context.solid_angles);
+  result->longer_internal_weight = two[0];
+  result->longer_longer_weight = two[1];
+  result->two_interfaces_internal_longer = with(two, {&halo, &longer});
 }
 
 void ComputeErrors(const std::vector<double>& solid_angles, ValidationCase* result) {
@@ -374,6 +415,7 @@ void ComputeErrors(const std::vector<double>& solid_angles, ValidationCase* resu
   both(result->blend_internal_fitted, &e.blend_internal_fitted, &f.blend_internal_fitted);
   both(result->two_interfaces, &e.two_interfaces, &f.two_interfaces);
   both(result->two_interfaces_internal, &e.two_interfaces_internal, &f.two_interfaces_internal);
+  both(result->two_interfaces_internal_longer, &e.two_interfaces_internal_longer, &f.two_interfaces_internal_longer);
 }
 
 ValidationCase RunCase(const ValidationContext& context, const SlabTracer& tracer, RoughSides sides,

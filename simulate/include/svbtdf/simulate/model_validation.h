@@ -86,6 +86,10 @@ struct ModelErrors {
   // fits): the rough side's T R R T term for one rough side, SlabInternalReflection for both.
   double two_interfaces = 0.0;
   double two_interfaces_internal = 0.0;
+  // The same plus a second shape for the longer internal paths (T (R R)^n T, n >= 2), whose halo
+  // is wider: the internal reflection's shape with each rough side's NDF widened by
+  // `ValidationOptions::longer_paths_widening`; both shapes' weights fitted (>= 0).
+  double two_interfaces_internal_longer = 0.0;
 };
 
 // Relative L2 error of s * model after the best scale s > 0: what remains once the overall
@@ -107,6 +111,8 @@ struct ValidationCase {
   double blend_internal_fitted_alpha = 0.5;
   double blend_internal_fitted_roughness = 0.0;
   double two_interfaces_internal_weight = 0.0;  // the internal reflection's fitted weight
+  // The weights of two_interfaces_internal_longer: the internal reflection's shape, the longer one.
+  double longer_internal_weight = 0.0, longer_longer_weight = 0.0;
   ModelErrors errors;             // relative L2 against MC
   ModelErrors scale_free_errors;  // the same after each model's best overall scale
   // The relative L2 distance that MC noise alone would produce: sqrt(sum Omega se^2 / sum Omega mc^2).
@@ -115,7 +121,7 @@ struct ValidationCase {
   // Cell averages of each model over the slice (hemicube cell order).
   std::vector<double> rho_T, rho_B, blend, single_same_ndf, single_fitted, blend_fitted;
   std::vector<double> slab_lobe, blend_internal, blend_internal_fitted;  // empty when not computed
-  std::vector<double> two_interfaces, two_interfaces_internal;
+  std::vector<double> two_interfaces, two_interfaces_internal, two_interfaces_internal_longer;
 };
 
 struct ValidationOptions {
@@ -136,8 +142,13 @@ struct ValidationOptions {
   // blend_internal_fitted when fit_blend_roughness is set too).
   bool slab_lobe = true;
   bool internal_reflection = true;
-  // The two-interface columns (two_interfaces, two_interfaces_internal).
+  // The two-interface columns (two_interfaces, two_interfaces_internal,
+  // two_interfaces_internal_longer).
   bool two_interfaces = true;
+  // The longer paths' shape is the internal reflection's with the rough sides' roughness times
+  // this: sqrt(2), as if each of its two rough events were two (a round trip more adds a rough
+  // reflection, and slopes' variances add).
+  double longer_paths_widening = std::sqrt(2.0);
   // The internal-reflection term is smooth: it is averaged on k x k points per cell, with this
   // quadrature (a coarser one, on cell centres, inside the roughness search; the final fitted
   // column is evaluated with this one).
