@@ -19,7 +19,6 @@ import datetime
 import json
 import os
 import re
-import shutil
 import subprocess
 import sys
 import time
@@ -63,7 +62,8 @@ def number_after(label, text):
 
 def simulate_once(svbtdf, preset, cache, options=()):
     """The cached simulation, made first when missing (into a temporary folder, renamed when
-    complete, so that an interrupted simulation is never taken for a finished one). `options` are
+    complete, so that an interrupted simulation is never taken for a finished one, and resumed
+    when a run was interrupted). `options` are
     more `svbtdf simulate` options (the cache folder must then be one for them)."""
     done = cache / "simulated"
     record = cache / "simulated.json"
@@ -71,8 +71,8 @@ def simulate_once(svbtdf, preset, cache, options=()):
         stage = json.loads(record.read_text())
         stage["stage"] = "simulate (cached)"
         return done, stage
+    # An interrupted simulation is resumed (`svbtdf simulate` continues an unfinished folder).
     partial = cache / "simulated.partial"
-    shutil.rmtree(partial, ignore_errors=True)
     cache.mkdir(parents=True, exist_ok=True)
     stage = run_stage("simulate", [svbtdf, "simulate", "--preset", preset, *options, "--out", partial])
     stage.pop("output")

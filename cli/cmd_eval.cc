@@ -45,6 +45,7 @@ nlohmann::json ModelTerms(const fit::TexelBtdf& texel, const model::Vec3& wi, co
     return {{"slab_entry", side(slab->entry)},
             {"slab_exit", side(slab->exit)},
             {"slab_internal_reflection", slab->internal_reflection},
+            {"slab_longer_paths", slab->longer_paths},
             {"rho", fit::SlabShape(*slab, p.eta, wi, wo)}};
   }
   if (const auto& lobe = texel.baseline()) {
@@ -80,8 +81,9 @@ void PrintSummary(const model::Rgb& value, const nlohmann::json& terms) {
       return std::to_string(s["alpha_x"].get<double>()).substr(0, 6) + " x " + std::to_string(s["alpha_y"].get<double>()).substr(0, 6) +
              " at " + std::to_string(std::lround(s["azimuth"].get<double>() * 180 / model::kPi)) + " deg";
     };
-    std::printf("(slab: entry %s, exit %s, internal reflection %.3f, rho %.6g)\n", side("slab_entry").c_str(),
-                side("slab_exit").c_str(), terms["slab_internal_reflection"].get<double>(), terms["rho"].get<double>());
+    std::printf("(slab: entry %s, exit %s, internal reflection %.3f, longer paths %.3f, rho %.6g)\n",
+                side("slab_entry").c_str(), side("slab_exit").c_str(), terms["slab_internal_reflection"].get<double>(),
+                terms["slab_longer_paths"].get<double>(), terms["rho"].get<double>());
   } else {
     std::printf("(rho_T %.6g, rho_B %.6g, alpha %.3f", terms["rho_T"].get<double>(), terms["rho_B"].get<double>(),
                 terms["alpha"].get<double>());

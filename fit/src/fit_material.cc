@@ -269,7 +269,7 @@ std::vector<int64_t> FailedTexels(const std::vector<int64_t>& reps, const std::v
 nlohmann::json SlabToJson(const SlabFitResult& f) {
   const auto side = [](const SlabSide& s) { return nlohmann::json{s.alpha_x, s.alpha_y, s.azimuth}; };
   return {{"entry", side(f.interfaces.entry)}, {"exit", side(f.interfaces.exit)},
-          {"internal_reflection", f.interfaces.internal_reflection},
+          {"internal_reflection", f.interfaces.internal_reflection}, {"longer_paths", f.interfaces.longer_paths},
           {"entry_roughness_se", f.entry_roughness_se},     {"exit_roughness_se", f.exit_roughness_se},
           {"roughness_correlation", f.roughness_correlation}, {"k_s", f.k_s},
           {"k_s_rgb", f.k_s_rgb},                           {"log_rms", f.log_rms},
@@ -285,6 +285,7 @@ SlabFitResult SlabFromJson(const nlohmann::json& j) {
   f.interfaces.entry = side("entry");
   f.interfaces.exit = side("exit");
   f.interfaces.internal_reflection = j.at("internal_reflection").get<double>();
+  f.interfaces.longer_paths = j.at("longer_paths").get<double>();
   f.entry_roughness_se = j.at("entry_roughness_se").get<double>();
   f.exit_roughness_se = j.at("exit_roughness_se").get<double>();
   f.roughness_correlation = j.at("roughness_correlation").get<double>();
@@ -442,6 +443,8 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
   if (options.free_horizon) identity["free_horizon"] = true;
   if (options.internal_reflection) identity["internal_reflection"] = true;
   if (options.model == MaterialModel::kSlab && options.slab_anisotropic) identity["slab_anisotropic"] = true;
+  // A slab journal of before the longer paths' shape (material version 5) holds another model.
+  if (options.model == MaterialModel::kSlab) identity["slab_longer_paths"] = true;
   Checkpoint checkpoint(options.checkpoint, identity);
   RepresentativeFits fits(eta, options, reps.size());
   const size_t resumed = checkpoint.done().size();

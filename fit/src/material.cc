@@ -51,6 +51,9 @@ const MapSpec kSlabMaps[] = {
     {"slab_internal_reflection", "slab_internal_reflection.exr", &Material::slab_internal_reflection, 1},
 };
 
+// The longer internal paths' weight (slab materials, version 6; 0 in a version 5 slab).
+const MapSpec kSlabLongerPathsMap = {"slab_longer_paths", "slab_longer_paths.exr", &Material::slab_longer_paths, 1};
+
 // The standard errors (version 3; docs/fitting.md, "Uncertainty").
 const MapSpec kUncertaintyMaps[] = {
     {"alpha_se", "alpha_se.exr", &Material::alpha_se, 1},
@@ -62,10 +65,12 @@ const MapSpec kUncertaintyMaps[] = {
     {"prediction_se", "prediction_se.exr", &Material::prediction_se, 1},
 };
 
-std::vector<MapSpec> MapsOf(MaterialModel model, bool uncertainty) {
+// The maps of a material of `version` (the writer's: kMaterialFormatVersion).
+std::vector<MapSpec> MapsOf(MaterialModel model, bool uncertainty, int version = kMaterialFormatVersion) {
   std::vector<MapSpec> maps(std::begin(kMaps), std::end(kMaps));
   if (model == MaterialModel::kWalterGgx) maps.insert(maps.end(), std::begin(kBaselineMaps), std::end(kBaselineMaps));
   if (model == MaterialModel::kSlab) maps.insert(maps.end(), std::begin(kSlabMaps), std::end(kSlabMaps));
+  if (model == MaterialModel::kSlab && version >= 6) maps.push_back(kSlabLongerPathsMap);
   if (uncertainty) maps.insert(maps.end(), std::begin(kUncertaintyMaps), std::end(kUncertaintyMaps));
   return maps;
 }
@@ -77,8 +82,9 @@ const char* ModelFormula(MaterialModel model) {
       return "walter-ggx: R = k_s f_Walter(GGX(baseline_alpha_x, baseline_alpha_y) rotated by baseline_azimuth; i, o, "
              "1, eta) + rho_d";
     case MaterialModel::kSlab:
-      return "slab: R = k_s (rho_TT + slab_internal_reflection IR)(entry GGX(slab_entry_alpha_x, slab_entry_alpha_y) "
-             "turned by slab_entry_azimuth, exit likewise; i, o, eta) + rho_d (docs/model.md, \"Two rough interfaces\")";
+      return "slab: R = k_s (rho_TT + slab_internal_reflection IR + slab_longer_paths IR[widened by sqrt(2)])(entry "
+             "GGX(slab_entry_alpha_x, slab_entry_alpha_y) turned by slab_entry_azimuth, exit likewise; i, o, eta) + rho_d "
+             "(docs/model.md, \"Two rough interfaces\")";
     case MaterialModel::kDualMicrofacet:
       break;
   }
@@ -86,7 +92,7 @@ const char* ModelFormula(MaterialModel model) {
 }
 
 int MinimumVersion(const Material& m) {
-  if (m.model == MaterialModel::kSlab) return 5;
+  if (m.model == MaterialModel::kSlab) return 6;
   if (m.internal_reflection) return 4;
   if (m.has_uncertainty()) return 3;
   return m.model == MaterialModel::kWalterGgx ? 2 : 1;
@@ -292,6 +298,7 @@ Material AssembleSlabMaterial(int width, int height, double eta, int ndf_resolut
   m.model = MaterialModel::kSlab;
   for (common::FloatImage* map : {&m.baseline_alpha_x, &m.baseline_alpha_y, &m.baseline_azimuth}) *map = common::FloatImage();
   for (const MapSpec& spec : kSlabMaps) m.*spec.image = common::FloatImage(width, height, 1);
+  m.slab_longer_paths = common::FloatImage(width, height, 1);
   // Every texel takes its cluster's representative whole (AssembleBaselineMaterial's weights).
   for (int64_t t = 0; t < static_cast<int64_t>(width) * height; ++t) {
     const SlabFitResult& f = representative_fits.at(clustering.cluster[t]);
@@ -306,6 +313,7 @@ Material AssembleSlabMaterial(int width, int height, double eta, int ndf_resolut
     m.slab_entry_roughness_se.pixels[t] = static_cast<float>(f.entry_roughness_se);
     m.slab_exit_roughness_se.pixels[t] = static_cast<float>(f.exit_roughness_se);
     m.slab_internal_reflection.pixels[t] = static_cast<float>(f.interfaces.internal_reflection);
+    m.slab_longer_paths.pixels[t] = static_cast<float>(f.interfaces.longer_paths);
   }
   return m;
 }
@@ -430,7 +438,7 @@ Material ReadMaterial(const fs::path& folder) {
   if (uncertainty && version < 3) {
     common::ThrowFormatError(manifest_path.string(), "lists standard-error maps, which need material format version 3");
   }
-  for (const MapSpec& spec : MapsOf(m.model, uncertainty)) {
+  for (const MapSpec& spec : MapsOf(m.model, uncertainty, version)) {
     const fs::path file = folder / spec.file;
     m.*spec.image = common::ReadFloatImage(file);
     common::RequireFinite(m.*spec.image, file.string());
@@ -450,9 +458,12 @@ Material ReadMaterial(const fs::path& folder) {
         common::ThrowFormatError((folder / spec.file).string(), "holds a GGX roughness <= 0");
       }
     }
-    const common::FloatImage& weights = m.slab_internal_reflection;
-    if (*std::min_element(weights.pixels.begin(), weights.pixels.end()) < 0.0f) {
-      common::ThrowFormatError((folder / "slab_internal_reflection.exr").string(), "holds a negative weight");
+    if (version < 6) m.slab_longer_paths = common::FloatImage(m.width, m.height, 1);  // none before version 6
+    for (const MapSpec& spec : {kSlabMaps[8], kSlabLongerPathsMap}) {
+      const common::FloatImage& weights = m.*spec.image;
+      if (*std::min_element(weights.pixels.begin(), weights.pixels.end()) < 0.0f) {
+        common::ThrowFormatError((folder / spec.file).string(), "holds a negative weight");
+      }
     }
   }
   if (m.model == MaterialModel::kWalterGgx) {
@@ -488,7 +499,9 @@ model::DualMicrofacetParams TexelParams(const Material& material, int x, int y) 
 SlabInterfaces TexelSlab(const Material& m, int x, int y) {
   return SlabInterfaces{{m.slab_entry_alpha_x.at(x, y), m.slab_entry_alpha_y.at(x, y), m.slab_entry_azimuth.at(x, y)},
                         {m.slab_exit_alpha_x.at(x, y), m.slab_exit_alpha_y.at(x, y), m.slab_exit_azimuth.at(x, y)},
-                        m.slab_internal_reflection.at(x, y)};
+                        m.slab_internal_reflection.at(x, y),
+                        // A material built without the map (as before version 6) has no longer paths.
+                        m.slab_longer_paths.width > 0 ? m.slab_longer_paths.at(x, y) : 0.0};
 }
 
 std::vector<double> RepresentativeScales(const Material& material) {

@@ -65,53 +65,97 @@ double Weight(const TexelSlice& slice, int k) { return slice.weight.empty() ? 1.
 // rho_TT of every row at unit scale.
 void RowShapes(const SlabInterfaces& slab, double eta, const TexelSlice& slice, const std::vector<int>& rows,
                std::vector<double>* shapes) {
-  std::optional<model::GgxNdf> entry_ggx, exit_ggx;
-  std::optional<model::EllipsoidNdf> entry_turned, exit_turned;
-  const model::SlabTransmission transmission(SideNdf(slab.entry, &entry_ggx, &entry_turned),
-                                             SideNdf(slab.exit, &exit_ggx, &exit_turned), eta);
+  const SlabNdfs ndfs(slab);
+  const model::SlabTransmission transmission(ndfs.entry(), ndfs.exit(), eta);
   const model::SlabTransmission::ForViewer viewer = transmission.Viewer(slice.view);
   shapes->resize(rows.size());
   for (size_t j = 0; j < rows.size(); ++j) (*shapes)[j] = viewer.Rho(slice.light[rows[j]]);
 }
 
-// The internal reflection's shape at every row.
-std::vector<double> RowInternalReflection(const SlabInterfaces& slab, double eta, const TexelSlice& slice,
-                                          const std::vector<int>& rows) {
-  std::optional<model::GgxNdf> entry_ggx, exit_ggx;
-  std::optional<model::EllipsoidNdf> entry_turned, exit_turned;
-  const model::SlabInternalReflection paths(SideNdf(slab.entry, &entry_ggx, &entry_turned),
-                                            SideNdf(slab.exit, &exit_ggx, &exit_turned), eta);
+// The internal reflection's shapes at every row: the T R R T paths' of the interfaces, and with
+// `longer` the longer paths' too (the interfaces widened). Empty vectors where not asked for.
+struct InternalShapes {
+  std::vector<double> halo, longer;
+};
+
+std::vector<double> RowInternalReflection(const SlabInterfaces& slab, double widening, double eta,
+                                          const TexelSlice& slice, const std::vector<int>& rows) {
+  const SlabNdfs ndfs(slab, widening);
+  const model::SlabInternalReflection paths(ndfs.entry(), ndfs.exit(), eta);
   std::vector<double> values(rows.size());
   for (size_t j = 0; j < rows.size(); ++j) values[j] = paths.Rho(slice.light[rows[j]], slice.view);
   return values;
 }
 
-// The model of the rows: k (shape + h halo), its two linear amounts a = k and b = k h >= 0.
+InternalShapes RowInternalShapes(const SlabInterfaces& slab, bool longer, double eta, const TexelSlice& slice,
+                                 const std::vector<int>& rows) {
+  InternalShapes shapes;
+  shapes.halo = RowInternalReflection(slab, 1.0, eta, slice, rows);
+  if (longer) shapes.longer = RowInternalReflection(slab, model::kLongerPathsWidening, eta, slice, rows);
+  return shapes;
+}
+
+// The model of the rows: k (shape + h halo + l longer), its linear amounts a = k, b = k h and
+// c = k l, all >= 0.
 struct LinearAmounts {
-  double direct = 0, internal = 0;
-  double At(const std::vector<double>& shapes, const std::vector<double>* halo, size_t j) const {
-    return direct * shapes[j] + (halo ? internal * (*halo)[j] : 0.0);
+  double direct = 0, internal = 0, longer = 0;
+  double At(const std::vector<double>& shapes, const InternalShapes* internal_shapes, size_t j) const {
+    double value = direct * shapes[j];
+    if (internal_shapes && !internal_shapes->halo.empty()) value += internal * internal_shapes->halo[j];
+    if (internal_shapes && !internal_shapes->longer.empty()) value += longer * internal_shapes->longer[j];
+    return value;
   }
 };
 
-// The least-squares amounts of `shapes` (and `halo`, when given) against the rows' rho, both >= 0.
+// The least-squares amounts of `shapes` and of the internal shapes (when given) against the
+// rows' rho, all >= 0: the unconstrained solution of every subset of the columns that keeps the
+// direct light, the feasible one of least cost (at most four 3 x 3 solves).
 LinearAmounts BestAmounts(const TexelSlice& slice, const std::vector<int>& rows, const std::vector<double>& shapes,
-                          const std::vector<double>* halo) {
-  Eigen::Matrix2d normal = Eigen::Matrix2d::Zero();
-  Eigen::Vector2d right = Eigen::Vector2d::Zero();
+                          const InternalShapes* internal) {
+  std::vector<const std::vector<double>*> columns = {&shapes};
+  if (internal && !internal->halo.empty()) columns.push_back(&internal->halo);
+  if (internal && !internal->longer.empty()) columns.push_back(&internal->longer);
+  const int n = static_cast<int>(columns.size());
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d right = Eigen::Vector3d::Zero();
+  double rho_rho = 0;
   for (size_t j = 0; j < rows.size(); ++j) {
     const double w = Weight(slice, rows[j]), rho = slice.rho[rows[j]];
-    const Eigen::Vector2d column(shapes[j], halo ? (*halo)[j] : 0.0);
+    Eigen::Vector3d column = Eigen::Vector3d::Zero();
+    for (int c = 0; c < n; ++c) column[c] = (*columns[c])[j];
     normal += w * column * column.transpose();
     right += w * rho * column;
+    rho_rho += w * rho * rho;
+  }
+  Eigen::Vector3d best = Eigen::Vector3d::Zero();
+  double best_cost = rho_rho;  // nothing at all
+  for (int subset = 1; subset < (1 << n); subset += 2) {  // odd: the direct light is always in
+    std::vector<int> in;
+    for (int c = 0; c < n; ++c) {
+      if (subset & (1 << c)) in.push_back(c);
+    }
+    const int m = static_cast<int>(in.size());
+    Eigen::MatrixXd sub(m, m);
+    Eigen::VectorXd sub_right(m);
+    for (int a = 0; a < m; ++a) {
+      sub_right[a] = right[in[a]];
+      for (int b = 0; b < m; ++b) sub(a, b) = normal(in[a], in[b]);
+    }
+    if (!(sub.determinant() > 1e-12 * sub.diagonal().prod())) continue;  // a shape the others hold
+    const Eigen::VectorXd amounts = sub.ldlt().solve(sub_right);
+    if (!amounts.allFinite() || (amounts.array() < 0).any()) continue;
+    const double cost = rho_rho - amounts.dot(sub_right);  // at the least-squares solution
+    if (cost < best_cost) {
+      best_cost = cost;
+      best.setZero();
+      for (int a = 0; a < m; ++a) best[in[a]] = amounts[a];
+    }
   }
   LinearAmounts amounts;
-  if (halo && normal.determinant() > 1e-12 * normal(0, 0) * normal(1, 1)) {
-    const Eigen::Vector2d both = normal.ldlt().solve(right);
-    if (both[0] >= 0 && both[1] >= 0) return {both[0], both[1]};
-  }
-  // The direct light alone (a negative amount of either means the other explains more).
-  amounts.direct = normal(0, 0) > 0 ? std::max(0.0, right[0] / normal(0, 0)) : 0.0;
+  amounts.direct = best[0];
+  int next = 1;
+  if (internal && !internal->halo.empty()) amounts.internal = best[next++];
+  if (internal && !internal->longer.empty()) amounts.longer = best[next++];
   return amounts;
 }
 
@@ -122,23 +166,23 @@ LinearAmounts BestAmounts(const TexelSlice& slice, const std::vector<int>& rows,
 // exit's roughness of the Monte Carlo truth from 0.18 to 0.55 and left the lobe's peak 60% short.
 // It is also what `svbtdf compare` measures.
 //
-// `halo`: the internal reflection's shape at every row, held fixed while the interfaces move (it
-// is recomputed between passes), or null.
+// `internal`: the internal reflection's shapes at every row, held fixed while the interfaces move
+// (they are recomputed between passes), or null.
 struct SlabResidual {
   const TexelSlice* slice;
   const std::vector<int>* rows;
   double eta;
   double brightest;
   Parameterisation parameterisation;
-  const std::vector<double>* halo;
+  const InternalShapes* internal;
 
   bool operator()(double const* const* parameters, double* residuals) const {
     std::vector<double> shapes;
     RowShapes(InterfacesOf(parameterisation, parameters[0]), eta, *slice, *rows, &shapes);
-    const LinearAmounts amounts = BestAmounts(*slice, *rows, shapes, halo);
+    const LinearAmounts amounts = BestAmounts(*slice, *rows, shapes, internal);
     for (size_t j = 0; j < rows->size(); ++j) {
       const int row = (*rows)[j];
-      residuals[j] = std::sqrt(Weight(*slice, row)) * (amounts.At(shapes, halo, j) - slice->rho[row]) / brightest;
+      residuals[j] = std::sqrt(Weight(*slice, row)) * (amounts.At(shapes, internal, j) - slice->rho[row]) / brightest;
     }
     return true;
   }
@@ -170,13 +214,13 @@ std::vector<double> CoarseStart(const TexelSlice& slice, const std::vector<int>&
   return best;
 }
 
-// Levenberg-Marquardt over the interfaces from `x`, the halo's shape held fixed (or none), in
+// Levenberg-Marquardt over the interfaces from `x`, the internal shapes held fixed (or none), in
 // `problem` (kept for the standard errors).
 ceres::Solver::Summary SolveInterfaces(const TexelSlice& slice, const std::vector<int>& rows, double eta, double brightest,
-                                       Parameterisation parameterisation, const std::vector<double>* halo,
+                                       Parameterisation parameterisation, const InternalShapes* internal,
                                        std::vector<double>* x, ceres::Problem* problem) {
   auto* cost = new ceres::DynamicNumericDiffCostFunction<SlabResidual, ceres::CENTRAL>(
-      new SlabResidual{&slice, &rows, eta, brightest, parameterisation, halo});
+      new SlabResidual{&slice, &rows, eta, brightest, parameterisation, internal});
   cost->AddParameterBlock(static_cast<int>(x->size()));
   cost->SetNumResiduals(static_cast<int>(rows.size()));
   problem->AddResidualBlock(cost, nullptr, x->data());
@@ -247,46 +291,48 @@ void MeasureUncertainty(ceres::Problem* problem, Parameterisation parameterisati
   result->roughness_correlation = scale > 0 ? roughness(0, 1) / scale : 0.0;
 }
 
-// One stage of the fit: a parameterisation, its parameters from the last solve, the halo's
-// shape it holds (empty: none yet) and the solved problem (kept for the standard errors).
+// One stage of the fit: a parameterisation, its parameters from the last solve, the internal
+// shapes it holds (empty: none yet) and the solved problem (kept for the standard errors).
 struct Stage {
   Parameterisation parameterisation;
   std::vector<double> x;
-  std::vector<double> halo = {};
+  bool longer_paths = false;  // the longer paths' shape beside the T R R T one
+  InternalShapes internal = {};
   std::unique_ptr<ceres::Problem> problem = nullptr;
   ceres::Solver::Summary summary = {};
 
-  // Fits again from x, with the halo's shape recomputed at the current interfaces first when
-  // asked, else the one held.
+  // Fits again from x, with the internal shapes recomputed at the current interfaces first when
+  // asked, else the ones held.
   void Refit(double eta, const TexelSlice& slice, const std::vector<int>& rows, double brightest, bool recompute_halo);
   SlabFitResult Result(double eta, const TexelSlice& slice, const std::vector<int>& rows, double dark_fraction,
                        double brightest) const;
+  const InternalShapes* Held() const { return internal.halo.empty() ? nullptr : &internal; }
 };
 
 void Stage::Refit(double eta, const TexelSlice& slice, const std::vector<int>& rows, double brightest, bool recompute_halo) {
-  if (recompute_halo) halo = RowInternalReflection(InterfacesOf(parameterisation, x.data()), eta, slice, rows);
+  if (recompute_halo) internal = RowInternalShapes(InterfacesOf(parameterisation, x.data()), longer_paths, eta, slice, rows);
   problem = std::make_unique<ceres::Problem>();
-  summary = SolveInterfaces(slice, rows, eta, brightest, parameterisation, halo.empty() ? nullptr : &halo, &x, problem.get());
+  summary = SolveInterfaces(slice, rows, eta, brightest, parameterisation, Held(), &x, problem.get());
 }
 
 SlabFitResult Stage::Result(double eta, const TexelSlice& slice, const std::vector<int>& rows, double dark_fraction,
                             double brightest) const {
-  const std::vector<double>* fitted_halo = halo.empty() ? nullptr : &halo;
   SlabFitResult result;
   result.interfaces = InterfacesOf(parameterisation, x.data());
   result.converged = summary.IsSolutionUsable();
-  MeasureUncertainty(problem.get(), parameterisation, static_cast<int>(rows.size()), fitted_halo ? 2 : 1, &result);
+  const int linear = 1 + !internal.halo.empty() + !internal.longer.empty();  // the amounts are parameters too
+  MeasureUncertainty(problem.get(), parameterisation, static_cast<int>(rows.size()), linear, &result);
 
   std::vector<double> shapes;
   RowShapes(result.interfaces, eta, slice, rows, &shapes);
-  const LinearAmounts amounts = BestAmounts(slice, rows, shapes, fitted_halo);
+  const LinearAmounts amounts = BestAmounts(slice, rows, shapes, Held());
   result.k_s = amounts.direct;
   result.interfaces.internal_reflection = amounts.direct > 0 ? amounts.internal / amounts.direct : 0.0;
-  // The shape the material will evaluate, with the halo at its weight.
-  std::vector<double> model_shapes = shapes;
-  if (fitted_halo) {
-    for (size_t j = 0; j < rows.size(); ++j) model_shapes[j] += result.interfaces.internal_reflection * halo[j];
-  }
+  result.interfaces.longer_paths = amounts.direct > 0 ? amounts.longer / amounts.direct : 0.0;
+  // The shape the material will evaluate, with the internal shapes at their weights.
+  std::vector<double> model_shapes(rows.size());
+  const LinearAmounts unit_scale = {1.0, result.interfaces.internal_reflection, result.interfaces.longer_paths};
+  for (size_t j = 0; j < rows.size(); ++j) model_shapes[j] = unit_scale.At(shapes, Held(), j);
   double squared_error = 0, squared_rho = 0, squared_log = 0;
   size_t logged = 0;
   for (size_t j = 0; j < rows.size(); ++j) {
@@ -312,12 +358,15 @@ const model::Ndf& SideNdf(const SlabSide& side, std::optional<model::GgxNdf>* gg
 }
 
 double SlabShape(const SlabInterfaces& slab, double eta, const model::Vec3& i, const model::Vec3& o) {
-  std::optional<model::GgxNdf> entry_ggx, exit_ggx;
-  std::optional<model::EllipsoidNdf> entry_turned, exit_turned;
-  const model::Ndf& entry = SideNdf(slab.entry, &entry_ggx, &entry_turned);
-  const model::Ndf& exit = SideNdf(slab.exit, &exit_ggx, &exit_turned);
-  double rho = model::SlabTransmission(entry, exit, eta).Rho(i, o);
-  if (slab.internal_reflection > 0) rho += slab.internal_reflection * model::SlabInternalReflection(entry, exit, eta).Rho(i, o);
+  const SlabNdfs ndfs(slab);
+  double rho = model::SlabTransmission(ndfs.entry(), ndfs.exit(), eta).Rho(i, o);
+  if (slab.internal_reflection > 0) {
+    rho += slab.internal_reflection * model::SlabInternalReflection(ndfs.entry(), ndfs.exit(), eta).Rho(i, o);
+  }
+  if (slab.longer_paths > 0) {
+    const SlabNdfs longer(slab, model::kLongerPathsWidening);
+    rho += slab.longer_paths * model::SlabInternalReflection(longer.entry(), longer.exit(), eta).Rho(i, o);
+  }
   return rho;
 }
 
@@ -347,17 +396,18 @@ SlabFitResult SlabFitter::Fit(const TexelSlice& slice) const {
   if (bright < 8 || !(brightest > 0)) {
     throw common::Error(common::ErrorKind::kNumerical, "texel slice", "too few bright samples for the slab fit");
   }
-  // Isotropic sides first, the direct light alone; then, with the internal reflection's shape at
-  // the last interfaces, again (a fixed point: the shape moves little with them); then each
-  // side's anisotropy from there, with the halo once more at the end.
+  // Isotropic sides first, the direct light alone; then, with the internal reflection's shapes at
+  // the last interfaces, again (a fixed point: the shapes move little with them); then each
+  // side's anisotropy from there, with the shapes once more at the end.
   const int passes = options_.internal_reflection ? options_.internal_reflection_passes : 0;
-  Stage isotropic{Parameterisation::kIsotropic, CoarseStart(slice, rows, eta_)};
+  const bool longer = options_.internal_reflection && options_.longer_paths;
+  Stage isotropic{Parameterisation::kIsotropic, CoarseStart(slice, rows, eta_), longer};
   isotropic.Refit(eta_, slice, rows, brightest, false);
   for (int pass = 0; pass < passes; ++pass) isotropic.Refit(eta_, slice, rows, brightest, true);
   SlabFitResult result = isotropic.Result(eta_, slice, rows, options_.dark_fraction, brightest);
   if (!options_.anisotropic) return result;
-  Stage anisotropic{Parameterisation::kAnisotropic, CholeskyOfIsotropic(isotropic.x), isotropic.halo};
-  anisotropic.Refit(eta_, slice, rows, brightest, false);  // with the isotropic fit's halo
+  Stage anisotropic{Parameterisation::kAnisotropic, CholeskyOfIsotropic(isotropic.x), longer, isotropic.internal};
+  anisotropic.Refit(eta_, slice, rows, brightest, false);  // with the isotropic fit's shapes
   if (passes > 0) anisotropic.Refit(eta_, slice, rows, brightest, true);
   const SlabFitResult turned = anisotropic.Result(eta_, slice, rows, options_.dark_fraction, brightest);
   // Four more parameters fit a little more of anything, model error included: on a traced

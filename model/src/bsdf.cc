@@ -307,20 +307,28 @@ std::optional<BsdfSample> SlabLobeBsdf::Sample(const Vec3& wo, double u_lobe, co
 // ---------------------------------------------------------------------------------------------
 // SlabBsdf
 
-SlabBsdf::SlabBsdf(const Ndf& entry, const Ndf& exit, double eta, const Rgb& k_s, const Rgb& rho_d, double internal_reflection)
+SlabBsdf::SlabBsdf(const Ndf& entry, const Ndf& exit, double eta, const Rgb& k_s, const Rgb& rho_d,
+                   const SlabInternalLight& internal)
     : entry_(entry),
       exit_(exit),
       eta_(eta),
       k_s_(k_s),
       rho_d_(rho_d),
-      internal_reflection_(internal_reflection),
+      internal_(internal),
       diffuse_probability_(DiffuseProbability(k_s, rho_d)) {
   DualMicrofacetModel validate_eta(eta);
-  if (!(internal_reflection >= 0) || !std::isfinite(internal_reflection)) {
-    common::ThrowInvalidInput("internal reflection", "its weight must be finite and >= 0");
+  for (const double weight : {internal.weight, internal.longer_weight}) {
+    if (!(weight >= 0) || !std::isfinite(weight)) {
+      common::ThrowInvalidInput("internal reflection", "its weights must be finite and >= 0");
+    }
+  }
+  if (internal.longer_weight > 0 && (!internal.longer_entry || !internal.longer_exit)) {
+    common::ThrowInvalidInput("internal reflection", "a weight of the longer paths needs their widened NDFs");
   }
   // The halo is broad and covered by the cosine alone: give it a fifth, as DualMicrofacetBsdf does.
-  if (internal_reflection > 0) diffuse_probability_ = std::max(diffuse_probability_, kInternalReflectionCosineShare);
+  if (internal.weight > 0 || internal.longer_weight > 0) {
+    diffuse_probability_ = std::max(diffuse_probability_, kInternalReflectionCosineShare);
+  }
 }
 
 Rgb SlabBsdf::Eval(const Vec3& wi, const Vec3& wo) const {
@@ -330,7 +338,12 @@ Rgb SlabBsdf::Eval(const Vec3& wi, const Vec3& wo) const {
   const Ndf& exit = below ? entry_ : exit_;
   const Vec3 i = below ? FlipZ(wi) : wi, o = below ? FlipZ(wo) : wo;
   double rho = SlabTransmission(entry, exit, eta_).Rho(i, o);
-  if (internal_reflection_ > 0) rho += internal_reflection_ * SlabInternalReflection(entry, exit, eta_).Rho(i, o);
+  if (internal_.weight > 0) rho += internal_.weight * SlabInternalReflection(entry, exit, eta_).Rho(i, o);
+  if (internal_.longer_weight > 0) {
+    const Ndf& longer_entry = below ? *internal_.longer_exit : *internal_.longer_entry;
+    const Ndf& longer_exit = below ? *internal_.longer_entry : *internal_.longer_exit;
+    rho += internal_.longer_weight * SlabInternalReflection(longer_entry, longer_exit, eta_).Rho(i, o);
+  }
   return {k_s_[0] * rho + rho_d_[0], k_s_[1] * rho + rho_d_[1], k_s_[2] * rho + rho_d_[2]};
 }
 

@@ -383,6 +383,9 @@ void BindMaterial(py::module_& m) {
       .def_property_readonly("slab_internal_reflection",
                              [](const Material& m) { return MapOrNone(m.material().slab_internal_reflection); },
                              "float32 (H, W): weight of the light reflected inside the slab, for a slab material, else None")
+      .def_property_readonly("slab_longer_paths",
+                             [](const Material& m) { return MapOrNone(m.material().slab_longer_paths); },
+                             "float32 (H, W): weight of the longer internal paths' shape, for a slab material, else None")
       .def("eval", &Material::Eval, py::arg("texels"), py::arg("wi"), py::arg("wo"), py::arg("threads") = 0,
            "R(x, i, o) RGB, float64 (N, 3), exactly as `svbtdf eval`. texels: int (N, 2) of (column, row) or (2,); "
            "wi: (N, 3) or (3,) toward the light (z < 0); wo: toward the camera (z > 0); any length, normalised. "

@@ -124,7 +124,8 @@ def test_fit_model_slab_writes_both_interfaces_and_evaluates_as_the_command_line
     material = svbtdf.Material.load(out)
     assert material.btdf == "slab"
     for name in ("slab_entry_alpha_x", "slab_entry_alpha_y", "slab_entry_azimuth", "slab_exit_alpha_x", "slab_exit_alpha_y",
-                 "slab_exit_azimuth", "slab_entry_roughness_se", "slab_exit_roughness_se", "slab_internal_reflection"):
+                 "slab_exit_azimuth", "slab_entry_roughness_se", "slab_exit_roughness_se", "slab_internal_reflection",
+                 "slab_longer_paths"):
         array = getattr(material, name)
         assert array.shape == (material.height, material.width) and array.dtype == np.float32, name
     assert (material.slab_entry_alpha_y > 0).all() and (material.slab_exit_alpha_y > 0).all()

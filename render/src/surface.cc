@@ -53,9 +53,14 @@ const model::Bsdf& MaterialSurface::At(int col, int row, BsdfScratch& scratch) c
   }
   if (m.model == fit::MaterialModel::kSlab) {
     const fit::SlabInterfaces slab = fit::TexelSlab(m, col, row);
-    const model::Ndf& entry = fit::SideNdf(slab.entry, &scratch.ggx, &scratch.ellipsoid);
-    const model::Ndf& exit = fit::SideNdf(slab.exit, &scratch.ggx_exit, &scratch.ellipsoid_exit);
-    return scratch.slab.emplace(entry, exit, m.eta, params.k_s, params.rho_d, slab.internal_reflection);
+    const fit::SlabNdfs& sides = scratch.slab_sides.emplace(slab);
+    model::SlabInternalLight internal{slab.internal_reflection, slab.longer_paths};
+    if (slab.longer_paths > 0) {
+      const fit::SlabNdfs& longer = scratch.slab_longer_sides.emplace(slab, model::kLongerPathsWidening);
+      internal.longer_entry = &longer.entry();
+      internal.longer_exit = &longer.exit();
+    }
+    return scratch.slab.emplace(sides.entry(), sides.exit(), m.eta, params.k_s, params.rho_d, internal);
   }
   // D = sum_j c_j D_j with c_j = w_j s_j / S, as MaterialEvaluator::TexelNdf blends the cells
   // (docs/material-format.md), except that the sum is taken after interpolation.

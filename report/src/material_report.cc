@@ -230,6 +230,11 @@ void AddSlabInterfaceMaps(const fit::Material& material, const MapFunction& map)
   map("slab_internal_reflection.png", ScalarMap(material.slab_internal_reflection, 0, 0, halo_max),
       "weight of the light reflected inside the slab against the light transmitted straight through (0: none)", 0,
       halo_max, "unitless");
+  const double longer_max = std::max(1e-3, MaxOf(material.slab_longer_paths));
+  map("slab_longer_paths.png", ScalarMap(material.slab_longer_paths, 0, 0, longer_max),
+      "weight of the longer internal paths (the same shape widened by sqrt(2)) against the light transmitted straight "
+      "through (0: none)",
+      0, longer_max, "unitless");
 }
 
 void AddMaps(Page& page, const fit::Material& material, const simulate::Truth* truth, const std::string& lobe_error_file) {

@@ -81,7 +81,7 @@ TEST_F(FitCommand, GgxBaselineIsFittedWrittenAndEvaluated) {
   EXPECT_GE(value["rgb"][0].get<double>(), material.rho_d.at(2, 3, 0));
 }
 
-// --model slab: a material of format version 5 whose texels `svbtdf eval` shows as two
+// --model slab: a material of format version 6 whose texels `svbtdf eval` shows as two
 // interfaces, R = k_s rho + rho_d through the library's one path; `svbtdf export` refuses it in
 // one line naming its manifest, and writes nothing.
 TEST_F(FitCommand, TheSlabModelIsWrittenEvaluatedAndNotExported) {
@@ -90,7 +90,7 @@ TEST_F(FitCommand, TheSlabModelIsWrittenEvaluatedAndNotExported) {
   ASSERT_EQ(fitted.exit_code, 0) << fitted.output;
   const nlohmann::json manifest = nlohmann::json::parse(common::ReadTextFile(root_ / "slab" / "material.json"));
   EXPECT_EQ(manifest["btdf"], "slab");
-  EXPECT_EQ(manifest["version"], 5);
+  EXPECT_EQ(manifest["version"], 6);
   EXPECT_FALSE(manifest["provenance"]["settings"]["slab_anisotropic"].get<bool>());
   const auto eval = RunSvbtdf("eval " + (root_ / "slab").string() + " --texel 2 3 --wi 0 0.3 -1 --wo 0 -0.7 0.7 --json");
   ASSERT_EQ(eval.exit_code, 0) << eval.output;

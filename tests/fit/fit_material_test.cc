@@ -338,11 +338,12 @@ TEST_F(FitMaterialTest, GgxBaselineIsWorseThanDualOnADualTruthAndRoundTrips) {
 }
 
 // `--model slab`: the same clustering, each representative's two interfaces fitted by
-// SlabFitter and held whole by its cluster, written as format version 5 and read back; a reader
-// refuses the slab btdf under an older version. The truth here is a dual-microfacet material,
+// SlabFitter and held whole by its cluster, written as format version 6 and read back; a reader
+// refuses the slab btdf under an older version than 5, and reads a version 5 slab (before the
+// longer internal paths) with none of them. The truth here is a dual-microfacet material,
 // which the slab cannot hold exactly: its accuracy is measured on traced slabs
 // (slab_fit_test.cc) and the Monte Carlo truth (docs/validation.md), not here.
-TEST_F(FitMaterialTest, TheSlabModelIsFittedWrittenAsVersion5AndReadBack) {
+TEST_F(FitMaterialTest, TheSlabModelIsFittedWrittenAsVersion6AndReadBack) {
   FitMaterialOptions options = Options(0.05);
   options.model = MaterialModel::kSlab;
   const Material slab = FitMaterial(Store(), options);
@@ -359,6 +360,7 @@ TEST_F(FitMaterialTest, TheSlabModelIsFittedWrittenAsVersion5AndReadBack) {
   EXPECT_NEAR(held.exit.alpha_x, own.interfaces.exit.alpha_x, 1e-5);
   EXPECT_NEAR(held.exit.azimuth, own.interfaces.exit.azimuth, 1e-5);
   EXPECT_NEAR(held.internal_reflection, own.interfaces.internal_reflection, 1e-5);
+  EXPECT_NEAR(held.longer_paths, own.interfaces.longer_paths, 1e-5);
   EXPECT_NEAR(slab.slab_exit_roughness_se.at(x, y), own.exit_roughness_se, 1e-5);
   EXPECT_GT(own.exit_roughness_se, 0.0);
   // Every texel holds its cluster's representative's interfaces.
@@ -375,12 +377,13 @@ TEST_F(FitMaterialTest, TheSlabModelIsFittedWrittenAsVersion5AndReadBack) {
 
   WriteMaterial(dir_ / "slab", slab);
   const nlohmann::json manifest = common::ReadJsonFile(dir_ / "slab" / "material.json");
-  EXPECT_EQ(manifest["version"], 5);
+  EXPECT_EQ(manifest["version"], 6);
   EXPECT_EQ(manifest["btdf"], "slab");
   const Material read = ReadMaterial(dir_ / "slab");
   EXPECT_EQ(read.model, MaterialModel::kSlab);
   EXPECT_EQ(read.slab_exit_alpha_y.pixels, slab.slab_exit_alpha_y.pixels);
   EXPECT_EQ(read.slab_internal_reflection.pixels, slab.slab_internal_reflection.pixels);
+  EXPECT_EQ(read.slab_longer_paths.pixels, slab.slab_longer_paths.pixels);
   const MaterialEvaluator before(slab), after(read);
   const model::Vec3 o = Store().geometry().View(rep), i = Store().geometry().Light(rep, 300);
   const TexelBtdf texel = after.Texel(x, y);
@@ -400,6 +403,13 @@ TEST_F(FitMaterialTest, TheSlabModelIsFittedWrittenAsVersion5AndReadBack) {
         throw;
       },
       common::Error);
+  // Version 5 (no slab_longer_paths map): read with no longer paths.
+  old["version"] = 5;
+  old["maps"].erase("slab_longer_paths");
+  common::WriteTextAtomically(dir_ / "slab" / "material.json", old.dump(), /*overwrite=*/true);
+  const Material version5 = ReadMaterial(dir_ / "slab");
+  EXPECT_EQ(version5.slab_longer_paths.width, 16);
+  EXPECT_EQ(*std::max_element(version5.slab_longer_paths.pixels.begin(), version5.slab_longer_paths.pixels.end()), 0.0f);
   common::WriteTextAtomically(dir_ / "slab" / "material.json", manifest.dump(), /*overwrite=*/true);
   common::FloatImage zero = slab.slab_entry_alpha_x;
   zero.pixels[3] = 0.0f;

@@ -42,6 +42,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
     map((prefix + "_roughness_se.exr").c_str(), 0.01f);
   }
   map("slab_internal_reflection.exr", 1.0f);
+  map("slab_longer_paths.exr", 0.5f);  // version 6 (corpus/material/slab-longer-paths.json)
   svbtdf::fuzz::RequireFixtureReads("SmallMaterial", ReadAndEvaluate);
   return 0;
 }

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "svbtdf/common/error.h"
 #include "svbtdf/model/bsdf.h"
 #include "svbtdf/model/ellipsoid_ndf.h"
 #include "svbtdf/model/ggx.h"
@@ -160,8 +161,10 @@ TEST(WalterBsdf, SampleFollowsPdfAndEvalIsTheBaselineShape) {
 
 TEST(SlabBsdf, SampleFollowsPdfAndEvalIsTheTwoInterfaceTransmissionAndItsHalo) {
   const GgxNdf entry(0.3), exit(0.12, 0.2);
+  const double w = kLongerPathsWidening;
+  const GgxNdf longer_entry(0.3 * w), longer_exit(0.12 * w, 0.2 * w);
   const Rgb k_s = {0.9, 0.8, 0.7}, rho_d = {0.02, 0.03, 0.04};
-  const SlabBsdf bsdf(entry, exit, 1.45, k_s, rho_d, /*internal_reflection=*/1.5);
+  const SlabBsdf bsdf(entry, exit, 1.45, k_s, rho_d, SlabInternalLight{1.5, 0.8, &longer_entry, &longer_exit});
   // Each Eval is two integrals (about 50 us): fewer draws than the closed-form BSDFs get.
   for (const Vec3& wo : {Direction(70, 200), FlipZ(Direction(35, 10))}) {
     const testing::BsdfSamplerCheck c = testing::CheckBsdf(bsdf, wo, 50000, 19);
@@ -171,17 +174,20 @@ TEST(SlabBsdf, SampleFollowsPdfAndEvalIsTheTwoInterfaceTransmissionAndItsHalo) {
     EXPECT_LT(c.max_pdf_mismatch, 1e-9) << where;
     EXPECT_LT(c.max_weight_mismatch, 1e-9) << where;
   }
-  // Seen from above it is k_s (rho_TT + 1.5 IR) + rho_d; from below, the slab turned over.
+  // Seen from above it is k_s (rho_TT + 1.5 IR + 0.8 IR') + rho_d, IR' the longer paths'; from
+  // below, the slab turned over.
   const SlabTransmission above(entry, exit, 1.45), below(exit, entry, 1.45);
   const SlabInternalReflection above_ir(entry, exit, 1.45), below_ir(exit, entry, 1.45);
+  const SlabInternalReflection above_longer(longer_entry, longer_exit, 1.45), below_longer(longer_exit, longer_entry, 1.45);
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(0, 1);
   for (int k = 0; k < 50; ++k) {
     const Vec3 o = Direction(80 * u(rng), 360 * u(rng)), i = FlipZ(Direction(60 * u(rng), 360 * u(rng)));
     const Rgb got = bsdf.Eval(i, o), turned = bsdf.Eval(FlipZ(i), FlipZ(o));
     for (int c = 0; c < 3; ++c) {
-      EXPECT_DOUBLE_EQ(got[c], k_s[c] * (above.Rho(i, o) + 1.5 * above_ir.Rho(i, o)) + rho_d[c]);
-      EXPECT_DOUBLE_EQ(turned[c], k_s[c] * (below.Rho(i, o) + 1.5 * below_ir.Rho(i, o)) + rho_d[c]);
+      EXPECT_DOUBLE_EQ(got[c], k_s[c] * (above.Rho(i, o) + 1.5 * above_ir.Rho(i, o) + 0.8 * above_longer.Rho(i, o)) + rho_d[c]);
+      EXPECT_DOUBLE_EQ(turned[c],
+                       k_s[c] * (below.Rho(i, o) + 1.5 * below_ir.Rho(i, o) + 0.8 * below_longer.Rho(i, o)) + rho_d[c]);
     }
   }
 }
@@ -189,6 +195,14 @@ TEST(SlabBsdf, SampleFollowsPdfAndEvalIsTheTwoInterfaceTransmissionAndItsHalo) {
 // Light and viewer swapped is the slab seen from the other side: reciprocal to the accuracy of
 // the integral's quadrature (the two sides sample different directions). With k_s = 1 it
 // transmits at most what it receives, and Sample's weights estimate what quadrature finds.
+// A weight of the longer paths without their NDFs is refused, as is a negative weight.
+TEST(SlabBsdf, RefusesLongerPathsWithoutTheirNdfsAndNegativeWeights) {
+  const GgxNdf entry(0.3), exit(0.12);
+  EXPECT_THROW(SlabBsdf(entry, exit, 1.5, {1, 1, 1}, {0, 0, 0}, SlabInternalLight{0.0, 0.5}), common::Error);
+  EXPECT_THROW(SlabBsdf(entry, exit, 1.5, {1, 1, 1}, {0, 0, 0}, SlabInternalLight{-1.0}), common::Error);
+  EXPECT_NO_THROW(SlabBsdf(entry, exit, 1.5, {1, 1, 1}, {0, 0, 0}, SlabInternalLight{0.5, 0.5, &entry, &exit}));
+}
+
 TEST(SlabBsdf, IsReciprocalAndSampleEstimatesItsEnergy) {
   const GgxNdf entry(0.25), exit(0.1);
   const SlabBsdf bsdf(entry, exit, 1.5, {1, 1, 1}, {0, 0, 0});

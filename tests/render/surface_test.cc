@@ -134,6 +134,13 @@ TEST(MaterialSurface, ASlabTexelIsTheEvaluatorsSlabTexel) {
   const MaterialSurface surface(m, 0.03, 0.02, "slab");
   BsdfScratch scratch;
   EXPECT_LT(RelativeL2(surface.At(1, 1, scratch), fit::MaterialEvaluator(m).Texel(1, 1)), 1e-9);
+  // With the longer internal paths (version 6): the renderer widens the same sides, and they add
+  // light.
+  const fit::Material without = m;
+  m.slab_longer_paths = common::FloatImage(3, 2, 1, 0.7f);
+  const MaterialSurface longer(m, 0.03, 0.02, "slab");
+  EXPECT_LT(RelativeL2(longer.At(1, 1, scratch), fit::MaterialEvaluator(m).Texel(1, 1)), 1e-9);
+  EXPECT_GT(RelativeL2(longer.At(1, 1, scratch), fit::MaterialEvaluator(without).Texel(1, 1)), 1e-3);
   EXPECT_EQ(surface.description(), "fitted slab material");
 }
 

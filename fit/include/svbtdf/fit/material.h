@@ -26,10 +26,11 @@ namespace svbtdf::fit {
 // Version 2 adds the single-interface baseline (manifest "btdf": "walter-ggx"). Version 3 adds
 // the per-texel standard errors (the *_se maps). Version 4 adds the light reflected inside the
 // slab (manifest "internal_reflection": true). Version 5 adds the slab model (manifest "btdf":
-// "slab", `svbtdf fit --model slab`). A material is written with the lowest version that
-// describes it: 5 for a slab, 4 with that term, else 3 with standard errors, else 2 for the
+// "slab", `svbtdf fit --model slab`). Version 6 adds the slab's longer internal paths (the map
+// slab_longer_paths; a version 5 slab has none). A material is written with the lowest version
+// that describes it: 6 for a slab, 4 with that term, else 3 with standard errors, else 2 for the
 // baseline, else 1, so that older readers keep reading what they can.
-inline constexpr int kMaterialFormatVersion = 5;
+inline constexpr int kMaterialFormatVersion = 6;
 
 // Which BTDF the material's texels hold.
 enum class MaterialModel {
@@ -70,6 +71,7 @@ struct Material {
   common::FloatImage slab_exit_alpha_x, slab_exit_alpha_y, slab_exit_azimuth;
   common::FloatImage slab_entry_roughness_se, slab_exit_roughness_se;
   common::FloatImage slab_internal_reflection;  // SlabInterfaces::internal_reflection (>= 0)
+  common::FloatImage slab_longer_paths;         // SlabInterfaces::longer_paths (>= 0; version 6)
   // Version 3, dual-microfacet: standard errors per texel (docs/fitting.md, "Uncertainty"); all
   // empty (0 x 0) in a material without them. -1 where not known.
   common::FloatImage alpha_se;                // 1 channel

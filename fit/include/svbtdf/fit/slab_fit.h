@@ -26,6 +26,8 @@ struct SlabSide {
   double azimuth = 0.0;
 
   static SlabSide Isotropic(double roughness) { return {roughness, roughness, 0.0}; }
+  // The same side with both alphas times `factor`.
+  SlabSide Widened(double factor) const { return {alpha_x * factor, alpha_y * factor, azimuth}; }
   // sqrt(alpha_x alpha_y): the isotropic roughness whose slopes spread over the same area.
   double Roughness() const;
 };
@@ -37,15 +39,39 @@ struct SlabInterfaces {
   // Weight of the light reflected inside the slab (model::SlabInternalReflection's shape) against
   // the light transmitted straight through; 0: none.
   double internal_reflection = 0.0;
+  // Weight of the longer internal paths' shape (the same with both sides widened by
+  // model::kLongerPathsWidening); 0: none.
+  double longer_paths = 0.0;
 };
 
 // The NDF of one side, built in whichever of the two slots it needs (an axis-aligned GGX, or the
 // Ellipsoid NDF that is GGX turned about z) and returned; valid while the slot is.
 const model::Ndf& SideNdf(const SlabSide& side, std::optional<model::GgxNdf>* ggx, std::optional<model::EllipsoidNdf>* turned);
 
+// The NDFs of a texel's two sides (SideNdf), each side's alphas times `widening` (1: as fitted;
+// model::kLongerPathsWidening: the longer internal paths' shape). Not copyable: the NDFs are
+// referenced by whatever evaluates them.
+class SlabNdfs {
+ public:
+  explicit SlabNdfs(const SlabInterfaces& slab, double widening = 1.0)
+      : entry_(&SideNdf(slab.entry.Widened(widening), &entry_ggx_, &entry_turned_)),
+        exit_(&SideNdf(slab.exit.Widened(widening), &exit_ggx_, &exit_turned_)) {}
+  SlabNdfs(const SlabNdfs&) = delete;
+  SlabNdfs& operator=(const SlabNdfs&) = delete;
+  const model::Ndf& entry() const { return *entry_; }
+  const model::Ndf& exit() const { return *exit_; }
+
+ private:
+  std::optional<model::GgxNdf> entry_ggx_, exit_ggx_;
+  std::optional<model::EllipsoidNdf> entry_turned_, exit_turned_;
+  const model::Ndf* entry_;
+  const model::Ndf* exit_;
+};
+
 // rho(i, o) of the slab with unit scale: SlabTransmission(entry, exit, eta) with the default
-// quadrature, plus internal_reflection x SlabInternalReflection of the same interfaces. The one
-// evaluation of the slab model: the fitter and fitted materials (MaterialEvaluator) share it.
+// quadrature, plus internal_reflection x SlabInternalReflection of the same interfaces and
+// longer_paths x the same of the widened interfaces. The one evaluation of the slab model: the
+// fitter and fitted materials (MaterialEvaluator) share it.
 double SlabShape(const SlabInterfaces& slab, double eta, const model::Vec3& i, const model::Vec3& o);
 
 struct SlabFitResult {
@@ -75,6 +101,8 @@ struct SlabFitOptions {
   double anisotropy_gain = 0.9;
   // Fit the weight of the light reflected inside the slab too (SlabInterfaces::internal_reflection).
   bool internal_reflection = true;
+  // ... and of the longer internal paths' shape beside it (SlabInterfaces::longer_paths).
+  bool longer_paths = true;
   // Its shape depends on the interfaces: it is computed at the last fit's and the fit repeated,
   // this many times (a fixed-point iteration).
   int internal_reflection_passes = 2;

@@ -123,8 +123,19 @@ class SlabLobeBsdf final : public Bsdf {
   double diffuse_probability_;
 };
 
-// A slab with two rough interfaces (slab_transmission.h), R = k_s (rho_TT + w IR) + rho_d with IR
-// the light reflected inside it (SlabInternalReflection) at weight w, and Lambertian
+// The light a slab reflects inside before it leaves, as the slab model holds it: the T R R T
+// shape (SlabInternalReflection of the slab's own interfaces) at `weight`, and the longer paths'
+// shape (the same with each rough side's NDF widened by kLongerPathsWidening, slab_transmission.h:
+// `longer_entry`, `longer_exit`, which the caller makes and keeps alive) at `longer_weight`.
+struct SlabInternalLight {
+  double weight = 0.0;
+  double longer_weight = 0.0;
+  const Ndf* longer_entry = nullptr;
+  const Ndf* longer_exit = nullptr;
+};
+
+// A slab with two rough interfaces (slab_transmission.h), R = k_s (rho_TT + w IR + w' IR') +
+// rho_d with IR the light reflected inside it (SlabInternalLight) and Lambertian
 // transmission as the diffuse part. rho_TT is an integral, so no sampler of its own has a closed
 // pdf: Sample draws from a mixture of the one-rough-side configurations (the entry's normals
 // with the exit taken flat, the exit's with the entry flat) and the cosine, and reports that
@@ -133,8 +144,10 @@ class SlabLobeBsdf final : public Bsdf {
 // the caller keeps them alive.
 class SlabBsdf final : public Bsdf {
  public:
-  // Throws svbtdf::common::Error(kInvalidInput) unless eta is finite and > 1.
-  SlabBsdf(const Ndf& entry, const Ndf& exit, double eta, const Rgb& k_s, const Rgb& rho_d, double internal_reflection = 0.0);
+  // Throws svbtdf::common::Error(kInvalidInput) unless eta is finite and > 1 and the weights
+  // finite and >= 0, with the longer NDFs given where longer_weight > 0.
+  SlabBsdf(const Ndf& entry, const Ndf& exit, double eta, const Rgb& k_s, const Rgb& rho_d,
+           const SlabInternalLight& internal = {});
 
   Rgb Eval(const Vec3& wi, const Vec3& wo) const override;
   std::optional<BsdfSample> Sample(const Vec3& wo, double u_lobe, const Vec2& u) const override;
@@ -148,7 +161,7 @@ class SlabBsdf final : public Bsdf {
   const Ndf& exit_;
   double eta_;
   Rgb k_s_, rho_d_;
-  double internal_reflection_;
+  SlabInternalLight internal_;
   double diffuse_probability_;
 };
 

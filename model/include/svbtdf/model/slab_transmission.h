@@ -92,6 +92,16 @@ class SlabTransmission::ForViewer {
 // exact when the other side is flat; with both sides rough it is an approximation of the
 // four-hit halo's shape, and with a fitted weight it stands for every internal path (measured
 // against the Monte Carlo slab in docs/model.md, "Two rough interfaces").
+//
+// Light trapped by total internal reflection makes more round trips than the one this shape
+// follows, each adding a rough reflection, so its halo is wider: the slab model stands for those
+// longer paths with a second shape, this one with each rough side's roughness times
+// kLongerPathsWidening (docs/model.md, "Two rough interfaces"). sqrt(2): the T R R T shape meets
+// the rough side twice, and slopes' variances add, so twice the variance per meeting is the
+// spread of four rough events, a path with one or two round trips more. Fixed before it was
+// measured against the Monte Carlo slab, not fitted to it.
+inline constexpr double kLongerPathsWidening = 1.4142135623730951;  // sqrt(2)
+
 class SlabInternalReflection {
  public:
   // The NDFs are referenced, not copied. Throws svbtdf::common::Error(kInvalidInput) unless eta

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "svbtdf/fit/material.h"
+#include "svbtdf/fit/slab_fit.h"
 #include "svbtdf/model/bsdf.h"
 #include "svbtdf/model/ellipsoid_ndf.h"
 #include "svbtdf/model/ggx.h"
@@ -27,9 +28,8 @@ namespace svbtdf::render {
 struct BsdfScratch {
   std::optional<model::TabulatedNdfBlend> blend;
   std::optional<model::GgxNdf> ggx;
-  std::optional<model::GgxNdf> ggx_exit;  // a slab texel's exit (ggx holds its entry)
-  std::optional<model::EllipsoidNdf> ellipsoid;  // a rotated GGX lobe (LobeSurface; a slab texel's turned entry)
-  std::optional<model::EllipsoidNdf> ellipsoid_exit;  // a slab texel's turned exit
+  std::optional<model::EllipsoidNdf> ellipsoid;  // a rotated GGX lobe (LobeSurface)
+  std::optional<fit::SlabNdfs> slab_sides, slab_longer_sides;  // a slab texel's, and widened
   std::optional<model::DualMicrofacetBsdf> dual;
   std::optional<model::WalterBsdf> walter;
   std::optional<model::SlabBsdf> slab;

@@ -17,6 +17,7 @@
 
 #include "svbtdf/model/internal_reflection.h"
 #include "svbtdf/model/ndf.h"
+#include "svbtdf/model/slab_transmission.h"
 #include "svbtdf/model/vec.h"
 #include "svbtdf/simulate/slab_tracer.h"
 
@@ -146,9 +147,8 @@ struct ValidationOptions {
   // two_interfaces_internal_longer).
   bool two_interfaces = true;
   // The longer paths' shape is the internal reflection's with the rough sides' roughness times
-  // this: sqrt(2), as if each of its two rough events were two (a round trip more adds a rough
-  // reflection, and slopes' variances add).
-  double longer_paths_widening = std::sqrt(2.0);
+  // this (the slab model's, slab_transmission.h).
+  double longer_paths_widening = model::kLongerPathsWidening;
   // The internal-reflection term is smooth: it is averaged on k x k points per cell, with this
   // quadrature (a coarser one, on cell centres, inside the roughness search; the final fitted
   // column is evaluated with this one).
