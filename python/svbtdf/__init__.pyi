@@ -59,6 +59,7 @@ class Material:
     slab_entry_roughness_se: Optional[F32]  # of sqrt(alpha_x alpha_y); -1 where not known
     slab_exit_roughness_se: Optional[F32]
     slab_internal_reflection: Optional[F32]  # weight of the light reflected inside the slab
+    slab_longer_paths: Optional[F32]  # weight of the longer internal paths (the same shape widened by sqrt(2))
     def eval(self, texels: ArrayLike, wi: ArrayLike, wo: ArrayLike, threads: int = 0) -> F64:
         """R (N, 3) as `svbtdf eval`; texels (N, 2) of (column, row) or (2,); wi, wo (N, 3) or (3,)."""
     def bsdf_eval(self, texels: ArrayLike, wi: ArrayLike, wo: ArrayLike, threads: int = 0) -> F64: ...
