@@ -10,8 +10,10 @@ of time against texels and against dots, and what they predict for a larger sess
   bench/scaling.py [--preset grid-sheet] [--dots 20 40] [--texels 150 300 600] [--cache DIR]
                    [--build build] [--threads N] [--predict 2000 40]
 
-Each run's stores and materials go to DIR/scaling-TIMESTAMP (removed unless --keep); the table is
-written there as scaling.json.
+Each run's stores and materials go to DIR/scaling-TIMESTAMP (removed unless --keep). Every cell is
+printed as soon as it is measured and appended to cells.jsonl there (a torn last line is ignored),
+so that an interrupted run keeps what it measured: `--resume DIR/scaling-TIMESTAMP` measures only
+the missing cells. The table is written there as scaling.json.
 """
 
 import argparse
@@ -40,6 +42,26 @@ def simulation_for(svbtdf, preset, dots, cache):
     return simulate_once(svbtdf, preset, cache / f"{preset}-dots{dots}x{dots}", ["--dots", f"{dots}x{dots}"])
 
 
+def read_cells(journal):
+    """The cells measured so far: one JSON object a line; a torn last line (a run killed while
+    writing it) is dropped."""
+    cells = []
+    if journal.is_file():
+        for line in journal.read_text().splitlines():
+            try:
+                cells.append(json.loads(line))
+            except json.JSONDecodeError:
+                break
+    return cells
+
+
+def append_cell(journal, cell):
+    with open(journal, "a") as f:
+        f.write(json.dumps(cell) + "\n")
+        f.flush()
+        os.fsync(f.fileno())
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--preset", default="grid-sheet")
@@ -51,6 +73,7 @@ def main():
     parser.add_argument("--predict", type=int, nargs=2, default=[2000, 40], metavar=("TEXELS", "DOTS"),
                         help="texels and dots per side of the session to predict")
     parser.add_argument("--keep", action="store_true", help="keep the stores and materials")
+    parser.add_argument("--resume", type=Path, help="an earlier run's folder: measure only the cells it lacks")
     args = parser.parse_args()
     if len(args.texels) < 2 and len(args.dots) < 2:
         sys.exit("scaling: needs two or more texel grids or dot grids to measure a growth")
@@ -60,38 +83,51 @@ def main():
     for tool in (svbtdf, bench_process):
         if not tool.is_file():
             sys.exit(f"scaling: {tool} is missing (cmake --build {args.build} --target svbtdf bench)")
-    run = args.cache / ("scaling-" + datetime.datetime.now().strftime("%Y%m%d-%H%M%S"))
-    run.mkdir(parents=True)
-
-    cells = []
+    run = args.resume or args.cache / ("scaling-" + datetime.datetime.now().strftime("%Y%m%d-%H%M%S"))
+    run.mkdir(parents=True, exist_ok=args.resume is not None)
+    journal = run / "cells.jsonl"
+    cells = read_cells(journal)
     for dots in sorted(args.dots):
+        if all(any(c["texels"] == t and c["dots"] == dots for c in cells) for t in args.texels):
+            continue
         simulated, simulate = simulation_for(svbtdf, args.preset, dots, args.cache)
         for texels in sorted(args.texels):
+            if any(c["texels"] == texels and c["dots"] == dots for c in cells):
+                continue
             name = f"{texels}x{texels}-dots{dots}"
             store, material = run / name / "processed", run / name / "material"
+            shutil.rmtree(run / name, ignore_errors=True)  # an interrupted cell's, measured again
             store.parent.mkdir()
             process = run_stage(f"process {name}", [bench_process, simulated, args.threads, texels, texels, "--keep", store],
                                 capture=True)
             fit = run_stage(f"fit {name}", [svbtdf, "fit", store, "--out", material, "--threads", args.threads])
-            cells.append({
+            cell = {
                 "texels": texels, "dots": dots,
                 "simulate_wall_s": simulate["wall_s"],
                 "decode_s": number_after("baseline, read every image once:", process["output"]),
                 "process_s": number_after("process:", process["output"]),
                 "process_peak_mb": process["peak_mb"],
                 "fit_s": fit["wall_s"], "fit_cpu_s": fit["cpu_s"], "fit_peak_mb": fit["peak_mb"],
-            })
+                "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            }
+            append_cell(journal, cell)
+            cells.append(cell)
+            print(f"scaling: {name}: decode {duration(cell['decode_s'])}, process {duration(cell['process_s'])}, "
+                  f"fit {duration(cell['fit_s'])} (CPU {duration(cell['fit_cpu_s'])})", flush=True)
             if not args.keep:
                 shutil.rmtree(run / name)
+    cells = [c for c in cells if c["texels"] in args.texels and c["dots"] in args.dots]
+    cells.sort(key=lambda c: (c["dots"], c["texels"]))
 
     print()
     print(f"{args.preset}: {os.cpu_count()} cores, {datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%d %H:%M UTC')}")
     print("| texels | dots | decode once | process | fit | fit CPU | process + fit | peak memory |")
     print("|---|---|---|---|---|---|---|---|")
     for c in cells:
-        peak = max(c["process_peak_mb"], c["fit_peak_mb"])
+        peak = max(m for m in (c["process_peak_mb"], c.get("fit_peak_mb")) if m is not None)
+        cpu = duration(c["fit_cpu_s"]) if c.get("fit_cpu_s") is not None else "-"
         print(f"| {c['texels']}^2 | {c['dots']}^2 | {duration(c['decode_s'])} | {duration(c['process_s'])} | "
-              f"{duration(c['fit_s'])} | {duration(c['fit_cpu_s'])} | {duration(c['process_s'] + c['fit_s'])} | {peak:.0f} MB |")
+              f"{duration(c['fit_s'])} | {cpu} | {duration(c['process_s'] + c['fit_s'])} | {peak:.0f} MB |")
 
     exponents = {}
     print("\nexponents (time ~ count^e, least squares in log-log; counts are texels and dots, not per side):")
