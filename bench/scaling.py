@@ -42,6 +42,13 @@ def simulation_for(svbtdf, preset, dots, cache):
     return simulate_once(svbtdf, preset, cache / f"{preset}-dots{dots}x{dots}", ["--dots", f"{dots}x{dots}"])
 
 
+def fit_stages(material):
+    """The fit's three stages' wall times, as `svbtdf fit` records them in the material."""
+    statistics = json.loads((material / "material.json").read_text())["provenance"]["statistics"]
+    return {"clustering_s": statistics["clustering_seconds"], "representatives_s": statistics["fit_seconds"],
+            "refine_s": statistics["refine_seconds"]}
+
+
 def read_cells(journal):
     """The cells measured so far: one JSON object a line; a torn last line (a run killed while
     writing it) is dropped."""
@@ -108,6 +115,7 @@ def main():
                 "process_s": number_after("process:", process["output"]),
                 "process_peak_mb": process["peak_mb"],
                 "fit_s": fit["wall_s"], "fit_cpu_s": fit["cpu_s"], "fit_peak_mb": fit["peak_mb"],
+                **fit_stages(material),
                 "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
             }
             append_cell(journal, cell)
@@ -121,24 +129,27 @@ def main():
 
     print()
     print(f"{args.preset}: {os.cpu_count()} cores, {datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%d %H:%M UTC')}")
-    print("| texels | dots | decode once | process | fit | fit CPU | process + fit | peak memory |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| texels | dots | decode once | process | fit | clustering / representatives / refinement | fit CPU | "
+          "process + fit | peak memory |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for c in cells:
         peak = max(m for m in (c["process_peak_mb"], c.get("fit_peak_mb")) if m is not None)
         cpu = duration(c["fit_cpu_s"]) if c.get("fit_cpu_s") is not None else "-"
+        stages = " / ".join(duration(c[k]) if c.get(k) is not None else "-"
+                            for k in ("clustering_s", "representatives_s", "refine_s"))
         print(f"| {c['texels']}^2 | {c['dots']}^2 | {duration(c['decode_s'])} | {duration(c['process_s'])} | "
-              f"{duration(c['fit_s'])} | {cpu} | {duration(c['process_s'] + c['fit_s'])} | {peak:.0f} MB |")
+              f"{duration(c['fit_s'])} | {stages} | {cpu} | {duration(c['process_s'] + c['fit_s'])} | {peak:.0f} MB |")
 
     exponents = {}
     print("\nexponents (time ~ count^e, least squares in log-log; counts are texels and dots, not per side):")
-    for stage in ("process_s", "fit_s"):
+    for stage in ("process_s", "fit_s", "clustering_s", "representatives_s", "refine_s"):
         for axis, held in (("texels", "dots"), ("dots", "texels")):
             for value in sorted({c[held] for c in cells}):
                 line = [c for c in cells if c[held] == value]
-                if len(line) >= 2:
+                if len(line) >= 2 and all(c.get(stage) is not None for c in line):
                     e = slope([c[axis] ** 2 for c in line], [c[stage] for c in line])
                     exponents[f"{stage} vs {axis} at {value}^2 {held}"] = e
-                    print(f"  {stage[:-2]:8s} against {axis} at {value}^2 {held}: {e:.2f}")
+                    print(f"  {stage[:-2]:15s} against {axis} at {value}^2 {held}: {e:.2f}")
 
     # The prediction: from the largest measured cell, each stage scaled by its exponents at that
     # cell's dots and texels.

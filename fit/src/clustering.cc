@@ -4,12 +4,14 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <random>
 #include <string>
 #include <thread>
 
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/progress.h"
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/common/parallel.h"
 
@@ -184,11 +186,18 @@ Clustering ClusterSlices(const SliceSource& source, const ClusteringOptions& opt
   const int k = static_cast<int>(std::clamp<int64_t>(
       std::llround(options.representative_fraction * n), std::max(1, options.min_representatives), n));
 
+  std::unique_ptr<common::ProgressBar> progress;
+  if (options.progress) progress = std::make_unique<common::ProgressBar>("cluster", options.kmeans_iterations + 3, "passes");
+  const auto advance = [&] {
+    if (progress) progress->Advance();
+  };
   const Pca pca = ComputePca(source, options, rng);
   const MatrixF z = ProjectAll(source, pca, threads);
   common::ThrowIfInterrupted("clustering");
+  advance();
 
   MatrixF centres = SeedKMeansPlusPlus(z, k, options, rng);
+  advance();
   std::vector<int> label;
   std::vector<float> distance;
   for (int iteration = 0; iteration < options.kmeans_iterations; ++iteration) {
@@ -209,6 +218,7 @@ Clustering ClusterSlices(const SliceSource& source, const ClusteringOptions& opt
       }
     }
     common::ThrowIfInterrupted("clustering");
+    advance();
   }
   Assign(z, centres, threads, &label, &distance);
 
@@ -266,6 +276,8 @@ Clustering ClusterSlices(const SliceSource& source, const ClusteringOptions& opt
       }
     }
   });
+  advance();
+  if (progress) progress->Finish();
   return result;
 }
 

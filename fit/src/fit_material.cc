@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <numeric>
@@ -23,6 +24,10 @@
 namespace svbtdf::fit {
 namespace fs = std::filesystem;
 namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
 
 void CheckOptions(const FitMaterialOptions& options, double eta) {
   if (!(eta > 1.0) || !std::isfinite(eta)) {
@@ -85,6 +90,7 @@ Clustering ClusterTexels(const SliceStore& store, const std::vector<int64_t>& va
   clustering_options.representative_fraction = std::min(1.0, options.representative_fraction);
   clustering_options.seed = options.seed;
   clustering_options.threads = options.threads;
+  clustering_options.progress = options.progress;
   const Clustering on_valid = ClusterSlices(source, clustering_options);
 
   const int64_t texels = store.geometry().num_texels();
@@ -94,19 +100,9 @@ Clustering ClusterTexels(const SliceStore& store, const std::vector<int64_t>& va
   all.explained_variance = on_valid.explained_variance;
   all.cluster.assign(texels, 0);
   all.weights.assign(texels, {});
-  std::vector<int64_t> source_of(texels, -1);
-  for (size_t k = 0; k < valid.size(); ++k) source_of[valid[k]] = static_cast<int64_t>(k);
+  const std::vector<int64_t> nearest_valid = NearestSources(width, store.info().texels_y, valid);
   for (int64_t t = 0; t < texels; ++t) {
-    int64_t k = source_of[t];
-    if (k < 0) {
-      int64_t best = 0;
-      double best_distance = 1e300;
-      for (size_t v = 0; v < valid.size(); ++v) {
-        const double dx = valid[v] % width - t % width, dy = valid[v] / width - t / width;
-        if (dx * dx + dy * dy < best_distance) best_distance = dx * dx + dy * dy, best = static_cast<int64_t>(v);
-      }
-      k = best;
-    }
+    const int64_t k = nearest_valid[t];  // t itself when t is valid
     all.cluster[t] = on_valid.cluster[k];
     all.weights[t] = on_valid.weights[k];
   }
@@ -432,6 +428,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
   const std::vector<int64_t> valid = ValidTexels(store);
   const Clustering clustering = ClusterTexels(store, valid, options);
   const std::vector<int64_t>& reps = clustering.representatives;
+  const double clustering_seconds = SecondsSince(start);
 
   nlohmann::json identity = {{"store", fs::absolute(store.folder()).string()},
                              {"model", MaterialModelName(options.model)},
@@ -450,7 +447,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
   const size_t resumed = checkpoint.done().size();
   const auto fit_start = std::chrono::steady_clock::now();
   const std::vector<uint8_t> failed = FitPending(store, reps, use_dot, options, &checkpoint, &fits);
-  const double fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fit_start).count();
+  const double fit_seconds = SecondsSince(fit_start);
   const int64_t failures = std::count(failed.begin(), failed.end(), 1);
   if (failures == static_cast<int64_t>(reps.size())) {
     throw common::Error(common::ErrorKind::kNumerical, store.folder().string(), "no representative could be fitted (too few usable samples)");
@@ -468,6 +465,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
   material.width_m = store.geometry().width_m;
   material.height_m = store.geometry().height_m;
   RefineStatistics refined;
+  const auto refine_start = std::chrono::steady_clock::now();
   if (options.refine_texels) {
     RefineOptions refine_options;
     refine_options.threads = options.threads;
@@ -476,13 +474,14 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
     refine_options.standard_errors = options.standard_errors;
     refined = RefineTexels(store, use_dot, valid, refine_options, &material);
   }
+  const double refine_seconds = SecondsSince(refine_start);
   if (!options.uncertainty) {
     for (common::FloatImage* map : {&material.alpha_se, &material.k_s_se, &material.rho_d_se, &material.shadowing_roughness_se,
                                     &material.ndf_width, &material.ndf_width_se, &material.prediction_se}) {
       *map = common::FloatImage();
     }
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds = SecondsSince(start);
   material.provenance = {
       {"processed", fs::absolute(store.folder()).string()},
       {"session", store.info().provenance.value("session", "")},
@@ -512,8 +511,11 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
         {"median_relative_rmse_blended", refined.texels > 0 ? refined.median_rmse_blended : -1.0},
         {"median_relative_rmse_refined", refined.texels > 0 ? refined.median_rmse_refined : -1.0},
         {"pca_explained_variance", clustering.explained_variance},
+        // Wall times: the whole fit and its three stages (docs/benchmarks.md, "scaling.py").
         {"seconds", seconds},
-        {"fit_seconds", fit_seconds},
+        {"clustering_seconds", clustering_seconds},  // reading the store and clustering its slices
+        {"fit_seconds", fit_seconds},                // fitting the representatives
+        {"refine_seconds", refine_seconds},          // refining every texel
         // Wall time per representative fitted in this run (all threads together).
         {"seconds_per_fit", reps.size() > resumed ? fit_seconds / (reps.size() - resumed) : 0.0},
         {"threads", common::ThreadCount(options.threads)}}},
@@ -523,6 +525,79 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
     material.provenance["holdout"] = {{"fraction", options.holdout}, {"seed", options.seed}, {"dots", held_out}};
   }
   return material;
+}
+
+namespace {
+
+// One line of the distance transform: for every q in [0, n), the p minimising (q - p)^2 + f[p]
+// over the p with a finite f[p] (the lower envelope of parabolas rooted at them), or -1 when
+// every f is infinite. `v` and `z` are scratch of n and n + 1.
+void NearestOnLine(const std::vector<double>& f, std::vector<int>* nearest, std::vector<int>& v, std::vector<double>& z) {
+  const int n = static_cast<int>(f.size());
+  constexpr double kInfinity = std::numeric_limits<double>::infinity();
+  int k = -1;  // the envelope's last parabola
+  for (int q = 0; q < n; ++q) {
+    if (f[q] == kInfinity) continue;
+    double s = -kInfinity;  // where parabola q starts to lie below the envelope
+    while (k >= 0) {
+      s = ((f[q] + double(q) * q) - (f[v[k]] + double(v[k]) * v[k])) / (2.0 * (q - v[k]));
+      if (s > z[k]) break;
+      --k;
+    }
+    ++k;
+    v[k] = q;
+    z[k] = k == 0 ? -kInfinity : s;
+    z[k + 1] = kInfinity;
+  }
+  nearest->assign(n, -1);
+  if (k < 0) return;
+  for (int q = 0, j = 0; q < n; ++q) {
+    while (z[j + 1] < q) ++j;
+    (*nearest)[q] = v[j];
+  }
+}
+
+}  // namespace
+
+std::vector<int64_t> NearestSources(int width, int height, const std::vector<int64_t>& sources) {
+  const int64_t texels = static_cast<int64_t>(width) * height;
+  if (width <= 0 || height <= 0) common::ThrowInvalidInput("nearest texels", "the grid is empty");
+  if (sources.empty()) common::ThrowInvalidInput("nearest texels", "no source texel");
+  std::vector<int64_t> source_at(texels, -1);
+  for (size_t k = 0; k < sources.size(); ++k) {
+    if (sources[k] < 0 || sources[k] >= texels) {
+      common::ThrowInvalidInput("nearest texels", "source texel " + std::to_string(sources[k]) + " is outside the grid");
+    }
+    source_at[sources[k]] = static_cast<int64_t>(k);
+  }
+  constexpr double kInfinity = std::numeric_limits<double>::infinity();
+  const int longest = std::max(width, height);
+  std::vector<int> v(longest), line_nearest;
+  std::vector<double> z(longest + 1), f;
+  // Pass 1, down each column: the nearest source row in the texel's own column.
+  std::vector<int> nearest_row(texels);
+  f.resize(height);
+  for (int x = 0; x < width; ++x) {
+    for (int y = 0; y < height; ++y) f[y] = source_at[int64_t{y} * width + x] >= 0 ? 0.0 : kInfinity;
+    NearestOnLine(f, &line_nearest, v, z);
+    for (int y = 0; y < height; ++y) nearest_row[int64_t{y} * width + x] = line_nearest[y];
+  }
+  // Pass 2, along each row: the column whose nearest source (from pass 1) is nearest overall.
+  std::vector<int64_t> nearest(texels);
+  f.resize(width);
+  for (int y = 0; y < height; ++y) {
+    const int64_t row = int64_t{y} * width;
+    for (int x = 0; x < width; ++x) {
+      const int r = nearest_row[row + x];
+      f[x] = r < 0 ? kInfinity : double(r - y) * (r - y);
+    }
+    NearestOnLine(f, &line_nearest, v, z);
+    for (int x = 0; x < width; ++x) {
+      const int column = line_nearest[x];
+      nearest[row + x] = source_at[int64_t{nearest_row[row + column]} * width + column];
+    }
+  }
+  return nearest;
 }
 
 double ParseRepresentativeFraction(const std::string& text, const std::string& subject) {

@@ -44,11 +44,13 @@ void RequireNewOrEmpty(const fs::path& out) {
 void SayWhatWasFitted(const fit::Material& material, const fs::path& out, const PipelineListener& listener) {
   const nlohmann::json& statistics = material.provenance["statistics"];
   Say(listener, Format("fitted %s: %s representatives of %s valid texels (%s failed, %s resumed) in %.1f s "
-                       "(%.2f s per fit); median residual %.3f",
+                       "(clustering %.1f s, representatives %.1f s at %.2f s per fit, refinement %.1f s); "
+                       "median residual %.3f",
                        fit::MaterialModelName(material.model), statistics["representatives"].dump().c_str(),
                        statistics["valid_texels"].dump().c_str(), statistics["failed_fits"].dump().c_str(),
                        statistics["resumed_fits"].dump().c_str(), statistics["seconds"].get<double>(),
-                       statistics["seconds_per_fit"].get<double>(),
+                       statistics["clustering_seconds"].get<double>(), statistics["fit_seconds"].get<double>(),
+                       statistics["seconds_per_fit"].get<double>(), statistics["refine_seconds"].get<double>(),
                        statistics["median_relative_rmse"].is_number() ? statistics["median_relative_rmse"].get<double>()
                                                                       : -1.0));
   if (statistics.value("horizon_fixed_instead", int64_t{0}) > 0) {

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/progress.h"
 #include "svbtdf/fit/clustering.h"
 #include "svbtdf/model/vec.h"
 
@@ -65,6 +66,30 @@ TEST(Clustering, GroupsTexelsOfTheSameSliceTypeAndPicksMembersAsRepresentatives)
   std::map<int, int> types;
   for (int64_t r : c.representatives) ++types[s.type[r]];
   EXPECT_EQ(types.size(), 5u);
+}
+
+// At paper scale the clustering takes about a minute before the first fit: its bar counts the
+// projection, the seeding, each k-means pass and the weights, and ends full.
+TEST(Clustering, ShowsItsPassesOnAProgressBar) {
+  const SyntheticSlices s = MakeSlices(3, 100, 0.01, 4);
+  ClusteringOptions options;
+  options.representative_fraction = 0.05;
+  options.kmeans_iterations = 4;
+  options.progress = true;
+  std::vector<std::pair<int64_t, int64_t>> reports;
+  common::ProgressBar::SetEnabled(false);
+  common::ProgressBar::SetObserver([&](const std::string& label, int64_t done, int64_t total) {
+    if (label == "cluster") reports.emplace_back(done, total);
+  });
+  ClusterSlices(SourceOf(s), options);
+  options.progress = false;
+  const size_t with_bar = reports.size();
+  ClusterSlices(SourceOf(s), options);
+  common::ProgressBar::SetObserver({});
+  common::ProgressBar::SetEnabled(true);
+  ASSERT_GE(with_bar, 2u);
+  EXPECT_EQ(reports.size(), with_bar);  // no bar unless asked for
+  EXPECT_EQ(reports.back(), std::make_pair(int64_t{7}, int64_t{7}));  // 4 passes + 3
 }
 
 TEST(Clustering, AffineWeightsSumToOneAndBeatTheNearestRepresentative) {

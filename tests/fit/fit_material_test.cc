@@ -9,7 +9,9 @@
 #include <filesystem>
 #include <fstream>
 #include <future>
+#include <limits>
 #include <optional>
+#include <random>
 #include <thread>
 
 #include "analytic_store.h"
@@ -116,6 +118,14 @@ TEST_F(FitMaterialTest, RepresentativesRecoverAlphaNdfAndHeldOutDotsOnEveryTexel
   EXPECT_EQ(holdout.at("fraction").get<double>(), 0.1);
   EXPECT_EQ(material.provenance.at("statistics").at("representatives").get<int>(), 64);
   EXPECT_EQ(material.provenance.at("statistics").at("failed_fits").get<int>(), 0);
+  // The three stages' wall times, disjoint parts of the whole (docs/material-format.md).
+  const nlohmann::json& statistics = material.provenance.at("statistics");
+  double stages = 0.0;
+  for (const char* stage : {"clustering_seconds", "fit_seconds", "refine_seconds"}) {
+    EXPECT_GT(statistics.at(stage).get<double>(), 0.0) << stage;
+    stages += statistics.at(stage).get<double>();
+  }
+  EXPECT_LE(stages, statistics.at("seconds").get<double>());
   const Scores s = Score(material, truth_, Store());
   std::printf("64 of 256 texels fitted: alpha within 0.05 %.3f, NDF rel. L2 median %.4f, held-out rel. RMSE %.4f, %.3f s per fit\n",
               s.alpha_within_0_05, s.ndf_rel_l2_median, s.heldout_rel_rmse,
@@ -525,6 +535,43 @@ TEST(ParseRepresentativeFraction, TakesAllOrAFractionAndNamesTheOptionOtherwise)
       EXPECT_EQ(e.subject(), "representatives") << e.what();
     }
   }
+}
+
+// The masked-out texels' nearest valid texel, by the linear-time distance transform: the same
+// distance as comparing every pair, on grids with one source, a few, most, a column and a row.
+TEST(NearestSources, FindsTheNearestSourceOfEveryTexelAsComparingEveryPairDoes) {
+  std::mt19937_64 rng(7);
+  const struct {
+    int width, height;
+    double fraction;  // of texels that are sources
+  } grids[] = {{1, 1, 1.0}, {1, 17, 0.2}, {23, 1, 0.2}, {31, 19, 0.0}, {31, 19, 0.02}, {40, 40, 0.3}, {16, 45, 0.95}};
+  for (const auto& g : grids) {
+    const int64_t texels = int64_t{g.width} * g.height;
+    std::vector<int64_t> sources;
+    std::uniform_real_distribution<double> uniform(0, 1);
+    for (int64_t t = 0; t < texels; ++t) {
+      if (uniform(rng) < g.fraction) sources.push_back(t);
+    }
+    if (sources.empty()) sources.push_back(static_cast<int64_t>(rng() % texels));  // one source alone
+    const std::vector<int64_t> nearest = NearestSources(g.width, g.height, sources);
+    ASSERT_EQ(static_cast<int64_t>(nearest.size()), texels);
+    const auto squared_distance = [&](int64_t a, int64_t b) {
+      const int64_t dx = a % g.width - b % g.width, dy = a / g.width - b / g.width;
+      return dx * dx + dy * dy;
+    };
+    for (int64_t t = 0; t < texels; ++t) {
+      int64_t best = std::numeric_limits<int64_t>::max();
+      for (int64_t s : sources) best = std::min(best, squared_distance(t, s));
+      ASSERT_GE(nearest[t], 0);
+      ASSERT_LT(nearest[t], static_cast<int64_t>(sources.size()));
+      ASSERT_EQ(squared_distance(t, sources[nearest[t]]), best)
+          << g.width << " x " << g.height << " grid, " << sources.size() << " sources, texel " << t;
+    }
+    for (size_t k = 0; k < sources.size(); ++k) EXPECT_EQ(nearest[sources[k]], static_cast<int64_t>(k));
+  }
+  EXPECT_THROW(NearestSources(4, 4, {}), common::Error);
+  EXPECT_THROW(NearestSources(4, 4, {16}), common::Error);
+  EXPECT_THROW(NearestSources(0, 4, {0}), common::Error);
 }
 
 }  // namespace

@@ -32,6 +32,9 @@ struct ClusteringOptions {
   double weight_regularization = 1e-4;  // Tikhonov term (relative) keeping the weights bounded
   uint64_t seed = 1;
   int threads = 0;                  // 0: all hardware threads
+  // A progress bar over the passes (projection, seeding, each k-means iteration, the weights):
+  // at paper scale the clustering takes minutes (docs/benchmarks.md, "scaling.py").
+  bool progress = false;
 };
 
 struct AffineWeights {

@@ -52,11 +52,20 @@ struct FitMaterialOptions {
 // checkpoint then holds the finished fits).
 Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options);
 
-// The dots withheld by `holdout` with `seed` (sorted), as recorded in the material's provenance.
 // The fraction of texels fitted as representatives, from "all" or a fraction in (0, 1] as the
 // user wrote it (`--representatives`); svbtdf::Error(kInvalidInput) naming `subject` otherwise.
 double ParseRepresentativeFraction(const std::string& text, const std::string& subject = "--representatives");
 
+// The dots withheld by `holdout` with `seed` (sorted), as recorded in the material's provenance.
 std::vector<int> HeldOutDots(int num_dots, double holdout, uint64_t seed);
+
+// For every texel of a width x height grid (row-major), the index into `sources` (texel indices)
+// of the source nearest to it in Euclidean distance; ties go to either. A masked-out texel takes
+// the clustering weights of the nearest valid texel. Exact, in time linear in the texels (the
+// distance transform of Felzenszwalb and Huttenlocher 2012, keeping the nearest source), where
+// comparing every texel with every source grows with their product: a 2000 x 2000 session with
+// a tenth of its texels masked would compare 1.4e12 pairs. Throws svbtdf::Error(kInvalidInput)
+// for no sources or a source outside the grid.
+std::vector<int64_t> NearestSources(int width, int height, const std::vector<int64_t>& sources);
 
 }  // namespace svbtdf::fit
