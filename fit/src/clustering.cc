@@ -124,26 +124,150 @@ MatrixF SeedKMeansPlusPlus(const MatrixF& z, int k, const ClusteringOptions& opt
   return centres;
 }
 
-// Assigns each point its nearest centre; returns the squared distances too.
-void Assign(const MatrixF& z, const MatrixF& centres, int threads, std::vector<int>* label,
-            std::vector<float>* distance) {
-  const VectorF centre_norms = centres.rowwise().squaredNorm();
-  label->resize(z.rows());
-  distance->resize(z.rows());
-  constexpr int64_t kBlock = 2048;
-  const int64_t blocks = (z.rows() + kBlock - 1) / kBlock;
-  common::ParallelFor(blocks, threads, (blocks + threads - 1) / threads, [&](int64_t block_begin, int64_t block_end) {
-    for (int64_t b = block_begin; b < block_end; ++b) {
-      const int64_t begin = b * kBlock, end = std::min<int64_t>(z.rows(), begin + kBlock);
-      const MatrixF d = BlockDistances(z, begin, end, centres, centre_norms);
-      for (int64_t r = 0; r < end - begin; ++r) {
-        Eigen::Index best;
-        (*distance)[begin + r] = std::max(0.0f, d.row(r).minCoeff(&best));
-        (*label)[begin + r] = static_cast<int>(best);
-      }
-    }
-  });
+// Where the smallest of `values` is: its value by a vectorised reduction, then its place.
+template <typename Row>
+int IndexOfMinimum(const Row& values) {
+  const float smallest = values.minCoeff();
+  int i = 0;
+  while (i + 1 < values.size() && !(values[i] == smallest)) ++i;
+  return i;
 }
+
+// Each point's centre, as Lloyd's k-means needs it after every move of the centres. Comparing
+// every point with every centre costs N k per pass, and the centres are a fixed fraction of the
+// points, so that grows as the square of the texels (docs/benchmarks.md, "scaling.py"). Hamerly's
+// bounds (2010) skip part of it: a point keeps its centre without the comparison while its
+// distance to that centre is below both half the distance from the centre to the nearest other
+// centre and a lower bound on its distance to every other centre (the second-nearest distance
+// of its last full comparison, less the most any other centre has moved since). The answer is
+// the full comparison's. At paper scale they skip only 30-40% of the comparisons, because a few
+// of the thousands of centres keep moving far and the one bound drops by their move
+// (docs/benchmarks.md, "bench_cluster"); bounds per group of centres would keep more.
+class CentreAssignment {
+ public:
+  CentreAssignment(const MatrixF& z, int threads) : z_(z), threads_(threads) {
+    label_.assign(z.rows(), 0);
+    distance_.assign(z.rows(), 0.0f);
+    lower_.assign(z.rows(), 0.0f);
+  }
+
+  // Assigns every point its nearest centre. `previous` are the centres of the last call (empty
+  // on the first, or to compare every point with every centre).
+  void Assign(const MatrixF& centres, const MatrixF& previous) {
+    centre_norms_ = centres.rowwise().squaredNorm();
+    largest_centre_norm_ = centre_norms_.size() > 0 ? centre_norms_.maxCoeff() : 0.0f;
+    const bool bounded = previous.rows() == centres.rows() && centres.rows() > 1;
+    if (bounded) PrepareBounds(centres, previous);
+    constexpr int64_t kBlock = 2048;
+    const int64_t n = z_.rows(), blocks = (n + kBlock - 1) / kBlock;
+    common::ParallelFor(blocks, threads_, (blocks + threads_ - 1) / threads_, [&](int64_t block_begin, int64_t block_end) {
+      std::vector<int64_t> unsure;
+      for (int64_t b = block_begin; b < block_end; ++b) {
+        unsure.clear();
+        for (int64_t t = b * kBlock; t < std::min(n, (b + 1) * kBlock); ++t) {
+          if (!bounded || !KeepsItsCentre(t, centres)) unsure.push_back(t);
+        }
+        CompareWithEveryCentre(unsure, centres);
+      }
+    });
+  }
+
+  const std::vector<int>& label() const { return label_; }
+  // Squared distance of each point to its centre, exact (not from the bounds).
+  std::vector<float>& distance() { return distance_; }
+
+ private:
+  // The slack in a squared distance computed as |a|^2 - 2 a.b + |b|^2 in single precision,
+  // relative to |a|^2 + |b|^2: the sixteen-term dot product and the cancellation are good to a
+  // few 1e-7 of it. The bounds give it away, so that rounding never lets a point keep a centre
+  // that another beats.
+  static constexpr float kExpansionSlack = 1e-5f;
+
+  void PrepareBounds(const MatrixF& centres, const MatrixF& previous) {
+    const int k = static_cast<int>(centres.rows());
+    drift_ = (centres - previous).rowwise().norm();
+    farthest_ = 0;
+    for (int c = 1; c < k; ++c) {
+      if (drift_[c] > drift_[farthest_]) farthest_ = c;
+    }
+    second_drift_ = 0.0f;
+    for (int c = 0; c < k; ++c) {
+      if (c != farthest_) second_drift_ = std::max(second_drift_, drift_[c]);
+    }
+    // Half the distance from each centre to its nearest other centre, blocked over the centres.
+    half_gap_.resize(k);
+    const float slack = kExpansionSlack * 2.0f * largest_centre_norm_;
+    constexpr int64_t kBlock = 256;
+    const int64_t blocks = (k + kBlock - 1) / kBlock;
+    common::ParallelFor(blocks, threads_, (blocks + threads_ - 1) / threads_, [&](int64_t block_begin, int64_t block_end) {
+      for (int64_t b = block_begin; b < block_end; ++b) {
+        const int64_t begin = b * kBlock, end = std::min<int64_t>(k, begin + kBlock);
+        const MatrixF d = BlockDistances(centres, begin, end, centres, centre_norms_);
+        for (int64_t c = begin; c < end; ++c) {
+          float nearest = std::numeric_limits<float>::infinity();
+          for (int other = 0; other < k; ++other) {
+            if (other != c) nearest = std::min(nearest, d(c - begin, other));
+          }
+          half_gap_[c] = 0.5f * std::sqrt(std::max(0.0f, nearest - slack));
+        }
+      }
+    });
+  }
+
+  // Moves point t's bound by the centres' drift and its distance to its own centre to their new
+  // places; true when no other centre can be nearer.
+  bool KeepsItsCentre(int64_t t, const MatrixF& centres) {
+    const int c = label_[t];
+    lower_[t] = std::max(0.0f, lower_[t] - (c == farthest_ ? second_drift_ : drift_[farthest_]));
+    distance_[t] = (z_.row(t) - centres.row(c)).squaredNorm();
+    return std::sqrt(distance_[t]) < std::max(half_gap_[c], lower_[t]);
+  }
+
+  // The full comparison of the points `rows` with every centre: the nearest, its exact squared
+  // distance, and a lower bound on the distance to any other.
+  void CompareWithEveryCentre(const std::vector<int64_t>& rows, const MatrixF& centres) {
+    if (rows.empty()) return;
+    const int k = static_cast<int>(centres.rows());
+    MatrixF block(static_cast<Eigen::Index>(rows.size()), z_.cols());
+    for (size_t r = 0; r < rows.size(); ++r) block.row(static_cast<Eigen::Index>(r)) = z_.row(rows[r]);
+    MatrixF d = BlockDistances(block, 0, block.rows(), centres, centre_norms_);
+    for (size_t r = 0; r < rows.size(); ++r) {
+      const int64_t t = rows[r];
+      // The nearest and the second nearest by two minimum searches, each a vectorised reduction
+      // and a scan for where its value is (one branchy loop keeping both took 60% of the
+      // clustering at 600 x 600 texels).
+      auto row = d.row(static_cast<Eigen::Index>(r));
+      int best = IndexOfMinimum(row), second = -1;
+      if (k > 1) {
+        row[best] = std::numeric_limits<float>::infinity();
+        second = IndexOfMinimum(row);
+      }
+      float best_exact = (z_.row(t) - centres.row(best)).squaredNorm();
+      if (second < 0) {  // one centre
+        label_[t] = best, distance_[t] = best_exact, lower_[t] = std::numeric_limits<float>::infinity();
+        continue;
+      }
+      float second_exact = (z_.row(t) - centres.row(second)).squaredNorm();
+      if (second_exact < best_exact) std::swap(best, second), std::swap(best_exact, second_exact);
+      const float slack = kExpansionSlack * (z_.row(t).squaredNorm() + largest_centre_norm_);
+      label_[t] = best;
+      distance_[t] = best_exact;
+      lower_[t] = std::sqrt(std::max(0.0f, second_exact - slack));
+    }
+  }
+
+  const MatrixF& z_;
+  const int threads_;
+  std::vector<int> label_;
+  std::vector<float> distance_;
+  std::vector<float> lower_;  // per point: no centre but its own is nearer than this
+  VectorF centre_norms_;
+  float largest_centre_norm_ = 0.0f;
+  VectorF drift_;      // per centre: how far it moved since the last assignment
+  int farthest_ = 0;   // the centre that moved most
+  float second_drift_ = 0.0f;  // the most any other centre moved
+  std::vector<float> half_gap_;
+};
 
 }  // namespace
 
@@ -198,16 +322,20 @@ Clustering ClusterSlices(const SliceSource& source, const ClusteringOptions& opt
 
   MatrixF centres = SeedKMeansPlusPlus(z, k, options, rng);
   advance();
-  std::vector<int> label;
-  std::vector<float> distance;
-  for (int iteration = 0; iteration < options.kmeans_iterations; ++iteration) {
-    Assign(z, centres, threads, &label, &distance);
+  CentreAssignment assignment(z, threads);
+  MatrixF previous;  // the centres of the last assignment; none: compare with every centre
+  for (int iteration = 0; iteration <= options.kmeans_iterations; ++iteration) {
+    assignment.Assign(centres, options.exhaustive_assignment ? MatrixF() : previous);
+    if (iteration == options.kmeans_iterations) break;  // the last pass assigns the final centres
+    const std::vector<int>& label = assignment.label();
+    std::vector<float>& distance = assignment.distance();
     MatrixF sums = MatrixF::Zero(k, z.cols());
     std::vector<int64_t> counts(k, 0);
     for (int64_t t = 0; t < n; ++t) {
       sums.row(label[t]) += z.row(t);
       ++counts[label[t]];
     }
+    previous = centres;
     for (int c = 0; c < k; ++c) {
       if (counts[c] > 0) {
         centres.row(c) = sums.row(c) / static_cast<float>(counts[c]);
@@ -220,7 +348,8 @@ Clustering ClusterSlices(const SliceSource& source, const ClusteringOptions& opt
     common::ThrowIfInterrupted("clustering");
     advance();
   }
-  Assign(z, centres, threads, &label, &distance);
+  const std::vector<int>& label = assignment.label();
+  const std::vector<float>& distance = assignment.distance();
 
   // The representative of a cluster is its member nearest the centre.
   Clustering result;

@@ -68,6 +68,28 @@ TEST(Clustering, GroupsTexelsOfTheSameSliceTypeAndPicksMembersAsRepresentatives)
   EXPECT_EQ(types.size(), 5u);
 }
 
+// Hamerly's bounds skip comparisons, never change the answer: with more clusters than slice
+// types (so that many texels lie near a boundary between clusters of one type) and noisy
+// slices, the bounded k-means gives the clusters, representatives and weights of comparing
+// every texel with every centre on every pass.
+TEST(Clustering, BoundsGiveTheClustersOfComparingEveryTexelWithEveryCentre) {
+  const SyntheticSlices s = MakeSlices(12, 250, 0.05, 11);
+  for (const double fraction : {0.002, 0.05, 0.2}) {  // 6, 150 and 600 clusters of 3,000 texels
+    ClusteringOptions options;
+    options.representative_fraction = fraction;
+    options.exhaustive_assignment = true;
+    const Clustering every = ClusterSlices(SourceOf(s), options);
+    options.exhaustive_assignment = false;
+    const Clustering bounded = ClusterSlices(SourceOf(s), options);
+    EXPECT_EQ(bounded.representatives, every.representatives) << fraction;
+    EXPECT_EQ(bounded.cluster, every.cluster) << fraction;
+    ASSERT_EQ(bounded.weights.size(), every.weights.size());
+    int64_t differ = 0;
+    for (size_t t = 0; t < every.weights.size(); ++t) differ += bounded.weights[t].terms != every.weights[t].terms;
+    EXPECT_EQ(differ, 0) << fraction;
+  }
+}
+
 // At paper scale the clustering takes about a minute before the first fit: its bar counts the
 // projection, the seeding, each k-means pass and the weights, and ends full.
 TEST(Clustering, ShowsItsPassesOnAProgressBar) {
