@@ -6,6 +6,7 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake ninja-build pkg-config python3
   libeigen3-dev libceres-dev
+  libmetis-dev   # the fill-reducing ordering of the NDF fit's sparse solves (fit/src/texel_fit.cc)
   libblas3 liblapack3   # the reference BLAS and LAPACK svbtdf loads (cmake/ReferenceLinearAlgebra.cmake)
   libopencv-dev
   libopenimageio-dev openimageio-tools libopenexr-dev libpng-dev zlib1g-dev
