@@ -235,24 +235,6 @@ class WorkspacePool {
   std::vector<FitWorkspace> free_;
 };
 
-// Which representatives borrow whose fit: a failed one takes the spatially nearest successful one.
-std::vector<int> LenderOfFailed(const std::vector<int64_t>& representatives, int width,
-                                const std::vector<uint8_t>& failed) {
-  std::vector<int> lender(representatives.size());
-  for (size_t r = 0; r < representatives.size(); ++r) {
-    lender[r] = static_cast<int>(r);
-    if (!failed[r]) continue;
-    double best = 1e300;
-    for (size_t s = 0; s < representatives.size(); ++s) {
-      if (failed[s]) continue;
-      const double dx = representatives[s] % width - representatives[r] % width;
-      const double dy = representatives[s] / width - representatives[r] / width;
-      if (dx * dx + dy * dy < best) best = dx * dx + dy * dy, lender[r] = static_cast<int>(s);
-    }
-  }
-  return lender;
-}
-
 // The texel indices of the representatives whose own fit failed (for the provenance).
 std::vector<int64_t> FailedTexels(const std::vector<int64_t>& reps, const std::vector<uint8_t>& failed) {
   std::vector<int64_t> texels;
@@ -458,7 +440,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
   }
   // Counted before lending: a failed representative that borrows a refitted fit was not refitted itself.
   const int64_t horizon_fixed_instead = fits.HorizonFixedInstead();
-  fits.Lend(LenderOfFailed(reps, store.info().texels_x, failed));
+  fits.Lend(LendersOfFits(reps, store.info().texels_x, store.info().texels_y, failed));
 
   Material material = fits.Assemble(store, eta, options.ndf_resolution, clustering);
   material.internal_reflection = options.internal_reflection;
@@ -598,6 +580,32 @@ std::vector<int64_t> NearestSources(int width, int height, const std::vector<int
     }
   }
   return nearest;
+}
+
+std::vector<int> LendersOfFits(const std::vector<int64_t>& representatives, int width, int height,
+                               const std::vector<uint8_t>& failed) {
+  if (failed.size() != representatives.size()) {
+    common::ThrowInvalidInput("representatives", "have " + std::to_string(failed.size()) + " outcomes for " +
+                                                     std::to_string(representatives.size()) + " fits");
+  }
+  std::vector<int> lender(representatives.size());
+  std::vector<int64_t> succeeded_texels;
+  std::vector<int> succeeded;
+  for (size_t r = 0; r < representatives.size(); ++r) {
+    if (representatives[r] < 0 || representatives[r] >= int64_t{width} * height) {
+      common::ThrowInvalidInput("representatives", "texel " + std::to_string(representatives[r]) + " is outside the grid");
+    }
+    lender[r] = static_cast<int>(r);
+    if (failed[r]) continue;
+    succeeded.push_back(static_cast<int>(r));
+    succeeded_texels.push_back(representatives[r]);
+  }
+  if (succeeded.size() == representatives.size()) return lender;
+  const std::vector<int64_t> nearest = NearestSources(width, height, succeeded_texels);  // throws for none
+  for (size_t r = 0; r < representatives.size(); ++r) {
+    if (failed[r]) lender[r] = succeeded[static_cast<size_t>(nearest[representatives[r]])];
+  }
+  return lender;
 }
 
 double ParseRepresentativeFraction(const std::string& text, const std::string& subject) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/least_squares.h"
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/slab_transmission.h"
 #include "small_problem.h"
@@ -108,8 +109,8 @@ struct LinearAmounts {
 };
 
 // The least-squares amounts of `shapes` and of the internal shapes (when given) against the
-// rows' rho, all >= 0: the unconstrained solution of every subset of the columns that keeps the
-// direct light, the feasible one of least cost (at most four 3 x 3 solves).
+// rows' rho, all >= 0, the direct light always among them (common::NonNegativeLeastSquares: at
+// most four 3 x 3 solves).
 LinearAmounts BestAmounts(const TexelSlice& slice, const std::vector<int>& rows, const std::vector<double>& shapes,
                           const InternalShapes* internal) {
   std::vector<const std::vector<double>*> columns = {&shapes};
@@ -118,39 +119,15 @@ LinearAmounts BestAmounts(const TexelSlice& slice, const std::vector<int>& rows,
   const int n = static_cast<int>(columns.size());
   Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
   Eigen::Vector3d right = Eigen::Vector3d::Zero();
-  double rho_rho = 0;
   for (size_t j = 0; j < rows.size(); ++j) {
     const double w = Weight(slice, rows[j]), rho = slice.rho[rows[j]];
     Eigen::Vector3d column = Eigen::Vector3d::Zero();
     for (int c = 0; c < n; ++c) column[c] = (*columns[c])[j];
     normal += w * column * column.transpose();
     right += w * rho * column;
-    rho_rho += w * rho * rho;
   }
-  Eigen::Vector3d best = Eigen::Vector3d::Zero();
-  double best_cost = rho_rho;  // nothing at all
-  for (int subset = 1; subset < (1 << n); subset += 2) {  // odd: the direct light is always in
-    std::vector<int> in;
-    for (int c = 0; c < n; ++c) {
-      if (subset & (1 << c)) in.push_back(c);
-    }
-    const int m = static_cast<int>(in.size());
-    Eigen::MatrixXd sub(m, m);
-    Eigen::VectorXd sub_right(m);
-    for (int a = 0; a < m; ++a) {
-      sub_right[a] = right[in[a]];
-      for (int b = 0; b < m; ++b) sub(a, b) = normal(in[a], in[b]);
-    }
-    if (!(sub.determinant() > 1e-12 * sub.diagonal().prod())) continue;  // a shape the others hold
-    const Eigen::VectorXd amounts = sub.ldlt().solve(sub_right);
-    if (!amounts.allFinite() || (amounts.array() < 0).any()) continue;
-    const double cost = rho_rho - amounts.dot(sub_right);  // at the least-squares solution
-    if (cost < best_cost) {
-      best_cost = cost;
-      best.setZero();
-      for (int a = 0; a < m; ++a) best[in[a]] = amounts[a];
-    }
-  }
+  const common::NonNegativeVector best =
+      common::NonNegativeLeastSquares(normal.topLeftCorner(n, n), right.head(n), /*required=*/1u);  // the direct light
   LinearAmounts amounts;
   amounts.direct = best[0];
   int next = 1;

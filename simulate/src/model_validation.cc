@@ -9,6 +9,7 @@
 #include <string>
 
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/least_squares.h"
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/shadowing.h"
 #include "svbtdf/model/slab_lobe.h"
@@ -319,31 +320,21 @@ void FitBlendRoughness(const ValidationContext& context, ValidationCase* result)
 }
 
 // The least-squares weights (>= 0) of `shapes` added to `base` against MC over the cells (solid
-// angle weighted): all of them where none comes out negative, else the best single one.
+// angle weighted; common::NonNegativeLeastSquares).
 std::vector<double> NonNegativeWeights(const ValidationCase& result, const std::vector<double>& base,
                                        const std::vector<const std::vector<double>*>& shapes,
                                        const std::vector<double>& solid_angles) {
   const int n = static_cast<int>(shapes.size());
-  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(n, n);
-  Eigen::VectorXd right = Eigen::VectorXd::Zero(n);
+  common::NonNegativeMatrix normal = common::NonNegativeMatrix::Zero(n, n);
+  common::NonNegativeVector right = common::NonNegativeVector::Zero(n);
   for (size_t c = 0; c < base.size(); ++c) {
     for (int a = 0; a < n; ++a) {
       right[a] += solid_angles[c] * (*shapes[a])[c] * (result.mc.rho[c] - base[c]);
       for (int b = 0; b < n; ++b) normal(a, b) += solid_angles[c] * (*shapes[a])[c] * (*shapes[b])[c];
     }
   }
-  const Eigen::VectorXd all = normal.ldlt().solve(right);
-  if (all.allFinite() && (all.array() >= 0).all()) return {all.data(), all.data() + n};
-  std::vector<double> best(n, 0.0);
-  double best_gain = 0;  // the fall in the squared error, right^2 / normal for one shape
-  for (int a = 0; a < n; ++a) {
-    if (normal(a, a) > 0 && right[a] > 0 && right[a] * right[a] / normal(a, a) > best_gain) {
-      best_gain = right[a] * right[a] / normal(a, a);
-      std::fill(best.begin(), best.end(), 0.0);
-      best[a] = right[a] / normal(a, a);
-    }
-  }
-  return best;
+  const common::NonNegativeVector amounts = common::NonNegativeLeastSquares(normal, right);
+  return {amounts.data(), amounts.data() + n};
 }
 
 // The slab's exact two-interface transmission; the same plus the internal reflection's shape at

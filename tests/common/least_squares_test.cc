@@ -146,5 +146,63 @@ TEST(MinimizeInBox, KeepsToItsIterationLimitAndNeverEndsAboveItsStart) {
   EXPECT_DOUBLE_EQ(summary.final_cost, problem.Cost(x));
 }
 
+// The amounts satisfy the optimality (Karush-Kuhn-Tucker) conditions of min |A x - y|^2 over
+// x >= 0: the gradient N x - b is 0 where an amount is positive and >= 0 where it is 0. Random
+// problems of 1-4 columns, with columns alike enough that the unconstrained solution often goes
+// negative.
+TEST(NonNegativeLeastSquares, MeetsTheOptimalityConditionsOfTheConstrainedProblem) {
+  std::mt19937 random(5);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  int constrained = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const int n = 1 + trial % kMaxNonNegativeColumns;
+    Eigen::MatrixXd a(30, n);
+    const Eigen::VectorXd common_column = Eigen::VectorXd::NullaryExpr(30, [&] { return std::abs(normal(random)); });
+    for (int c = 0; c < n; ++c) {
+      a.col(c) = common_column + 0.3 * Eigen::VectorXd::NullaryExpr(30, [&] { return normal(random); });
+    }
+    const Eigen::VectorXd y = a * Eigen::VectorXd::NullaryExpr(n, [&] { return normal(random); }) +
+                              0.1 * Eigen::VectorXd::NullaryExpr(30, [&] { return normal(random); });
+    const NonNegativeMatrix n_matrix = a.transpose() * a;
+    const NonNegativeVector b = a.transpose() * y;
+    const NonNegativeVector x = NonNegativeLeastSquares(n_matrix, b);
+    const Eigen::VectorXd unconstrained = n_matrix.ldlt().solve(b);
+    if ((unconstrained.array() < 0).any()) ++constrained;
+    const NonNegativeVector gradient = n_matrix * x - b;
+    const double scale = b.cwiseAbs().maxCoeff();
+    for (int c = 0; c < n; ++c) {
+      ASSERT_GE(x[c], 0.0) << trial;
+      if (x[c] > 0) {
+        EXPECT_NEAR(gradient[c], 0.0, 1e-9 * scale) << trial << ", column " << c;
+      } else {
+        EXPECT_GE(gradient[c], -1e-9 * scale) << trial << ", column " << c;
+      }
+    }
+  }
+  EXPECT_GT(constrained, 100);  // the bound was active often enough to test it
+}
+
+// A required column stays in the support even where leaving it out would cost less; a column the
+// others already span is left out rather than solved for.
+TEST(NonNegativeLeastSquares, KeepsTheRequiredColumnsAndSkipsDependentOnes) {
+  NonNegativeMatrix normal(2, 2);
+  normal << 1.0, 0.9, 0.9, 1.0;
+  NonNegativeVector right(2);
+  right << 0.5, 1.0;  // unconstrained: column 0 negative
+  const NonNegativeVector free = NonNegativeLeastSquares(normal, right);
+  EXPECT_EQ(free[0], 0.0);
+  EXPECT_DOUBLE_EQ(free[1], 1.0);
+  const NonNegativeVector with_first = NonNegativeLeastSquares(normal, right, /*required=*/1u);
+  EXPECT_DOUBLE_EQ(with_first[0], 0.5);  // column 0 alone: the only feasible subset that holds it
+  EXPECT_EQ(with_first[1], 0.0);
+  NonNegativeMatrix twin(2, 2);
+  twin << 1.0, 1.0, 1.0, 1.0;  // the same column twice
+  NonNegativeVector twin_right(2);
+  twin_right << 2.0, 2.0;
+  const NonNegativeVector one = NonNegativeLeastSquares(twin, twin_right);
+  EXPECT_DOUBLE_EQ(one[0] + one[1], 2.0);
+  EXPECT_TRUE(one[0] == 0.0 || one[1] == 0.0);
+}
+
 }  // namespace
 }  // namespace svbtdf::common

@@ -574,5 +574,39 @@ TEST(NearestSources, FindsTheNearestSourceOfEveryTexelAsComparingEveryPairDoes) 
   EXPECT_THROW(NearestSources(0, 4, {0}), common::Error);
 }
 
+// A representative whose fit failed borrows the fit of the nearest one that succeeded; the others
+// keep their own.
+TEST(LendersOfFits, AFailedFitBorrowsTheNearestSuccessfulOne) {
+  std::mt19937_64 rng(11);
+  const int width = 37, height = 23;
+  std::vector<int64_t> reps;
+  for (int64_t t = 0; t < int64_t{width} * height; t += 1 + static_cast<int64_t>(rng() % 40)) reps.push_back(t);
+  std::vector<uint8_t> failed(reps.size());
+  for (uint8_t& f : failed) f = rng() % 3 == 0;
+  failed[0] = 0;
+  const std::vector<int> lender = LendersOfFits(reps, width, height, failed);
+  ASSERT_EQ(lender.size(), reps.size());
+  const auto squared_distance = [&](int64_t a, int64_t b) {
+    const int64_t dx = a % width - b % width, dy = a / width - b / width;
+    return dx * dx + dy * dy;
+  };
+  for (size_t r = 0; r < reps.size(); ++r) {
+    if (!failed[r]) {
+      EXPECT_EQ(lender[r], static_cast<int>(r));
+      continue;
+    }
+    int64_t best = std::numeric_limits<int64_t>::max();
+    for (size_t s = 0; s < reps.size(); ++s) {
+      if (!failed[s]) best = std::min(best, squared_distance(reps[r], reps[s]));
+    }
+    ASSERT_GE(lender[r], 0);
+    EXPECT_FALSE(failed[static_cast<size_t>(lender[r])]) << r;
+    EXPECT_EQ(squared_distance(reps[r], reps[static_cast<size_t>(lender[r])]), best) << r;
+  }
+  EXPECT_THROW(LendersOfFits({3, 5}, 4, 4, {1, 1}), common::Error);  // none succeeded
+  EXPECT_THROW(LendersOfFits({3, 5}, 4, 4, {0}), common::Error);
+  EXPECT_THROW(LendersOfFits({3, 16}, 4, 4, {0, 1}), common::Error);  // a failed one outside the grid
+}
+
 }  // namespace
 }  // namespace svbtdf::fit

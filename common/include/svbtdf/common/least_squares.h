@@ -127,4 +127,48 @@ BoxLevenbergMarquardtSummary MinimizeInBox(const Problem& problem, const Eigen::
   return summary;
 }
 
+// Non-negative least squares over a few columns, from their normal equations N = A^T W A and
+// b = A^T W y: at most kMaxNonNegativeColumns columns, held in matrices that stay off the heap
+// (the slab fit solves one at every residual evaluation).
+constexpr int kMaxNonNegativeColumns = 4;
+using NonNegativeMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxNonNegativeColumns, kMaxNonNegativeColumns>;
+using NonNegativeVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxNonNegativeColumns, 1>;
+
+// The amounts x >= 0 of least cost y^T W y - x^T b. With so few columns the active set is found by
+// trying every subset of them: each subset's unconstrained solution, the feasible one that lowers
+// the cost most (the exact answer: the constrained optimum is the unconstrained optimum of its
+// own support). Subsets must hold every column of `required` (a bitmask); a subset whose columns
+// are (nearly) linearly dependent is skipped (its shapes are the others'). All zero when no subset
+// is feasible.
+inline NonNegativeVector NonNegativeLeastSquares(const NonNegativeMatrix& normal, const NonNegativeVector& right,
+                                                 unsigned required = 0) {
+  const int n = static_cast<int>(right.size());
+  NonNegativeVector best = NonNegativeVector::Zero(n);
+  double best_gain = 0.0;  // x^T b: how far the subset's solution lowers the cost
+  int in[kMaxNonNegativeColumns];
+  for (unsigned subset = 1; subset < (1u << n); ++subset) {
+    if ((subset & required) != required) continue;
+    int m = 0;
+    for (int c = 0; c < n; ++c) {
+      if (subset & (1u << c)) in[m++] = c;
+    }
+    NonNegativeMatrix sub(m, m);
+    NonNegativeVector sub_right(m);
+    for (int a = 0; a < m; ++a) {
+      sub_right[a] = right[in[a]];
+      for (int b = 0; b < m; ++b) sub(a, b) = normal(in[a], in[b]);
+    }
+    if (!(sub.determinant() > 1e-12 * sub.diagonal().prod())) continue;
+    const NonNegativeVector amounts = sub.ldlt().solve(sub_right);
+    if (!amounts.allFinite() || (amounts.array() < 0).any()) continue;
+    const double gain = amounts.dot(sub_right);
+    if (gain > best_gain) {
+      best_gain = gain;
+      best.setZero();
+      for (int a = 0; a < m; ++a) best[in[a]] = amounts[a];
+    }
+  }
+  return best;
+}
+
 }  // namespace svbtdf::common

@@ -68,4 +68,11 @@ std::vector<int> HeldOutDots(int num_dots, double holdout, uint64_t seed);
 // for no sources or a source outside the grid.
 std::vector<int64_t> NearestSources(int width, int height, const std::vector<int64_t>& sources);
 
+// Whose fit each representative (a texel index on the width x height grid) takes: its own, or,
+// where `failed` says its own fit failed, that of the nearest representative whose fit succeeded
+// (NearestSources). Throws svbtdf::Error(kInvalidInput) when none succeeded (FitMaterial has
+// stopped before then), a representative is outside the grid or the lengths differ.
+std::vector<int> LendersOfFits(const std::vector<int64_t>& representatives, int width, int height,
+                               const std::vector<uint8_t>& failed);
+
 }  // namespace svbtdf::fit
