@@ -466,7 +466,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
   const double seconds = SecondsSince(start);
   material.provenance = {
       {"processed", fs::absolute(store.folder()).string()},
-      {"session", store.info().provenance.value("session", "")},
+      {"session", common::StringOr(store.info().provenance, "session")},
       {"settings",
        {{"model", MaterialModelName(options.model)},
         {"eta", eta},

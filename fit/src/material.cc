@@ -399,6 +399,7 @@ Material ReadMaterial(const fs::path& folder) {
     }
     m.representative_texels = common::IntegerArrayAt<int64_t>(manifest.at("representatives"), "texels", manifest_path.string());
     m.provenance = manifest.value("provenance", nlohmann::json::object());
+    if (!m.provenance.is_object()) common::ThrowFormatError(manifest_path.string(), "has a \"provenance\" that is not an object");
     uncertainty = manifest.contains("maps") && manifest["maps"].is_object() && manifest["maps"].contains("alpha_se");
     m.internal_reflection = manifest.value("internal_reflection", false);
   } catch (const nlohmann::json::exception& e) {

@@ -10,8 +10,8 @@
 #include <Eigen/Eigenvalues>
 
 #include "svbtdf/common/atomic_file.h"
-#include "svbtdf/common/json.h"
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/fit/slice_store.h"
 
@@ -252,9 +252,13 @@ std::vector<QualityWarning> CheckMaterial(const Material& m, const fs::path& fol
   }
 
   // Representatives that could not be fitted (they borrowed a neighbour's fit).
+  // (The provenance is free-form: a count that is not an integer is as good as none.)
   const nlohmann::json statistics = m.provenance.value("statistics", nlohmann::json::object());
-  const int64_t reps = statistics.value("representatives", int64_t{0});
-  const int64_t failed = statistics.value("failed_fits", int64_t{0});
+  const auto count = [&](const char* key) {
+    return statistics.is_object() && statistics.contains(key) ? common::IntegerIfFits<int64_t>(statistics[key]).value_or(0) : 0;
+  };
+  const int64_t reps = count("representatives");
+  const int64_t failed = count("failed_fits");
   if (reps > 0 && failed > kMaxFailedFitFraction * reps) {
     warnings.push_back({"fit", (folder / "material.json").string(), "failed-fits", "many representatives could not be fitted",
                         FormatFigures("%lld of %lld representatives failed (limit %.0f%%)", static_cast<long long>(failed),

@@ -65,7 +65,7 @@ SliceStore SliceStore::Open(const fs::path& folder) {
     common::ThrowFormatError((folder / kManifest).string(), std::string("is malformed: ") + e.what());
   }
   CheckInfo(store.info_, (folder / kManifest).string());
-  if (!manifest.value("complete", false)) {
+  if (!CompleteFromManifest(manifest, (folder / kManifest).string())) {
     common::ThrowInvalidInput(folder.string(), "holds an unfinished processing", "re-run 'svbtdf process' to finish it");
   }
   store.geometry_ = GeometryFromManifest(manifest, (folder / kManifest).string());

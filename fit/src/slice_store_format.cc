@@ -97,6 +97,7 @@ SliceStoreInfo InfoFromManifest(const nlohmann::json& j, const std::string& sour
   info.tile_texels = common::IntegerAt(j, "tile_texels", source);
   info.eta = j.value("eta", 0.0);
   info.provenance = j.value("provenance", nlohmann::json::object());
+  if (!info.provenance.is_object()) common::ThrowFormatError(source, "has a \"provenance\" that is not an object");
   return info;
 }
 
@@ -139,6 +140,15 @@ nlohmann::json ReadManifest(const fs::path& folder) {
   }
 }
 
+
+bool CompleteFromManifest(const nlohmann::json& manifest, const std::string& source) {
+  if (!manifest.contains("complete")) return false;
+  const nlohmann::json& complete = manifest["complete"];
+  if (!complete.is_boolean()) {
+    common::ThrowFormatError(source, "has \"complete\": " + complete.dump() + ", which is neither true nor false");
+  }
+  return complete.get<bool>();
+}
 
 TexelGeometry GeometryFromManifest(const nlohmann::json& manifest, const std::string& source) {
   try {

@@ -8,6 +8,7 @@
 #include "svbtdf/calib/session_calibration.h"
 #include "svbtdf/common/atomic_file.h"
 #include "svbtdf/common/error.h"
+#include "svbtdf/common/json.h"
 #include "svbtdf/fit/material.h"
 #include "svbtdf/fit/slice_store.h"
 #include "svbtdf/fit/slice_store_format.h"
@@ -93,7 +94,7 @@ void ProcessUnlessDone(const session::Session& session, const calib::SessionCali
                        const fs::path& processed, const ProcessOptions& options, const PipelineListener& listener) {
   std::string corrected;  // the polarisation a finished store was corrected for ("": none)
   try {
-    corrected = fit::SliceStore::Open(processed).info().provenance.value("polarisation_corrected", std::string());
+    corrected = common::StringOr(fit::SliceStore::Open(processed).info().provenance, "polarisation_corrected");
   } catch (const common::Error&) {
     // Not there or unfinished: process (an unfinished store resumes).
     Say(listener, "== 2/3 processing into " + processed.string());

@@ -179,7 +179,7 @@ SliceStoreWriter::SliceStoreWriter(const fs::path& folder, const SliceStoreInfo&
   const uint64_t bytes = NumTiles(info) * TileBytes(info);
   if (fs::exists(folder / kManifest)) {
     const nlohmann::json manifest = ReadManifest(folder);
-    const bool complete = manifest.value("complete", false);
+    const bool complete = CompleteFromManifest(manifest, (folder / kManifest).string());
     const nlohmann::json calibration_on_disk = common::ReadJsonFile(folder / kCalibration);
     if (manifest.at("texels_x") != info.texels_x || manifest.at("texels_y") != info.texels_y ||
         manifest.at("num_dots") != info.num_dots || manifest.at("light_resolution") != info.light_resolution ||

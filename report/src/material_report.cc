@@ -478,8 +478,7 @@ void WriteDataScript(const fs::path& file, const std::string& name, const std::s
 
 fs::path FromProvenance(const fit::Material& material, const std::string& given, const char* key) {
   if (!given.empty()) return given;
-  if (material.provenance.contains(key) && material.provenance[key].is_string()) return material.provenance[key].get<std::string>();
-  return {};
+  return common::StringOr(material.provenance, key);
 }
 
 }  // namespace
@@ -576,7 +575,10 @@ std::vector<fit::QualityWarning> WriteMaterialReport(const MaterialReportOptions
   const int dots = store ? static_cast<int>(store->geometry().dots.size()) : 0;
   const int side = InspectionGridSide(material.width, material.height, dots, options.inspect_grid, options.inspect_budget);
   std::vector<int> held_out;
-  if (material.provenance.contains("holdout")) held_out = material.provenance["holdout"].value("dots", std::vector<int>{});
+  const nlohmann::json& holdout = material.provenance.value("holdout", nlohmann::json::object());
+  if (holdout.is_object() && holdout.contains("dots")) {
+    held_out = common::IntegerArrayAt<int>(holdout, "dots", (fs::path(options.material_folder) / "material.json").string());
+  }
   const nlohmann::json inspection = InspectionData(material, store ? &*store : nullptr, parameters, held_out,
                                                    MakeTexelGrid(material.width, material.height, side), options.threads);
 

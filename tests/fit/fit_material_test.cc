@@ -270,8 +270,9 @@ TEST(SliceStoreTiles, SlicesFromATileEqualSlicesReadAlone) {
   fs::remove_all(dir);
 }
 
-// Version 2 stores carry their geometry in processed.json: a store whose geometry is damaged, or
-// a version 1 store (which has none), is refused with the manifest's path.
+// Version 2 stores carry their geometry in processed.json: a store whose geometry is damaged, a
+// version 1 store (which has none) or a manifest whose "complete" is not a boolean is refused
+// with the manifest's path.
 TEST(SliceStoreFormat, DamagedGeometryAndOldVersionsAreRefusedNamingTheManifest) {
   const fs::path dir = fs::temp_directory_path() / ("svbtdf-store-format-" + std::to_string(::getpid()));
   fs::remove_all(dir);
@@ -302,6 +303,12 @@ TEST(SliceStoreFormat, DamagedGeometryAndOldVersionsAreRefusedNamingTheManifest)
   const std::string old = open_with(version_1);
   EXPECT_NE(old.find(manifest_path.string()), std::string::npos) << old;
   EXPECT_NE(old.find("re-run 'svbtdf process'"), std::string::npos) << old;
+  // A "complete" that is not true or false (found by fuzzing: it escaped as a JSON type error).
+  nlohmann::json complete_as_text = manifest;
+  complete_as_text["complete"] = "yes";
+  const std::string not_boolean = open_with(complete_as_text);
+  EXPECT_NE(not_boolean.find(manifest_path.string()), std::string::npos) << not_boolean;
+  EXPECT_NE(not_boolean.find("\"complete\""), std::string::npos) << not_boolean;
   fs::remove_all(dir);
 }
 

@@ -157,6 +157,19 @@ TEST_F(MaterialTest, DamagedMaterialsAreErrorsNamingTheFile) {
                 std::string::npos) << e.what();
     }
   }
+  // A provenance that is not an object would throw nlohmann's type error in its readers (the
+  // quality checks, the report).
+  json = common::ReadJsonFile(manifest);
+  json["representatives"]["texels"][0] = 0;
+  json["provenance"] = 7;
+  common::WriteTextAtomically(manifest, json.dump(), /*overwrite=*/true);
+  try {
+    ReadMaterial(dir_ / "indices");
+    FAIL() << "a provenance of 7 was read";
+  } catch (const common::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("material.json: has a \"provenance\" that is not an object"), std::string::npos)
+        << e.what();
+  }
   // 150,000 nested [] in the provenance crashed `svbtdf eval` with SIGSEGV (issue 15).
   const std::string deep = std::string(150000, '[') + std::string(150000, ']');
   common::WriteTextAtomically(dir_ / "material.json", "{\"format\": \"svbtdf-material\", \"provenance\": " + deep + "}");

@@ -87,6 +87,15 @@ std::vector<Int> IntegerArrayAt(const nlohmann::json& object, const char* key, c
   return values;
 }
 
+// The string at `key` of `object`, or `fallback` when `object` is not an object, lacks `key` or
+// holds something else there. For free-form notes a reader only passes on (a provenance's
+// "session"), where a hand-edited value must not stop the work.
+inline std::string StringOr(const nlohmann::json& object, const char* key, std::string fallback = {}) {
+  if (!object.is_object()) return fallback;
+  const auto found = object.find(key);
+  return found != object.end() && found->is_string() ? found->get<std::string>() : fallback;
+}
+
 // Typed, range-checked access to one JSON object of a file a user writes (a capture plan, a rig
 // description); every error is common::Error(kFormat) naming the file and the field, with `hint`
 // (e.g. "see docs/capture.md for the plan format"). Unknown fields are refused, so that a

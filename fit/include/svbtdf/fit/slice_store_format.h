@@ -68,6 +68,9 @@ void WriteManifest(const std::filesystem::path& folder, const SliceStoreInfo& in
 // The manifest, its format and version checked (svbtdf::Error naming the file otherwise).
 nlohmann::json ReadManifest(const std::filesystem::path& folder);
 SliceStoreInfo InfoFromManifest(const nlohmann::json& manifest, const std::string& source);
+// Whether the manifest says its processing finished ("complete"; absent means not). A value that
+// is not true or false throws svbtdf::Error naming `source`.
+bool CompleteFromManifest(const nlohmann::json& manifest, const std::string& source);
 // `source` names the manifest in errors.
 TexelGeometry GeometryFromManifest(const nlohmann::json& manifest, const std::string& source);
 
