@@ -6,10 +6,14 @@
 // true calibration. Reports both times, their ratio, and the process's peak resident memory.
 //
 //   svbtdf simulate --preset rice-paper --out SIM
-//   bench_process SIM [THREADS] [TEXELS_X TEXELS_Y] [--keep STORE]
+//   bench_process SIM [THREADS] [TEXELS_X TEXELS_Y] [--keep STORE] [--no-baseline]
 //
 // --keep: the processed store is kept in STORE (a new folder) for a fit to time afterwards
-// (bench/paper_scale.py), rather than removed.
+// (bench/paper_scale.py), rather than removed. STORE may also be an unfinished store of the same
+// settings, which is resumed.
+// --no-baseline: the images are not read first; for profiling the processing alone, e.g. the
+// diffuse separation and resampling of a kept store whose manifest was set back to unfinished
+// ("complete": false; docs/benchmarks.md).
 
 #include <sys/resource.h>
 
@@ -40,13 +44,18 @@ double PeakResidentMegabytes() {
 
 int main(int argc, char** argv) {
   namespace fs = std::filesystem;
+  bool baseline_wanted = true;
+  if (argc >= 2 && std::string(argv[argc - 1]) == "--no-baseline") {
+    baseline_wanted = false;
+    --argc;
+  }
   fs::path keep;
   if (argc >= 3 && std::string(argv[argc - 2]) == "--keep") {
     keep = argv[argc - 1];
     argc -= 2;
   }
   if (argc < 2) {
-    std::fprintf(stderr, "usage: bench_process SIMULATION_FOLDER [THREADS] [TEXELS_X TEXELS_Y] [--keep STORE]\n");
+    std::fprintf(stderr, "usage: bench_process SIMULATION_FOLDER [THREADS] [TEXELS_X TEXELS_Y] [--keep STORE] [--no-baseline]\n");
     return 2;
   }
   try {
@@ -54,7 +63,9 @@ int main(int argc, char** argv) {
     const svbtdf::session::Session session = svbtdf::session::Session::Open(simulation / "session");
     const svbtdf::calib::SessionCalibration calibration = svbtdf::CalibrationFromTruth(simulation);
     auto start = std::chrono::steady_clock::now();
-    for (const std::string& key : session.planned_keys()) session.ReadImage(key);
+    if (baseline_wanted) {
+      for (const std::string& key : session.planned_keys()) session.ReadImage(key);
+    }
     const double baseline = Seconds(start);
     const double baseline_peak = PeakResidentMegabytes();
 
@@ -70,9 +81,9 @@ int main(int argc, char** argv) {
     const double measured = Seconds(start);
     std::printf("session: %zu images, %lld texels x %d dots\n", session.planned_keys().size(),
                 static_cast<long long>(report.texels), report.dots);
-    std::printf("baseline, read every image once:   %.1f s (peak %.0f MB)\n", baseline, baseline_peak);
+    if (baseline_wanted) std::printf("baseline, read every image once:   %.1f s (peak %.0f MB)\n", baseline, baseline_peak);
     std::printf("process:                           %.1f s\n", measured);
-    std::printf("ratio measured / baseline:         %.2f\n", measured / baseline);
+    if (baseline_wanted) std::printf("ratio measured / baseline:         %.2f\n", measured / baseline);
     std::printf("peak resident memory:              %.0f MB\n", PeakResidentMegabytes());
     if (keep.empty()) fs::remove_all(out);
   } catch (const svbtdf::common::Error& e) {

@@ -3,14 +3,16 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <cstdio>
-#include <future>
 #include <cmath>
+#include <cstdio>
+#include <deque>
+#include <future>
 #include <limits>
 #include <map>
 #include <memory>
 #include <numbers>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -238,35 +240,43 @@ class ImageReader {
   std::atomic<int64_t> images_read_{0};
 };
 
-// Reads the dot images in plan order one image ahead of their use, so that decoding the next
-// PNG overlaps the rectification of the current one. Read errors surface from Next().
+// Reads the dot images in plan order ahead of their use, `depth` of them decoding at once, each
+// on its own thread, while the current one is rectified. Decoding a PNG runs on one thread and
+// is most of the work: with one image ahead, the dots of a paper-scale session went at the pace
+// of one decoding thread and a second core stood idle a third of the time (docs/benchmarks.md,
+// "process"). Read errors surface from Next(), in plan order.
 class ReadAhead {
  public:
   ReadAhead(ImageReader& reader, const std::map<int, std::vector<float>>& darks,
-            std::vector<std::pair<int, std::string>> order)
-      : reader_(reader), darks_(darks), order_(std::move(order)) {}
+            std::vector<std::pair<int, std::string>> order, int depth)
+      : reader_(reader), darks_(darks), order_(std::move(order)), depth_(std::max(1, depth)) {}
 
   ImageReader::Linear Next() {
-    if (!pending_.valid()) Start(next_);
-    ImageReader::Linear image = pending_.get();
-    if (++next_ < order_.size()) Start(next_);
+    Refill();
+    if (pending_.empty()) throw std::logic_error("ReadAhead::Next past the last image");
+    ImageReader::Linear image = pending_.front().get();
+    pending_.pop_front();
+    Refill();
     return image;
   }
 
  private:
-  void Start(size_t k) {
-    pending_ = std::async(std::launch::async, [this, k] {
-      const auto& [bracket, key] = order_[k];
-      const auto dark = darks_.find(bracket);
-      return reader_.Read(key, dark == darks_.end() ? nullptr : &dark->second);
-    });
+  void Refill() {
+    while (static_cast<int>(pending_.size()) < depth_ && started_ < order_.size()) {
+      pending_.push_back(std::async(std::launch::async, [this, k = started_++] {
+        const auto& [bracket, key] = order_[k];
+        const auto dark = darks_.find(bracket);
+        return reader_.Read(key, dark == darks_.end() ? nullptr : &dark->second);
+      }));
+    }
   }
 
   ImageReader& reader_;
   const std::map<int, std::vector<float>>& darks_;
   std::vector<std::pair<int, std::string>> order_;  // (bracket, key)
-  size_t next_ = 0;
-  std::future<ImageReader::Linear> pending_;
+  int depth_;
+  size_t started_ = 0;
+  std::deque<std::future<ImageReader::Linear>> pending_;
 };
 
 void ResolveTexelGrid(const session::Session& session, const calib::SessionCalibration& calibration, ProcessOptions* options) {
@@ -474,7 +484,8 @@ ProcessReport ProcessSession(const session::Session& session, const calib::Sessi
   for (int q = 0; q < num_dots; ++q) {
     if (!writer.HasDot(q)) order.insert(order.end(), plan.dot_keys[q].begin(), plan.dot_keys[q].end());
   }
-  ReadAhead images(reader, darks, std::move(order));
+  // As many images decoding as there are threads: two on a 2-core machine.
+  ReadAhead images(reader, darks, std::move(order), common::ThreadCount(options.threads));
   ProcessReport report;
   std::unique_ptr<common::ProgressBar> progress;
   if (options.progress) progress = std::make_unique<common::ProgressBar>("process", num_dots, "dots");
