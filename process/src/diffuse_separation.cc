@@ -132,7 +132,7 @@ DiffuseEstimate EstimateDiffuse(const std::vector<model::Rgb>& r, const std::vec
   for (size_t q = 0; q < n; ++q) {
     if (!set[q]) continue;
     for (int k = 0; k < 3; ++k) sum[k] += r[q][k] / scale[q];
-    weights += 1.0 / scale[q];
+    weights += inverse_scale[q];
     ++estimate.floor_samples;
   }
   for (int k = 0; k < 3; ++k) estimate.rho_d[k] = sum[k] / weights;

@@ -211,7 +211,29 @@ TEST(SlabLobeBsdf, FromBelowTheInterfacesSwap) {
   const SlabLobeModel turned({1.5, 80.0, 10.0});
   const Vec3 wo = FlipZ(Direction(50, 20)), wi = Direction(45, 190);
   EXPECT_NEAR(bsdf.Eval(wi, wo)[0], turned.Rho(FlipZ(wi), FlipZ(wo)), 1e-12);
-  EXPECT_NE(bsdf.Eval(wi, wo)[0], SlabLobeModel(p).Rho(FlipZ(wi), FlipZ(wo)));
+}
+
+// The swap above cannot be seen in the lobe itself: the mean path through a parallel slab meets
+// both interfaces at the same pair of angles (theta outside, theta_t inside), so a tilt of either
+// interface's normal moves the light direction by the same Jacobian, and the lobe depends on the
+// two concentrations only through the symmetric product of their mean cosines (and the two
+// maskings, also of the same angles). Computed independently by MeanPathJacobians; a test that
+// the swap changed Rho passed before only by rounding, and failed once the build's arithmetic
+// changed (-march=native, 2026-12-07).
+TEST(SlabLobeModel, BothInterfacesTiltTheLightAlike) {
+  const SlabLobeModel a({1.5, 10.0, 80.0}), b({1.5, 80.0, 10.0});
+  for (double theta_o : {0.0, 20.0, 50.0, 70.0, 85.0}) {
+    const Vec3 o = Direction(theta_o, 20);
+    const SlabLobeModel::Jacobians j = a.MeanPathJacobians(o);
+    EXPECT_NEAR(j.entry_to_light / j.exit_to_light, 1.0, 1e-12) << theta_o;
+    for (double theta_i : {10.0, 45.0, 60.0}) {
+      const Vec3 i = FlipZ(Direction(theta_i, 190));
+      EXPECT_NEAR(a.Rho(i, o), b.Rho(i, o), 1e-12 * a.Rho(i, o)) << theta_o << " " << theta_i;
+    }
+  }
+  // At normal incidence a tilt d of either interface deviates the ray by (eta - 1) d, so a normal's
+  // solid angle maps onto the light's scaled by (eta - 1)^2: |d omega_m / d omega_i| = 4 at 1.5.
+  EXPECT_NEAR(a.MeanPathJacobians(Vec3::UnitZ()).entry_to_light, 4.0, 1e-12);
 }
 
 }  // namespace

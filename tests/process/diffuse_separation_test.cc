@@ -73,6 +73,34 @@ class NoisyCamera {
   std::normal_distribution<double> gauss_{0.0, 1.0};
 };
 
+// A texel's true R at every dot of `g` (texel 0) and each dot's s_q = r^2 / |i.z|: what
+// NoisyCamera measures from.
+struct TrueSamples {
+  std::vector<model::Rgb> rho;
+  std::vector<double> scale;
+};
+
+TrueSamples TrueSamplesOf(const TexelGeometry& g, const model::Ndf& ndf, const model::DualMicrofacetParams& params) {
+  TrueSamples out;
+  for (int q = 0; q < static_cast<int>(g.dots.size()); ++q) {
+    const model::Vec3 to_dot = g.dots[q] - g.TexelCentre(0);
+    out.rho.push_back(model::EvaluateMaterial(ndf, params, g.Light(0, q), g.View(0)));
+    out.scale.push_back(to_dot.squaredNorm() / std::abs(to_dot.normalized().z()));
+  }
+  return out;
+}
+
+// The dual-microfacet parameters of these tests' texels: GGX 0.2 shadowing, k_s 0.8, eta 1.5.
+model::DualMicrofacetParams TexelParams(const model::Rgb& rho_d) {
+  model::DualMicrofacetParams params;
+  params.eta = 1.5;
+  params.alpha = 0.5;
+  params.shadowing = model::SmithShadowing::Ggx(0.2);
+  params.k_s = {0.8, 0.8, 0.8};
+  params.rho_d = rho_d;
+  return params;
+}
+
 // The paper's eq. 14 (the store's estimator before): per channel, the minimum R.
 model::Rgb Minimum(const std::vector<model::Rgb>& r) {
   model::Rgb m = {1e300, 1e300, 1e300};
@@ -88,19 +116,8 @@ TEST(EstimateDiffuse, UnbiasedUnderShotNoiseWhereTheMinimumIsNot) {
   const calib::SessionCalibration calibration = testing::AnalyticCalibration(20);
   const TexelGeometry g = MakeTexelGeometry(calibration, 1, 1);
   const model::GgxNdf ndf(0.25, 0.25);
-  model::DualMicrofacetParams params;
-  params.eta = 1.5;
-  params.alpha = 0.5;
-  params.shadowing = model::SmithShadowing::Ggx(0.2);
-  params.k_s = {0.8, 0.8, 0.8};
-  params.rho_d = {0.01, 0.012, 0.008};
-  std::vector<model::Rgb> truth;
-  std::vector<double> scale;
-  for (int q = 0; q < static_cast<int>(g.dots.size()); ++q) {
-    const model::Vec3 to_dot = g.dots[q] - g.TexelCentre(0);
-    truth.push_back(model::EvaluateMaterial(ndf, params, g.Light(0, q), g.View(0)));
-    scale.push_back(to_dot.squaredNorm() / std::abs(to_dot.normalized().z()));
-  }
+  const model::DualMicrofacetParams params = TexelParams({0.01, 0.012, 0.008});
+  const auto [truth, scale] = TrueSamplesOf(g, ndf, params);
   // Noise-free, the floor is the diffuse term (the lobe's tails add a little).
   const std::vector<std::array<int, 2>> neighbour = OppositeNeighbours(g.dots);
   const DiffuseEstimate exact = EstimateDiffuse(truth, scale, neighbour);
@@ -214,19 +231,7 @@ TEST(EstimateDiffuse, EqualsThePlainIterationToTheLastBitAlsoWhenItCycles) {
   for (double roughness : {0.05, 0.15, 0.4}) {
     for (double floor : {0.0, 0.002, 0.02}) {
       const model::GgxNdf ndf(roughness, roughness);
-      model::DualMicrofacetParams params;
-      params.eta = 1.5;
-      params.alpha = 0.5;
-      params.shadowing = model::SmithShadowing::Ggx(0.2);
-      params.k_s = {0.8, 0.8, 0.8};
-      params.rho_d = {floor, floor, floor};
-      std::vector<model::Rgb> truth;
-      std::vector<double> scale;
-      for (int q = 0; q < static_cast<int>(g.dots.size()); ++q) {
-        const model::Vec3 to_dot = g.dots[q] - g.TexelCentre(0);
-        truth.push_back(model::EvaluateMaterial(ndf, params, g.Light(0, q), g.View(0)));
-        scale.push_back(to_dot.squaredNorm() / std::abs(to_dot.normalized().z()));
-      }
+      const auto [truth, scale] = TrueSamplesOf(g, ndf, TexelParams({floor, floor, floor}));
       for (int trial = 0; trial < 20; ++trial) {
         const std::vector<model::Rgb> measured = camera.Measure(truth, scale);
         const DiffuseEstimate fast = EstimateDiffuse(measured, scale, neighbour);
