@@ -17,6 +17,48 @@ Vec3 ScaledSlabDirection(double tx, double ty, double eta) {
   return {tx, ty, std::sqrt(std::max(0.0, eta * eta - tx * tx - ty * ty))};
 }
 
+// The geometry of each configuration, shared by its evaluation and by HalfVectors.
+struct EntryGeometry {
+  Vec3 om;  // eta times the in-slab direction toward the flat exit
+  Vec3 h;
+  double length2 = 0, cos_ih = 0, cos_omh = 0;
+};
+
+std::optional<EntryGeometry> RoughEntryGeometry(const Vec3& i, const Vec3& o, double eta) {
+  if (i.z() >= 0 || o.z() <= 0) return std::nullopt;
+  EntryGeometry g;
+  g.om = ScaledSlabDirection(o.x(), o.y(), eta);
+  const Vec3 sum = i + g.om;
+  g.length2 = sum.squaredNorm();
+  if (sum.z() <= 0 || g.length2 <= 0) return std::nullopt;
+  g.h = sum / std::sqrt(g.length2);
+  g.cos_ih = i.dot(g.h);
+  g.cos_omh = g.om.dot(g.h);
+  // Refraction through a facet needs the light below it and the refracted ray above it.
+  if (g.cos_ih >= 0 || g.cos_omh <= 0) return std::nullopt;
+  return g;
+}
+
+struct ExitGeometry {
+  Vec3 im;  // eta times the in-slab direction from the flat entry
+  Vec3 h;
+  double length2 = 0, cos_imh = 0, cos_oh = 0;
+};
+
+std::optional<ExitGeometry> RoughExitGeometry(const Vec3& i, const Vec3& o, double eta) {
+  if (i.z() >= 0 || o.z() <= 0) return std::nullopt;
+  ExitGeometry g;
+  g.im = ScaledSlabDirection(-i.x(), -i.y(), eta);
+  const Vec3 difference = g.im - o;
+  g.length2 = difference.squaredNorm();
+  if (difference.z() <= 0 || g.length2 <= 0) return std::nullopt;
+  g.h = difference / std::sqrt(g.length2);
+  g.cos_imh = g.im.dot(g.h);
+  g.cos_oh = o.dot(g.h);
+  if (g.cos_imh <= 0 || g.cos_oh <= 0) return std::nullopt;
+  return g;
+}
+
 }  // namespace
 
 DualMicrofacetModel::DualMicrofacetModel(double eta, SmithShadowing shadowing)
@@ -29,46 +71,38 @@ DualMicrofacetModel::DualMicrofacetModel(double eta, SmithShadowing shadowing)
 
 VirtualConfiguration DualMicrofacetModel::RoughEntry(const Vec3& i, const Vec3& o, const Vec3* field) const {
   VirtualConfiguration config;
-  if (i.z() >= 0 || o.z() <= 0) return config;
-  const Vec3 om = ScaledSlabDirection(o.x(), o.y(), eta_);
-  const Vec3 sum = i + om;
-  const double length2 = sum.squaredNorm();
-  if (sum.z() <= 0 || length2 <= 0) return config;
-  const Vec3 h = sum / std::sqrt(length2);
-  const double cos_ih = i.dot(h);
-  const double cos_omh = om.dot(h);
-  // Refraction through a facet needs the light below it and the refracted ray above it.
-  if (cos_ih >= 0 || cos_omh <= 0) return config;
+  const std::optional<EntryGeometry> g = RoughEntryGeometry(i, o, eta_);
+  if (!g) return config;
   // Through the facet h into the slab, then out through the flat exit (normal z).
-  const double transmit = field ? TwoInterfaceTransmittance(-i, *field, h, eta_, Vec3::UnitZ(), 1.0 / eta_)
-                                : (1.0 - FresnelDielectric(-cos_ih, eta_)) * (1.0 - FresnelDielectric(o.z(), eta_));
-  const double g = shadowing_.G(i, om / eta_, h);
+  const double transmit = field ? TwoInterfaceTransmittance(-i, *field, g->h, eta_, Vec3::UnitZ(), 1.0 / eta_)
+                                : (1.0 - FresnelDielectric(-g->cos_ih, eta_)) * (1.0 - FresnelDielectric(o.z(), eta_));
+  const double shadowing = shadowing_.G(i, g->om / eta_, g->h);
   config.valid = true;
-  config.h = h;
-  config.factor = transmit * g * std::abs(cos_ih) * cos_omh /
-                  (std::abs(i.z()) * om.z() * length2);
+  config.h = g->h;
+  config.factor = transmit * shadowing * std::abs(g->cos_ih) * g->cos_omh /
+                  (std::abs(i.z()) * g->om.z() * g->length2);
   return config;
 }
 
 VirtualConfiguration DualMicrofacetModel::RoughExit(const Vec3& i, const Vec3& o, const Vec3* field) const {
   VirtualConfiguration config;
-  if (i.z() >= 0 || o.z() <= 0) return config;
-  const Vec3 im = ScaledSlabDirection(-i.x(), -i.y(), eta_);
-  const Vec3 difference = im - o;
-  const double length2 = difference.squaredNorm();
-  if (difference.z() <= 0 || length2 <= 0) return config;
-  const Vec3 h = difference / std::sqrt(length2);
-  const double cos_imh = im.dot(h);
-  const double cos_oh = o.dot(h);
-  if (cos_imh <= 0 || cos_oh <= 0) return config;
+  const std::optional<ExitGeometry> g = RoughExitGeometry(i, o, eta_);
+  if (!g) return config;
   // Into the slab through the flat entry (normal z), then out through the facet h.
-  const double transmit = field ? TwoInterfaceTransmittance(-i, *field, Vec3::UnitZ(), eta_, h, 1.0 / eta_)
-                                : (1.0 - FresnelDielectric(-i.z(), eta_)) * (1.0 - FresnelDielectric(cos_oh, eta_));
-  const double g = shadowing_.G(-im / eta_, o, h);
+  const double transmit = field ? TwoInterfaceTransmittance(-i, *field, Vec3::UnitZ(), eta_, g->h, 1.0 / eta_)
+                                : (1.0 - FresnelDielectric(-i.z(), eta_)) * (1.0 - FresnelDielectric(g->cos_oh, eta_));
+  const double shadowing = shadowing_.G(-g->im / eta_, o, g->h);
   config.valid = true;
-  config.h = h;
-  config.factor = transmit * g * cos_imh * cos_oh / (im.z() * o.z() * length2);
+  config.h = g->h;
+  config.factor = transmit * shadowing * g->cos_imh * g->cos_oh / (g->im.z() * o.z() * g->length2);
   return config;
+}
+
+std::array<std::optional<Vec3>, 2> DualMicrofacetModel::HalfVectors(const Vec3& i, const Vec3& o) const {
+  std::array<std::optional<Vec3>, 2> h;
+  if (const auto entry = RoughEntryGeometry(i, o, eta_)) h[0] = entry->h;
+  if (const auto exit = RoughExitGeometry(i, o, eta_)) h[1] = exit->h;
+  return h;
 }
 
 double DualMicrofacetModel::RhoT(const Ndf& ndf, const Vec3& i, const Vec3& o, const Vec3* field) const {

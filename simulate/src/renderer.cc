@@ -83,7 +83,7 @@ Point InterpolateInPixel(const std::array<Point, 4>& corners, int sx, int sy, in
 }  // namespace
 
 
-const DiskRule& DotRule(double ratio) {
+const DiskRule& DotRule(double ratio, double lobe_fraction) {
   // The centre alone.
   static const DiskRule point{{model::Vec2::Zero()}, {1.0}};
   // Stroud's S2:3-1: four points at radius sqrt(1/2) on the axes, weight 1/4 each. The mean of
@@ -121,9 +121,12 @@ const DiskRule& DotRule(double ratio) {
     }
     return rule;
   }();
-  if (ratio < kPointDotRatio) return point;
-  if (ratio < kFourPointDotRatio) return four;
-  return ratio < kRadonDotRatio ? radon : fine;
+  // The ratio at which a rule errs at the peak, relative to the peak, as much as it errs here
+  // relative to the value here (renderer.h).
+  const double as_at_peak = ratio * std::min(1.0, 2.0 * std::sqrt(std::sqrt(std::clamp(lobe_fraction, 0.0, 1.0))));
+  if (as_at_peak < kPointDotRatio) return point;
+  if (as_at_peak < kFourPointDotRatio) return four;
+  return as_at_peak < kRadonDotRatio ? radon : fine;
 }
 
 RigRenderer::RigRenderer(const Rig& rig, const SpatialBtdf* material, int threads)
@@ -233,8 +236,13 @@ model::Vec3 RigRenderer::DotRadianceAt(const Dot& dot, const Group& group) const
   const MonitorFrame& frame = rig_.monitor_frame();
   const Polarisation& polarisation = rig_.config().monitor.polarisation;
   const model::Vec3 field = polarisation.linear() ? polarisation.FieldDirection(frame) : model::Vec3::Zero();
-  const double angular_radius = dot.radius / (dot.position - x).norm();
-  const DiskRule& rule = DotRule(angular_radius / material_->MinRoughness(group.texel));
+  const model::Vec3 to_centre = dot.position - x;
+  const double distance = to_centre.norm();
+  const double ratio = dot.radius / distance / material_->MinRoughness(group.texel);
+  // Most dots light a sharp lobe's tail, where fewer points are as accurate as more are at its
+  // peak: the fraction is asked for only where it could change the rule.
+  const double fraction = ratio < kPointDotRatio ? 1.0 : material_->LobeFraction(group.texel, to_centre / distance, o);
+  const DiskRule& rule = DotRule(ratio, fraction);
   model::Vec3 sum = model::Vec3::Zero();
   for (size_t k = 0; k < rule.nodes.size(); ++k) {
     const model::Vec3 p = dot.position + dot.radius * (rule.nodes[k].x() * frame.right + rule.nodes[k].y() * frame.down);

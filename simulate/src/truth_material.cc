@@ -204,6 +204,17 @@ model::Rgb TruthMaterial::EvaluatePolarised(int index, const model::Vec3& i, con
   return {t.k_s[0] * rho + t.rho_d[0], t.k_s[1] * rho + t.rho_d[1], t.k_s[2] * rho + t.rho_d[2]};
 }
 
+double TruthMaterial::LobeFraction(int index, const model::Vec3& i, const model::Vec3& o) const {
+  if (ndf_name_ != "ggx") return 1.0;
+  const model::Ndf& ndf = *ndfs_[index];
+  const double peak = ndf.D(model::Vec3::UnitZ());
+  double fraction = 0.0;
+  for (const std::optional<model::Vec3>& h : models_[index].HalfVectors(i, o)) {
+    if (h) fraction = std::max(fraction, ndf.D(*h) / peak);
+  }
+  return std::min(fraction, 1.0);
+}
+
 double TruthMaterial::MinRoughness(int index) const {
   const model::AnalyticNdfParams& p = texels_[index].ndf;
   return std::min(p.alpha_x, p.alpha_y);

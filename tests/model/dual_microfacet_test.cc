@@ -2,9 +2,11 @@
 // properties every implementation must have (shared/docs/dual-microfacet-notes.md, "Checks").
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <random>
 
 #include "svbtdf/common/error.h"
@@ -322,6 +324,35 @@ TEST(DualMicrofacet, RoughEntryIsWalterThroughAFlatExit) {
     const double walter_B = (1 - FresnelDielectric(-i.z(), eta)) * WalterBtdf(*ndf, -t_i, o, eta, 1.0);
     EXPECT_NEAR(model.RhoT(*ndf, i, o), walter_T, 1e-12 * std::max(1.0, walter_T));
     EXPECT_NEAR(model.RhoB(*ndf, i, o), walter_B, 1e-12 * std::max(1.0, walter_B));
+  }
+}
+
+// HalfVectors (the renderer's cheap look at where a pair of directions falls in D) gives each
+// configuration's h and validity exactly as RoughEntry and RoughExit do, over the whole sphere of
+// light directions (so that invalid pairs, lit from above, are among them).
+TEST(DualMicrofacet, HalfVectorsAreTheConfigurationsOwn) {
+  const DualMicrofacetModel model(1.45, SmithShadowing::Ggx(0.3));
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> uniform(0, 1);
+  int valid[2] = {0, 0}, invalid[2] = {0, 0};
+  for (int trial = 0; trial < 2000; ++trial) {
+    const Vec3 i = SphericalDirection(kPi * uniform(rng), kTwoPi * uniform(rng));
+    const Vec3 o = SphericalDirection(1.5 * uniform(rng), kTwoPi * uniform(rng));
+    const std::array<std::optional<Vec3>, 2> h = model.HalfVectors(i, o);
+    const VirtualConfiguration configurations[2] = {model.RoughEntry(i, o), model.RoughExit(i, o)};
+    for (int c = 0; c < 2; ++c) {
+      ASSERT_EQ(h[c].has_value(), configurations[c].valid) << c;
+      if (!h[c]) {
+        ++invalid[c];
+        continue;
+      }
+      ++valid[c];
+      EXPECT_EQ(*h[c], configurations[c].h) << c;
+    }
+  }
+  for (int c = 0; c < 2; ++c) {
+    EXPECT_GT(valid[c], 300) << c;  // 461 and 492 of 2,000
+    EXPECT_GT(invalid[c], 300) << c;
   }
 }
 

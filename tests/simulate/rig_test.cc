@@ -247,22 +247,9 @@ RigConfig InversionRig() {
 // The analytic truth the rig tests render: smooth 32 x 32 texels, eta 1.5, seed 7.
 TruthMaterial SmoothTruth() { return TruthMaterial::FromPattern("smooth", 32, 32, 1.5, 7); }
 
-// The dot rules (DotRule) against a fine reference over the disk (16 Gauss-Legendre rings in r^2
-// x 48 angles), with the renderer's integrand: R |i.z| / |p - x|^2 of grid-sheet texels (GGX,
-// anisotropic, roughness 0.05-0.40) and smooth ones, the dot on the lobe's peak and 0.5, 1 and 2
-// roughnesses off it, in the tiny rig's monitor plane. The error is relative to the lobe's peak
-// (the largest reference value of the four positions).
-TEST(RigRenderer, DotRulesAreAccurateWhereTheyAreUsed) {
-  const Rig rig(NoiseFreeTiny());
-  const MonitorFrame& frame = rig.monitor_frame();
-  const DiskRule& point = DotRule(0.0);
-  const DiskRule& four = DotRule(0.5 * (kPointDotRatio + kFourPointDotRatio));
-  const DiskRule& radon = DotRule(0.5 * (kFourPointDotRatio + kRadonDotRatio));
-  const DiskRule& fine = DotRule(1.0);
-  ASSERT_EQ(point.nodes.size(), 1u);
-  ASSERT_EQ(four.nodes.size(), 4u);
-  ASSERT_EQ(radon.nodes.size(), 7u);
-  ASSERT_EQ(fine.nodes.size(), 24u);
+// A fine reference rule on the unit disk: 16 Gauss-Legendre rings in r^2 (uniform in area) x 48
+// angles, 768 points.
+DiskRule ReferenceDiskRule() {
   // Gauss-Legendre nodes on [0, 1] (Golub-Welsch would do; 16 by bisection of P_16 suffices here).
   std::vector<double> gauss_t, gauss_w;
   {
@@ -287,6 +274,49 @@ TEST(RigRenderer, DotRulesAreAccurateWhereTheyAreUsed) {
       }
     }
   }
+  DiskRule rule;
+  for (size_t a = 0; a < gauss_t.size(); ++a) {
+    const double r = std::sqrt(gauss_t[a]);  // uniform in r^2: uniform in area
+    for (int b = 0; b < 48; ++b) {
+      const double phi = 2.0 * model::kPi * (b + 0.5) / 48;
+      rule.nodes.push_back(r * model::Vec2(std::cos(phi), std::sin(phi)));
+      rule.weights.push_back(gauss_w[a] / 48);
+    }
+  }
+  return rule;
+}
+
+// The renderer's integrand for a dot of radius `radius` centred at `centre` seen from sample point
+// x: R |i.z| / |p - x|^2 of truth texel t (green), averaged over the disk by `rule`.
+double DiskMean(const DiskRule& rule, const TruthMaterial& truth, int t, const MonitorFrame& frame,
+                const model::Vec3& centre, double radius, const model::Vec3& x, const model::Vec3& o) {
+  double sum = 0.0;
+  for (size_t k = 0; k < rule.nodes.size(); ++k) {
+    const model::Vec3 p = centre + radius * (rule.nodes[k].x() * frame.right + rule.nodes[k].y() * frame.down);
+    const double r2 = (p - x).squaredNorm();
+    const model::Vec3 i = (p - x) / std::sqrt(r2);
+    sum += rule.weights[k] * truth.Evaluate(t, i, o)[1] * std::abs(i.z()) / r2;
+  }
+  return sum;
+}
+
+// The dot rules (DotRule) against a fine reference over the disk (16 Gauss-Legendre rings in r^2
+// x 48 angles), with the renderer's integrand: R |i.z| / |p - x|^2 of grid-sheet texels (GGX,
+// anisotropic, roughness 0.05-0.40) and smooth ones, the dot on the lobe's peak and 0.5, 1 and 2
+// roughnesses off it, in the tiny rig's monitor plane. The error is relative to the lobe's peak
+// (the largest reference value of the four positions).
+TEST(RigRenderer, DotRulesAreAccurateWhereTheyAreUsed) {
+  const Rig rig(NoiseFreeTiny());
+  const MonitorFrame& frame = rig.monitor_frame();
+  const DiskRule& point = DotRule(0.0);
+  const DiskRule& four = DotRule(0.5 * (kPointDotRatio + kFourPointDotRatio));
+  const DiskRule& radon = DotRule(0.5 * (kFourPointDotRatio + kRadonDotRatio));
+  const DiskRule& fine = DotRule(1.0);
+  ASSERT_EQ(point.nodes.size(), 1u);
+  ASSERT_EQ(four.nodes.size(), 4u);
+  ASSERT_EQ(radon.nodes.size(), 7u);
+  ASSERT_EQ(fine.nodes.size(), 24u);
+  const DiskRule reference_rule = ReferenceDiskRule();
   const model::Vec3 x = model::Vec3::Zero();
   const model::Vec3 o = model::Vec3(0.3, -0.2, 1.0).normalized();
   const double distance = 0.3;
@@ -302,25 +332,8 @@ TEST(RigRenderer, DotRulesAreAccurateWhereTheyAreUsed) {
         double peak = 0.0;
         for (const double offset : {0.0, 0.5, 1.0, 2.0}) {
           const model::Vec3 centre = x + distance * (-o + offset * sigma * frame.right).normalized();
-          const auto f = [&](const model::Vec2& u) {
-            const model::Vec3 p = centre + radius * (u.x() * frame.right + u.y() * frame.down);
-            const double r2 = (p - x).squaredNorm();
-            const model::Vec3 i = (p - x) / std::sqrt(r2);
-            return truth.Evaluate(t, i, o)[1] * std::abs(i.z()) / r2;
-          };
-          const auto apply = [&](const DiskRule& rule) {
-            double sum = 0.0;
-            for (size_t k = 0; k < rule.nodes.size(); ++k) sum += rule.weights[k] * f(rule.nodes[k]);
-            return sum;
-          };
-          double reference = 0.0;
-          for (size_t a = 0; a < gauss_t.size(); ++a) {
-            const double r = std::sqrt(gauss_t[a]);  // uniform in r^2: uniform in area
-            for (int b = 0; b < 48; ++b) {
-              const double phi = 2.0 * model::kPi * (b + 0.5) / 48;
-              reference += gauss_w[a] / 48 * f(r * model::Vec2(std::cos(phi), std::sin(phi)));
-            }
-          }
+          const auto apply = [&](const DiskRule& rule) { return DiskMean(rule, truth, t, frame, centre, radius, x, o); };
+          const double reference = DiskMean(reference_rule, truth, t, frame, centre, radius, x, o);
           values.push_back({reference, apply(point), apply(four), apply(radon), apply(fine)});
           peak = std::max(peak, reference);
         }
@@ -343,6 +356,60 @@ TEST(RigRenderer, DotRulesAreAccurateWhereTheyAreUsed) {
     EXPECT_LT(error, 1e-3) << rule;
   }
   EXPECT_EQ(worst.size(), 4u);
+}
+
+// In a lobe's tail the renderer takes the rule by the ratio and by how far into the tail the dot
+// lies (DotRule's lobe fraction): grid-sheet and smooth texels, the dot 0 to 24 roughnesses off the
+// lobe's peak (at most 0.9 rad) along the monitor's two axes and a diagonal, at ratios 0.05 to 0.5.
+// Relative to the value there (the reference), the chosen rule errs by less than 1e-3 or no more
+// than the ratio's own rule does; and away from the peak it takes fewer points than that rule.
+TEST(RigRenderer, DotRulesStayAccurateInTheLobesTail) {
+  const Rig rig(NoiseFreeTiny());
+  const MonitorFrame& frame = rig.monitor_frame();
+  const DiskRule reference_rule = ReferenceDiskRule();
+  const model::Vec3 x = model::Vec3::Zero();
+  const model::Vec3 o = model::Vec3(0.3, -0.2, 1.0).normalized();
+  const double distance = 0.3;
+  const model::Vec3 directions[3] = {frame.right, frame.down, (frame.right + frame.down).normalized()};
+  double worst_excess = 0.0;  // the chosen rule's relative error beyond max(1e-3, the ratio rule's)
+  double worst_relative = 0.0;
+  int far = 0, far_cheaper = 0;
+  size_t points = 0, points_by_ratio = 0;
+  for (const std::string pattern : {"grid-sheet", "smooth"}) {
+    const TruthMaterial truth = TruthMaterial::FromPattern(pattern, 16, 16, 1.45, 3);
+    for (int t = 0; t < truth.texels_x() * truth.texels_y(); t += 37) {
+      const double sigma = truth.MinRoughness(t);
+      for (const double ratio : {0.05, 0.13, 0.25, 0.35, 0.5}) {
+        const double radius = ratio * sigma * distance;
+        const DiskRule& by_ratio = DotRule(ratio);
+        for (const model::Vec3& direction : directions) {
+          for (const double offset : {0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0, 24.0}) {
+            if (offset * sigma > 0.9) break;
+            const model::Vec3 centre = x + distance * (-o + offset * sigma * direction).normalized();
+            const double reference = DiskMean(reference_rule, truth, t, frame, centre, radius, x, o);
+            ASSERT_GT(reference, 0.0);
+            const DiskRule& chosen = DotRule(ratio, truth.LobeFraction(t, (centre - x).normalized(), o));
+            const double relative = std::abs(DiskMean(chosen, truth, t, frame, centre, radius, x, o) - reference) / reference;
+            const double ratio_rule = std::abs(DiskMean(by_ratio, truth, t, frame, centre, radius, x, o) - reference) / reference;
+            worst_excess = std::max(worst_excess, relative - std::max(1e-3, ratio_rule));
+            if (&chosen != &by_ratio) worst_relative = std::max(worst_relative, relative);
+            points += chosen.nodes.size();
+            points_by_ratio += by_ratio.nodes.size();
+            if (offset >= 4.0 && by_ratio.nodes.size() > 1) {
+              ++far;
+              if (chosen.nodes.size() < by_ratio.nodes.size()) ++far_cheaper;
+            }
+          }
+        }
+      }
+    }
+  }
+  std::printf("where the tail changed the rule, worst error %.2e of the value there; %zu points against %zu by the "
+              "ratio alone; %d of %d far dots cheaper\n",
+              worst_relative, points, points_by_ratio, far_cheaper, far);
+  EXPECT_LE(worst_excess, 0.0);
+  EXPECT_GT(far, 100);
+  EXPECT_GT(far_cheaper, far / 2);
 }
 
 TEST(RigRenderer, DotImageInvertsToTruth) {

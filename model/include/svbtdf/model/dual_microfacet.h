@@ -12,6 +12,7 @@
 // configuration as (h, factor) with rho = factor * D(h).
 
 #include <array>
+#include <optional>
 
 #include "svbtdf/model/ndf.h"
 #include "svbtdf/model/shadowing.h"
@@ -48,6 +49,11 @@ class DualMicrofacetModel {
   // Flat entry, rough exit: im = (-i.x, -i.y, sqrt(eta^2 - |i_xy|^2)), h_B = normalize(im - o),
   //   rho_B = (1-F(|i.z|)) (1-F(|o.h|)) G(-im/eta, o, h) D(h) |im.h| |o.h| / (im.z o.z |im - o|^2)
   VirtualConfiguration RoughExit(const Vec3& i, const Vec3& o, const Vec3* field = nullptr) const;
+
+  // The two configurations' half vectors alone, {h_T, h_B}, without their Fresnel, shadowing and
+  // Jacobian terms: where in D a pair of directions falls, at a fraction of RoughEntry's and
+  // RoughExit's cost. A configuration that is not valid for (i, o) gives nullopt.
+  std::array<std::optional<Vec3>, 2> HalfVectors(const Vec3& i, const Vec3& o) const;
 
   double RhoT(const Ndf& ndf, const Vec3& i, const Vec3& o, const Vec3* field = nullptr) const;
   double RhoB(const Ndf& ndf, const Vec3& i, const Vec3& o, const Vec3* field = nullptr) const;

@@ -10,7 +10,8 @@
 // monitor's angular profile). Quadrature: per pixel, n x n stratified sub-samples are grouped by
 // the texel they hit and each group is evaluated once at the centroid of its sub-samples with
 // weight (group size)/n^2; the dot's disk is integrated with the cheapest rule that is accurate
-// for the ratio of its angular radius to the texel's smallest NDF roughness (DotRule).
+// for the ratio of its angular radius to the texel's smallest NDF roughness, and for how far into
+// the lobe's tail the dot lies (DotRule).
 
 #include <cstdint>
 #include <functional>
@@ -46,10 +47,17 @@ struct DiskRule {
 // rule below kFourPointDotRatio, Radon's 7-point degree-5 rule below kRadonDotRatio, else a
 // 24-point product rule of degree 7. The bounds keep the error below 1e-3 of the lobe's peak
 // (measured: tests/simulate, RigRenderer.DotRulesAreAccurateWhereTheyAreUsed).
+//
+// `lobe_fraction` (SpatialBtdf::LobeFraction at the dot's centre): in a GGX lobe's tail, where it
+// is a fraction F of its peak, each rule's error relative to the value there is about its error at
+// the peak, relative to the peak, for a dot F^(1/4) times as large (in the lobe's stretched slope
+// space u, D ~ (1 + u^2)^-2 = F and its (d + 1)-th derivatives, which a rule of degree d misses,
+// fall as (1 + u^2)^-(5 + d) / 2). So the rule is chosen there by min(1, 2 F^(1/4)) times the
+// ratio, the 2 a margin for the derivatives' constants (RigRenderer.DotRulesStayAccurateInTheLobesTail).
 inline constexpr double kPointDotRatio = 0.015;
 inline constexpr double kFourPointDotRatio = 0.12;
 inline constexpr double kRadonDotRatio = 0.22;
-const DiskRule& DotRule(double ratio);
+const DiskRule& DotRule(double ratio, double lobe_fraction = 1.0);
 
 class RigRenderer {
  public:

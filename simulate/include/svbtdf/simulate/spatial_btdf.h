@@ -31,6 +31,11 @@ class SpatialBtdf {
   // How sharp the texel's lobe can be, as a microfacet roughness: the renderer chooses its rule
   // over a dot's disk by the ratio of the dot's angular radius to this (DotRule).
   virtual double MinRoughness(int index) const = 0;
+
+  // How far into its lobe's tail light from direction i falls, seen along o: the lobe's value
+  // there as a fraction of its peak, for a lobe whose derivatives fall with that fraction as a GGX
+  // lobe's do (DotRule); 1 where the truth cannot say, which leaves the rule to the ratio alone.
+  virtual double LobeFraction(int index, const model::Vec3& i, const model::Vec3& o) const { return 1.0; }
 };
 
 }  // namespace svbtdf::simulate

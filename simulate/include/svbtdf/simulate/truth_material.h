@@ -62,6 +62,11 @@ class TruthMaterial final : public SpatialBtdf {
   // The smallest NDF roughness of a texel: how sharp its lobe can be (for quadrature choices).
   double MinRoughness(int index) const override;
 
+  // A GGX texel's larger D(h) / D(z) of its two configurations' half vectors (z is the GGX's peak;
+  // 0 where neither is valid, as rho is then 0 whatever i). 1 for every other NDF: Beckmann's
+  // tail is not GGX's, and an ellipsoid's peak may be skewed off z.
+  double LobeFraction(int index, const model::Vec3& i, const model::Vec3& o) const override;
+
  private:
   int texels_x_;
   int texels_y_;
