@@ -6,6 +6,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
+#include <future>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -91,6 +93,44 @@ common::CameraImage ToImage(const Frame& frame, const std::string& camera_id) {
   return image;
 }
 
+// Stores each captured image (PNG encoding, fsync, journal: Session::AddImage) on a thread of its
+// own while the loop takes the next one, so that the camera's exposure and transfer (or the
+// simulator's rendering, which keeps both cores busy) overlap the writing instead of waiting for
+// it. One image at a time and in order: the journal is the one a serial loop writes. The loop
+// touches the session only after Finish, so the session is never used by two threads at once.
+class BackgroundWriter {
+ public:
+  BackgroundWriter() = default;
+  BackgroundWriter(const BackgroundWriter&) = delete;
+  BackgroundWriter& operator=(const BackgroundWriter&) = delete;
+  // A loop stopped by an error still journals the image it had handed over: nothing captured is
+  // dropped. That write's own error, if any, can only be logged (another error is on its way).
+  ~BackgroundWriter() {
+    if (!pending_.valid()) return;
+    try {
+      pending_.get();
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+    }
+  }
+
+  // Waits for the previous image (rethrowing its error) and starts writing the next.
+  void Start(std::function<void()> write) {
+    Finish();
+    pending_ = std::async(std::launch::async, std::move(write));
+  }
+
+  // Waits until the image handed over last is journalled; rethrows its error. True when one was.
+  bool Finish() {
+    if (!pending_.valid()) return false;
+    pending_.get();
+    return true;
+  }
+
+ private:
+  std::future<void> pending_;
+};
+
 // One run over the missing captures. Keeps what the hardware currently shows and uses, so that a
 // pattern is shown (and settled) once for all its brackets and repeats.
 class CaptureRun {
@@ -106,24 +146,37 @@ class CaptureRun {
       progress = std::make_unique<common::ProgressBar>(options_.progress_label, static_cast<int64_t>(captures.size()), "images");
       progress->SkipAlreadyDone(result_.already);
     }
+    // Chosen before the first write: the writer thread changes what Contains sees.
+    std::vector<const PlannedCapture*> missing;
     for (const PlannedCapture& capture : captures) {
-      if (session_.Contains(capture.key)) continue;
+      if (!session_.Contains(capture.key)) missing.push_back(&capture);
+    }
+    const auto journalled = [&] {
+      if (!writer_.Finish()) return;
+      ++result_.captured;
+      if (progress) progress->Advance(1);
+    };
+    for (const PlannedCapture* capture : missing) {
       StopIfInterrupted();
-      if (!SceneReady(capture)) {
+      if (!SceneReady(*capture)) {
         ++result_.skipped;
         continue;
       }
-      const Frame frame = CaptureWithRetries(capture);
-      CheckFrame(capture, frame);
-      session_.AddImage(capture.key, ToImage(frame, camera_id_), frame.exposure_s, frame.gain, presented_s_);
-      ++result_.captured;
-      if (progress) progress->Advance(1);
+      const Frame frame = CaptureWithRetries(*capture);  // while the previous image is written
+      journalled();
+      CheckFrame(*capture, frame);
+      writer_.Start([this, key = capture->key, image = ToImage(frame, camera_id_), exposure_s = frame.exposure_s,
+                     gain = frame.gain, presented_s = presented_s_] {
+        session_.AddImage(key, image, exposure_s, gain, presented_s);
+      });
     }
+    journalled();
   }
 
  private:
-  void StopIfInterrupted() const {
+  void StopIfInterrupted() {
     if (!common::InterruptRequested()) return;
+    writer_.Finish();  // the image captured last is kept
     throw common::Error(common::ErrorKind::kInterrupted, session_.folder().string(),
                 "acquisition interrupted with " + std::to_string(session_.entries().size()) + " of " +
                     std::to_string(session_.planned_keys().size()) + " images captured",
@@ -182,6 +235,7 @@ class CaptureRun {
       } catch (const common::Error& e) {
         if (e.kind() != common::ErrorKind::kHardware) throw;
         if (attempt >= options_.retries) {
+          writer_.Finish();  // the images captured so far are kept, and counted below
           throw common::Error(common::ErrorKind::kHardware, camera_id_,
                       "failed " + std::to_string(attempt + 1) + " times in a row at " + capture.key + " (" + e.what() +
                           "); stopped with " + std::to_string(session_.entries().size()) + " of " +
@@ -249,6 +303,7 @@ class CaptureRun {
   std::array<std::optional<std::array<int, 3>>, 2> size_;  // window frames, whole-sensor frames
   std::set<double> warned_exposures_;
   bool scene_ready_ = false;
+  BackgroundWriter writer_;  // last: destroyed (and so waited for) before anything it uses
 };
 
 }  // namespace

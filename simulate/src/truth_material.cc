@@ -171,6 +171,8 @@ TruthMaterial::TruthMaterial(int texels_x, int texels_y, double eta, std::string
     models_.emplace_back(eta_, t.shadowing_roughness > 0.0
                                    ? model::SmithShadowing::Ggx(t.shadowing_roughness)
                                    : model::SmithShadowing::None());
+    // Asked for every dot that could change its rule: computed once here.
+    if (ndf_name_ == "ggx") lobe_peaks_.push_back(ndfs_.back()->D(model::Vec3::UnitZ()));
   }
 }
 
@@ -205,9 +207,9 @@ model::Rgb TruthMaterial::EvaluatePolarised(int index, const model::Vec3& i, con
 }
 
 double TruthMaterial::LobeFraction(int index, const model::Vec3& i, const model::Vec3& o) const {
-  if (ndf_name_ != "ggx") return 1.0;
+  if (lobe_peaks_.empty()) return 1.0;  // not GGX
   const model::Ndf& ndf = *ndfs_[index];
-  const double peak = ndf.D(model::Vec3::UnitZ());
+  const double peak = lobe_peaks_[index];
   double fraction = 0.0;
   for (const std::optional<model::Vec3>& h : models_[index].HalfVectors(i, o)) {
     if (h) fraction = std::max(fraction, ndf.D(*h) / peak);

@@ -154,6 +154,40 @@ TEST_F(AcquireOnSimulatedRig, APulledCableStopsCleanlyAndTheSessionResumes) {
   EXPECT_TRUE(session::Session::Open(out).Verify().complete());
 }
 
+// Images are written on a thread of their own while the next is captured (BackgroundWriter): a
+// write that fails must still stop the run with its own error, naming the file, with every image
+// before it journalled and nothing after it.
+TEST_F(AcquireOnSimulatedRig, AFailedWriteStopsTheRunWithItsErrorAndTheSessionResumes) {
+  const fs::path out = root_ / "unwritable";
+  const std::vector<PlannedCapture> captures = ExpandPlan(*plan_);
+  constexpr int kBlocked = 20;
+  // A folder where the image's file should go (made once the session exists): its rename fails
+  // as on a broken disk.
+  const fs::path blocked = out / session::Session::FileForKey(captures.at(kBlocked).key);
+  options_.before_capture = [&](const PlannedCapture& capture) {
+    if (capture.key == captures[kBlocked].key) fs::create_directories(blocked / "in-the-way");
+  };
+  try {
+    Run(*camera_, out);
+    FAIL() << "the failed write was not reported";
+  } catch (const common::Error& e) {
+    EXPECT_EQ(e.kind(), common::ErrorKind::kIo) << e.what();
+    EXPECT_NE(std::string(e.what()).find(session::Session::FileForKey(captures.at(kBlocked).key)), std::string::npos)
+        << e.what();
+  }
+  const session::Session stopped = session::Session::Open(out);
+  ASSERT_EQ(stopped.entries().size(), size_t{kBlocked});
+  for (int n = 0; n < kBlocked; ++n) EXPECT_EQ(stopped.entries()[n].key, captures[n].key);
+  EXPECT_TRUE(stopped.Verify().corrupt.empty());
+  fs::remove_all(blocked);
+  options_.before_capture = nullptr;
+  SimCamera fresh(world_, setup_, "sim:test");  // a new process, as after the interrupt below
+  const AcquireResult resumed = Run(fresh, out);
+  EXPECT_EQ(resumed.already, kBlocked);
+  EXPECT_EQ(resumed.captured, Planned() - kBlocked);
+  ExpectEqualToTheSimulator(out);
+}
+
 TEST_F(AcquireOnSimulatedRig, NotEnoughFreeSpaceIsRefusedBeforeAnythingIsWritten) {
   const fs::path out = root_ / "full-disk";
   fs::path asked;

@@ -75,6 +75,7 @@ class TruthMaterial final : public SpatialBtdf {
   std::vector<TruthTexel> texels_;
   std::vector<std::unique_ptr<model::Ndf>> ndfs_;
   std::vector<model::DualMicrofacetModel> models_;  // per texel: eta and its shadowing
+  std::vector<double> lobe_peaks_;  // per texel: D(z) of a GGX truth (LobeFraction); empty otherwise
 };
 
 }  // namespace svbtdf::simulate
