@@ -34,11 +34,9 @@ struct ScaledFit {
 };
 
 ScaledFit BestScale(const std::vector<double>& shape, const std::vector<double>& rho, double sum_rho_squared) {
-  double dot = 0, shape_squared = 0;
-  for (size_t k = 0; k < rho.size(); ++k) {
-    dot += rho[k] * shape[k];
-    shape_squared += shape[k] * shape[k];
-  }
+  const Eigen::Index n = static_cast<Eigen::Index>(rho.size());
+  const Eigen::Map<const Eigen::VectorXd> m(shape.data(), n), r(rho.data(), n);
+  const double dot = r.dot(m), shape_squared = m.squaredNorm();
   ScaledFit fit;
   if (!(shape_squared > 0) || !(sum_rho_squared > 0)) return fit;
   fit.scale = std::max(0.0, dot / shape_squared);
@@ -89,6 +87,12 @@ SampleLookups LookupsOf(const model::DualMicrofacetParams& params, const model::
   return lookups;
 }
 
+// Eigen's array exp and log are vectorised (as libm's are not) as long as the expression holds no
+// select on a boolean array, so the masks below are 0/1 arrays that multiply, and a logarithm's
+// argument is made positive before it is taken: the refinement's exponentials and logarithms
+// were a third of its time.
+Eigen::ArrayXd MaskOf(const Eigen::Array<bool, Eigen::Dynamic, 1>& condition) { return condition.cast<double>(); }
+
 class ScalarRefiner {
  public:
   // The two virtual configurations do not depend on alpha (the model blends them in log space),
@@ -96,47 +100,46 @@ class ScalarRefiner {
   // texel's (LookupsOf), for the dual-microfacet model.
   ScalarRefiner(const TexelBtdf& texel, const TexelSlice& slice, const SampleLookups* lookups)
       : slice_(slice), sum_rho_squared_(SumOfSquares(slice.rho)) {
-    const size_t n = slice_.light.size();
+    const Eigen::Index n = static_cast<Eigen::Index>(slice_.light.size());
     if (texel.model() != MaterialModel::kDualMicrofacet) {  // a parametric lobe: its shape is fixed
       const TexelBtdf shape = texel.UnitShape();
-      for (size_t k = 0; k < n; ++k) fixed_shape_.push_back(shape.Evaluate(slice_.light[k], slice_.view)[0]);
+      for (Eigen::Index k = 0; k < n; ++k) fixed_shape_.push_back(shape.Evaluate(slice_.light[k], slice_.view)[0]);
       return;
     }
     const std::vector<double>& ln_d = texel.ndf().ln_d();
-    rho_t_.resize(n);
-    rho_b_.resize(n);
-    ln_t_.resize(n);
-    ln_b_.resize(n);
     // rho = factor D(h), its logarithm taken before the exponential (0 where rho vanishes).
-    const auto evaluate = [&](const SampleLookups::Lookup& l, double* rho, double* ln) {
-      if (!(l.factor > 0)) {
-        *rho = *ln = 0.0;
-        return;
+    const auto logarithms = [&](const std::vector<SampleLookups::Lookup>& side, Eigen::ArrayXd* ln, Eigen::ArrayXd* rho) {
+      Eigen::ArrayXd factor(n), ln_d_at(n);
+      for (Eigen::Index k = 0; k < n; ++k) {
+        const bool exists = side[k].factor > 0;
+        factor[k] = exists ? side[k].factor : 1.0;
+        ln_d_at[k] = exists ? side[k].LnD(ln_d) : 0.0;
       }
-      *ln = std::log(l.factor) + l.LnD(ln_d);
-      *rho = std::exp(*ln);
-      if (!(*rho > 0)) *ln = 0.0;
+      *ln = factor.log() + ln_d_at;
+      *rho = ln->exp();
+      // Where the configuration does not exist (or its value underflows) rho and ln are 0.
+      for (Eigen::Index k = 0; k < n; ++k) {
+        if (!(side[k].factor > 0) || !((*rho)[k] > 0)) (*rho)[k] = (*ln)[k] = 0.0;
+      }
     };
-    for (size_t k = 0; k < n; ++k) {
-      evaluate(lookups->entry[k], &rho_t_[k], &ln_t_[k]);
-      evaluate(lookups->exit[k], &rho_b_[k], &ln_b_[k]);
-    }
+    logarithms(lookups->entry, &ln_t_, &rho_t_);
+    logarithms(lookups->exit, &ln_b_, &rho_b_);
+    both_ = MaskOf(rho_t_ > 0.0 && rho_b_ > 0.0);
   }
 
   // The shape of the model (its BTDF with k_s = 1) at blend weight `alpha` at every sample:
   // LogBlend with the logarithms taken once.
   const std::vector<double>& Shape(double alpha) {
-    if (rho_t_.empty()) {
+    if (rho_t_.size() == 0) {
       shape_ = fixed_shape_;
       return shape_;
     }
-    shape_.resize(rho_t_.size());
-    for (size_t k = 0; k < rho_t_.size(); ++k) {
-      if (alpha >= 1.0 || alpha <= 0.0) {
-        shape_[k] = alpha >= 1.0 ? rho_t_[k] : rho_b_[k];
-      } else {
-        shape_[k] = rho_t_[k] > 0 && rho_b_[k] > 0 ? std::exp(alpha * ln_t_[k] + (1.0 - alpha) * ln_b_[k]) : 0.0;
-      }
+    shape_.resize(static_cast<size_t>(rho_t_.size()));
+    Eigen::Map<Eigen::ArrayXd> shape(shape_.data(), rho_t_.size());
+    if (alpha >= 1.0 || alpha <= 0.0) {
+      shape = alpha >= 1.0 ? rho_t_ : rho_b_;
+    } else {
+      shape = (alpha * ln_t_ + (1.0 - alpha) * ln_b_).exp() * both_;
     }
     return shape_;
   }
@@ -153,10 +156,11 @@ class ScalarRefiner {
 
   // d shape_k / d alpha at `alpha` for the shape last evaluated there (0 where the blend is flat).
   double ShapeAlphaDerivative(size_t k) const {
-    if (rho_t_.empty() || !(rho_t_[k] > 0 && rho_b_[k] > 0)) return 0.0;
-    return shape_[k] * (ln_t_[k] - ln_b_[k]);
+    const Eigen::Index i = static_cast<Eigen::Index>(k);
+    if (rho_t_.size() == 0 || !(both_[i] > 0)) return 0.0;
+    return shape_[k] * (ln_t_[i] - ln_b_[i]);
   }
-  bool has_alpha() const { return !rho_t_.empty(); }
+  bool has_alpha() const { return rho_t_.size() > 0; }
   const std::vector<double>& last_shape() const { return shape_; }
 
   // Per-channel scales for the shape last evaluated.
@@ -177,9 +181,10 @@ class ScalarRefiner {
  private:
   const TexelSlice& slice_;
   double sum_rho_squared_ = 0.0;
-  std::vector<double> rho_t_, rho_b_;  // dual-microfacet: the two configurations (k_s = 1) ...
-  std::vector<double> ln_t_, ln_b_;    // ... and their logarithms (0 where they vanish)
-  std::vector<double> fixed_shape_;    // walter-ggx: the shape, which has no alpha
+  Eigen::ArrayXd rho_t_, rho_b_;    // dual-microfacet: the two configurations (k_s = 1) ...
+  Eigen::ArrayXd ln_t_, ln_b_;      // ... their logarithms (0 where they vanish) ...
+  Eigen::ArrayXd both_;             // ... and 1 where both exist, 0 where the blend is 0
+  std::vector<double> fixed_shape_;  // walter-ggx: the shape, which has no alpha
   std::vector<double> shape_;
 };
 
@@ -219,17 +224,20 @@ struct RepresentativeTerms {
 
 RepresentativeTerms TermsOf(const Material& material, const std::vector<int>& reps, const SampleLookups& lookups) {
   const Eigen::Index n = static_cast<Eigen::Index>(lookups.entry.size()), m = static_cast<Eigen::Index>(reps.size());
-  RepresentativeTerms terms;
-  terms.t = Eigen::MatrixXd::Zero(n, m);
-  terms.b = Eigen::MatrixXd::Zero(n, m);
-  const auto add = [&](const SampleLookups::Lookup& l, Eigen::Index k, Eigen::MatrixXd* into) {
-    if (!(l.factor > 0)) return;
-    for (Eigen::Index j = 0; j < m; ++j) (*into)(k, j) = l.factor * std::exp(l.LnD(material.representative_ln_d[reps[j]]));
+  // factor_k D_j(h_k): the logarithms of D first, then every exponential at once (vectorised).
+  const auto terms_of = [&](const std::vector<SampleLookups::Lookup>& side) {
+    Eigen::MatrixXd ln_d(n, m);
+    Eigen::VectorXd factor(n);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const SampleLookups::Lookup& l = side[k];
+      factor[k] = l.factor > 0 ? l.factor : 0.0;
+      for (Eigen::Index j = 0; j < m; ++j) ln_d(k, j) = l.factor > 0 ? l.LnD(material.representative_ln_d[reps[j]]) : 0.0;
+    }
+    return Eigen::MatrixXd(factor.asDiagonal() * ln_d.array().exp().matrix());
   };
-  for (Eigen::Index k = 0; k < n; ++k) {
-    add(lookups.entry[k], k, &terms.t);
-    add(lookups.exit[k], k, &terms.b);
-  }
+  RepresentativeTerms terms;
+  terms.t = terms_of(lookups.entry);
+  terms.b = terms_of(lookups.exit);
   return terms;
 }
 
@@ -245,28 +253,34 @@ class BlendProblem {
         inverse_norm_(1.0 / std::sqrt(std::max(rho_.square().sum(), 1e-300))) {}
 
   // The residuals at x, and with `jacobian` their derivatives (a sample per row, a parameter per
-  // column). Where a configuration is empty the blend is flat zero: no gradient to follow.
+  // column). Where a configuration is empty the blend is flat zero: no gradient to follow. Written
+  // without selects so that the logarithms and exponentials are vectorised (MaskOf).
   void Evaluate(const Eigen::VectorXd& x, Eigen::VectorXd* residuals, Eigen::MatrixXd* jacobian) const {
     const Eigen::Index m = terms_.t.cols();
     const double alpha = x[m];
-    const Eigen::ArrayXd st = (terms_.t * x.head(m)).array(), sb = (terms_.b * x.head(m)).array();
-    const Eigen::Array<bool, Eigen::Dynamic, 1> smooth = st > 0 && sb > 0;
-    // LogBlend, with the logarithms kept for the derivative in alpha (1 where not smooth, so
+    st_ = (terms_.t * x.head(m)).array();
+    sb_ = (terms_.b * x.head(m)).array();
+    smooth_ = MaskOf(st_ > 0.0 && sb_ > 0.0);
+    // LogBlend, with the logarithms kept for the derivative in alpha (of 1 where not smooth, so
     // that they stay finite; those samples take the branches below).
-    const Eigen::ArrayXd ln_st = smooth.select(st, 1.0).log(), ln_sb = smooth.select(sb, 1.0).log();
-    Eigen::ArrayXd shape;
+    positive_st_ = smooth_ * st_ + (1.0 - smooth_);
+    positive_sb_ = smooth_ * sb_ + (1.0 - smooth_);
+    ln_st_ = positive_st_.log();
+    ln_sb_ = positive_sb_.log();
     if (alpha >= 1.0 || alpha <= 0.0) {
-      shape = (alpha >= 1.0 ? st : sb).max(0.0);
+      shape_ = (alpha >= 1.0 ? st_ : sb_).max(0.0);
     } else {
-      shape = smooth.select((alpha * ln_st + (1.0 - alpha) * ln_sb).exp(), 0.0);
+      shape_ = (alpha * ln_st_ + (1.0 - alpha) * ln_sb_).exp() * smooth_;
     }
-    *residuals = ((shape - rho_) * inverse_norm_).matrix();
+    *residuals = ((shape_ - rho_) * inverse_norm_).matrix();
     if (!jacobian) return;
-    const Eigen::ArrayXd scaled = smooth.select(shape * inverse_norm_, 0.0);
-    jacobian->resize(st.size(), m + 1);
-    jacobian->leftCols(m) = (scaled * alpha / smooth.select(st, 1.0)).matrix().asDiagonal() * terms_.t +
-                            (scaled * (1.0 - alpha) / smooth.select(sb, 1.0)).matrix().asDiagonal() * terms_.b;
-    jacobian->col(m) = (scaled * (ln_st - ln_sb)).matrix();
+    const Eigen::ArrayXd scaled = shape_ * smooth_ * inverse_norm_;
+    const Eigen::ArrayXd along_t = scaled * alpha / positive_st_, along_b = scaled * (1.0 - alpha) / positive_sb_;
+    jacobian->resize(st_.size(), m + 1);
+    for (Eigen::Index j = 0; j < m; ++j) {
+      jacobian->col(j) = (along_t * terms_.t.col(j).array() + along_b * terms_.b.col(j).array()).matrix();
+    }
+    jacobian->col(m) = (scaled * (ln_st_ - ln_sb_)).matrix();
   }
 
   double Cost(const Eigen::VectorXd& x) const {
@@ -276,9 +290,12 @@ class BlendProblem {
 
   double Linearize(const Eigen::VectorXd& x, Eigen::MatrixXd* jtj, Eigen::VectorXd* jtr) const {
     Evaluate(x, &residuals_, &jacobian_);
-    jtj->setZero();
-    jtj->selfadjointView<Eigen::Lower>().rankUpdate(jacobian_.transpose());
-    *jtj = jtj->selfadjointView<Eigen::Lower>();
+    // Column by column: a few long dot products, cheaper than a general product's packing here.
+    const Eigen::Index p = jacobian_.cols();
+    jtj->resize(p, p);
+    for (Eigen::Index a = 0; a < p; ++a) {
+      for (Eigen::Index b = 0; b <= a; ++b) (*jtj)(a, b) = (*jtj)(b, a) = jacobian_.col(a).dot(jacobian_.col(b));
+    }
     *jtr = jacobian_.transpose() * residuals_;
     return 0.5 * residuals_.squaredNorm();
   }
@@ -287,8 +304,10 @@ class BlendProblem {
   const RepresentativeTerms& terms_;
   Eigen::ArrayXd rho_;
   double inverse_norm_;
-  mutable Eigen::VectorXd residuals_;  // scratch
+  // Scratch, kept from one evaluation to the next.
+  mutable Eigen::VectorXd residuals_;
   mutable Eigen::MatrixXd jacobian_;
+  mutable Eigen::ArrayXd st_, sb_, smooth_, positive_st_, positive_sb_, ln_st_, ln_sb_, shape_;
 };
 
 // The texel's representatives and weights as stored (terms with weight 0 are unused slots).

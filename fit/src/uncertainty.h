@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -30,20 +31,33 @@ inline Eigen::MatrixXd SandwichCovariance(const Eigen::MatrixXd& jacobian, const
   const Eigen::Index n = jacobian.rows(), p = jacobian.cols();
   if (n <= p) return Eigen::MatrixXd::Constant(p, p, std::numeric_limits<double>::quiet_NaN());
   const Eigen::MatrixXd bread = (jacobian.transpose() * jacobian).completeOrthogonalDecomposition().pseudoInverse();
-  // Scores s_k = r_k J_k; meat = sum_k s_k (s_k + sum_l w_kl s_l)^T.
-  const Eigen::MatrixXd scores = residuals.asDiagonal() * jacobian;
-  Eigen::MatrixXd meat = scores.transpose() * scores;
+  // Scores s_k = r_k J_k, one sample per row, padded to a multiple of 8 so that a neighbour's
+  // contribution below is whole vector operations; meat = sum_k s_k (s_k + sum_l w_kl s_l)^T.
+  constexpr Eigen::Index kLanes = 8;
+  const Eigen::Index stride = (p + kLanes - 1) / kLanes * kLanes;
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  RowMajor scores = RowMajor::Zero(n, stride);
+  scores.leftCols(p) = residuals.asDiagonal() * jacobian;
+  RowMajor summed = scores;  // s_k + sum_l w_kl s_l
   if (neighbours && static_cast<Eigen::Index>(neighbours->size()) == n) {
-    // Row by row: row-major copies keep each sample's p scores together.
-    using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-    const RowMajor score_rows = scores;
-    RowMajor smoothed = RowMajor::Zero(n, p);
+    // A sample has about 28 neighbours at 3 dot spacings.
     for (Eigen::Index k = 0; k < n; ++k) {
-      for (const auto& [l, w] : (*neighbours)[k]) smoothed.row(k) += w * score_rows.row(l);
+      for (Eigen::Index block = 0; block < stride; block += kLanes) {
+        // Summed in a local block, which the compiler keeps in registers (a store through a
+        // pointer for every neighbour could alias the scores it reads, and kept the loop scalar).
+        std::array<double, kLanes> sum{};
+        for (const auto& [l, w] : (*neighbours)[k]) {
+          const double* from = scores.data() + static_cast<Eigen::Index>(l) * stride + block;
+          for (Eigen::Index i = 0; i < kLanes; ++i) sum[i] += w * from[i];
+        }
+        double* into = summed.data() + k * stride + block;
+        for (Eigen::Index i = 0; i < kLanes; ++i) into[i] += sum[i];
+      }
     }
-    const Eigen::MatrixXd cross = scores.transpose() * smoothed;
-    meat += 0.5 * (cross + cross.transpose());
   }
+  // S^T S + S^T W S, the cross terms symmetrised: S^T S + (S^T W S + S^T W^T S) / 2.
+  const Eigen::MatrixXd product = (scores.transpose() * summed).topLeftCorner(p, p);
+  const Eigen::MatrixXd meat = 0.5 * (product + product.transpose());
   return static_cast<double>(n) / static_cast<double>(n - p) * bread * meat * bread;
 }
 
