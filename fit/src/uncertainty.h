@@ -4,7 +4,6 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -43,15 +42,14 @@ inline Eigen::MatrixXd SandwichCovariance(const Eigen::MatrixXd& jacobian, const
     // A sample has about 28 neighbours at 3 dot spacings.
     for (Eigen::Index k = 0; k < n; ++k) {
       for (Eigen::Index block = 0; block < stride; block += kLanes) {
-        // Summed in a local block, which the compiler keeps in registers (a store through a
+        // Summed in a fixed-size block, which Eigen keeps in vector registers (a store through a
         // pointer for every neighbour could alias the scores it reads, and kept the loop scalar).
-        std::array<double, kLanes> sum{};
+        using Lanes = Eigen::Matrix<double, kLanes, 1>;
+        Lanes sum = Lanes::Zero();
         for (const auto& [l, w] : (*neighbours)[k]) {
-          const double* from = scores.data() + static_cast<Eigen::Index>(l) * stride + block;
-          for (Eigen::Index i = 0; i < kLanes; ++i) sum[i] += w * from[i];
+          sum += w * Eigen::Map<const Lanes>(scores.data() + static_cast<Eigen::Index>(l) * stride + block);
         }
-        double* into = summed.data() + k * stride + block;
-        for (Eigen::Index i = 0; i < kLanes; ++i) into[i] += sum[i];
+        Eigen::Map<Lanes>(summed.data() + k * stride + block) += sum;
       }
     }
   }
