@@ -83,29 +83,49 @@ inline double StandardError(double variance) {
 }
 
 // Bartlett-weighted neighbours of points (any dimension) within radius spacings of each other, the
-// spacing the median nearest-neighbour distance; O(n^2), for one slice or one dot grid.
+// spacing the median nearest-neighbour distance; for one slice or one dot grid. Each list is in
+// increasing index order.
+//
+// A sweep over the points in order of their first coordinate: two points farther apart along it
+// than a distance sought are farther apart than that, so each search stops there. (Every pair
+// was compared before: at 1,600 samples that was 4% of a representative's fit.) Points with a
+// coordinate that is not finite cannot be ordered; then every pair is compared, as before.
 template <typename Point>
 std::vector<std::vector<std::pair<int, double>>> PointNeighbours(const std::vector<Point>& points, double radius) {
   const size_t n = points.size();
   std::vector<std::vector<std::pair<int, double>>> result(n);
   if (n < 2 || !(radius > 0)) return result;
+  const bool finite = std::all_of(points.begin(), points.end(), [](const Point& p) { return p.allFinite(); });
+  std::vector<size_t> order(n);
+  for (size_t i = 0; i < n; ++i) order[i] = i;
+  if (finite) std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return points[a][0] < points[b][0]; });
+  // Calls visit(b, distance) for every other point b that may lie within `reach` of point
+  // order[i] (all of them when the points are not finite); `reach` may shrink as it goes. The
+  // margin keeps a pair whose rounded distance falls just below its rounded offset.
+  const auto visit_near = [&](size_t i, const double& reach, const auto& visit) {
+    const size_t a = order[i];
+    const auto beyond = [&](size_t j) {
+      return finite && std::abs(points[order[j]][0] - points[a][0]) > reach * (1.0 + 1e-9);
+    };
+    for (size_t j = i + 1; j < n && !beyond(j); ++j) visit(order[j], (points[a] - points[order[j]]).norm());
+    for (size_t j = i; j-- > 0 && !beyond(j);) visit(order[j], (points[a] - points[order[j]]).norm());
+  };
   std::vector<double> nearest(n, std::numeric_limits<double>::infinity());
-  for (size_t a = 0; a < n; ++a) {
-    for (size_t b = 0; b < n; ++b) {
-      if (a != b) nearest[a] = std::min(nearest[a], (points[a] - points[b]).norm());
-    }
+  for (size_t i = 0; i < n; ++i) {
+    double& best = nearest[order[i]];
+    visit_near(i, best, [&](size_t, double d) { best = std::min(best, d); });
   }
   std::vector<double> sorted = nearest;
   std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.end());
   const double spacing = sorted[n / 2];
   if (!(spacing > 0) || !std::isfinite(spacing)) return result;
   const double reach = radius * spacing * 1.01, bandwidth = (radius + 1.0) * spacing;
-  for (size_t a = 0; a < n; ++a) {
-    for (size_t b = 0; b < n; ++b) {
-      if (a == b) continue;
-      const double d = (points[a] - points[b]).norm();
-      if (d <= reach) result[a].emplace_back(static_cast<int>(b), 1.0 - d / bandwidth);
-    }
+  for (size_t i = 0; i < n; ++i) {
+    std::vector<std::pair<int, double>>& list = result[order[i]];
+    visit_near(i, reach, [&](size_t b, double d) {
+      if (d <= reach) list.emplace_back(static_cast<int>(b), 1.0 - d / bandwidth);
+    });
+    std::sort(list.begin(), list.end());
   }
   return result;
 }
