@@ -14,17 +14,16 @@
 #include <filesystem>
 #include <vector>
 
+#include "bench_timing.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/fit/clustering.h"
 #include "svbtdf/fit/slice_store.h"
 
+using svbtdf::bench::SecondsSince;
+
 namespace {
 
 using namespace svbtdf;
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
 
 bool SameWeights(const std::vector<fit::AffineWeights>& a, const std::vector<fit::AffineWeights>& b) {
   if (a.size() != b.size()) return false;
@@ -54,12 +53,12 @@ int main(int argc, char** argv) {
     options.exhaustive_assignment = true;
     auto start = std::chrono::steady_clock::now();
     const fit::Clustering baseline = fit::ClusterSlices(source, options);
-    const double baseline_seconds = Seconds(start);
+    const double baseline_seconds = SecondsSince(start);
 
     options.exhaustive_assignment = false;
     start = std::chrono::steady_clock::now();
     const fit::Clustering measured = fit::ClusterSlices(source, options);
-    const double measured_seconds = Seconds(start);
+    const double measured_seconds = SecondsSince(start);
 
     const bool same = baseline.representatives == measured.representatives && baseline.cluster == measured.cluster &&
                       SameWeights(baseline.weights, measured.weights);

@@ -17,7 +17,10 @@
 #include <optional>
 #include <vector>
 
+#include "bench_timing.h"
 #include "svbtdf/fit/material.h"
+
+using svbtdf::bench::SecondsSince;
 
 namespace {
 
@@ -66,7 +69,7 @@ int main(int argc, char** argv) {
       const model::Rgb r = texel_of[k]->Evaluate(i, o);
       checksum += r[0] + r[1] + r[2];
     }
-    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    best = std::min(best, SecondsSince(start));
     best_cpu = std::min(best_cpu, static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC);
   }
   std::printf("{\"pairs\": %zu, \"seconds\": %.6f, \"cpu_seconds\": %.6f, \"evaluations_per_s\": %.1f, "

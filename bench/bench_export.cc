@@ -18,18 +18,17 @@
 #include <filesystem>
 #include <string>
 
+#include "bench_timing.h"
 #include "paper_scale_material.h"
 #include "svbtdf/common/parallel.h"
 #include "svbtdf/export/gltf.h"
 #include "svbtdf/export/lobe_fit.h"
 
+using svbtdf::bench::SecondsSince;
+
 namespace {
 
 using namespace svbtdf;
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
 
 double BlendEveryTexelSeconds(const fit::Material& material) {
   const fit::MaterialEvaluator evaluator(material);
@@ -42,7 +41,7 @@ double BlendEveryTexelSeconds(const fit::Material& material) {
     }
     checksum = checksum + local;
   });
-  const double seconds = Seconds(start);
+  const double seconds = SecondsSince(start);
   std::printf("  (checksum %.3g)\n", checksum.load());
   return seconds;
 }
@@ -57,14 +56,14 @@ int main(int argc, char** argv) {
            : std::filesystem::temp_directory_path() / ("svbtdf-bench-export-" + std::to_string(::getpid()));
   auto start = std::chrono::steady_clock::now();
   const fit::Material material = PaperScaleMaterial(side, side * side / 100);
-  std::printf("%d x %d material with %d representatives built in %.1f s\n", side, side, side * side / 100, Seconds(start));
+  std::printf("%d x %d material with %d representatives built in %.1f s\n", side, side, side * side / 100, SecondsSince(start));
 
   const double baseline = BlendEveryTexelSeconds(material);
   start = std::chrono::steady_clock::now();
   const exporter::MaterialLobes lobes = exporter::FitMaterialLobes(material, 0);
-  const double fit_seconds = Seconds(start);
+  const double fit_seconds = SecondsSince(start);
   exporter::WriteGltf(material, lobes, out, "bench");
-  const double measured = Seconds(start);
+  const double measured = SecondsSince(start);
   if (!keep) std::filesystem::remove_all(out);
 
   const exporter::ErrorDistribution error = exporter::Distribution(lobes.relative_error);

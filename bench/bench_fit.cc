@@ -18,19 +18,18 @@
 #include <cstdlib>
 #include <vector>
 
+#include "bench_timing.h"
 #include "svbtdf/common/parallel.h"
 #include "svbtdf/fit/texel_fit.h"
 #include "svbtdf/model/ggx.h"
 #include "synthetic_slices.h"
 
+using svbtdf::bench::SecondsSince;
+
 namespace {
 
 using namespace svbtdf;
 using namespace svbtdf::fit;
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
 
 }  // namespace
 
@@ -53,7 +52,7 @@ int main(int argc, char** argv) {
     FitWorkspace fresh;
     fitter.Fit(slice, &fresh);
   }
-  const double baseline = Seconds(start) / texels;
+  const double baseline = SecondsSince(start) / texels;
   // Shared workspace, one per thread, as `svbtdf fit` runs it.
   const int threads = common::ThreadCount(0);
   const auto shared_workspaces = [&](const TexelFitter& f) {
@@ -63,7 +62,7 @@ int main(int argc, char** argv) {
     common::ParallelFor(threads, threads, 1, [&](int64_t worker, int64_t) {
       for (int t = next++; t < texels; t = next++) f.Fit(slices[t], &workspaces[worker]);
     });
-    return Seconds(begin) / texels;
+    return SecondsSince(begin) / texels;
   };
   const double shared_wall = shared_workspaces(fitter);
   TexelFitOptions without_options = options;

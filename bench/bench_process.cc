@@ -23,16 +23,15 @@
 #include <filesystem>
 #include <string>
 
+#include "bench_timing.h"
 #include "svbtdf/common/error.h"
 #include "svbtdf/session/session.h"
 #include "svbtdf/process/process_session.h"
 #include "truth_calibration.h"
 
-namespace {
+using svbtdf::bench::SecondsSince;
 
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
+namespace {
 
 double PeakResidentMegabytes() {
   rusage usage{};
@@ -66,7 +65,7 @@ int main(int argc, char** argv) {
     if (baseline_wanted) {
       for (const std::string& key : session.planned_keys()) session.ReadImage(key);
     }
-    const double baseline = Seconds(start);
+    const double baseline = SecondsSince(start);
     const double baseline_peak = PeakResidentMegabytes();
 
     const fs::path out = keep.empty() ? simulation / ("bench-processed-" + std::to_string(::getpid())) : keep;
@@ -78,7 +77,7 @@ int main(int argc, char** argv) {
     }
     start = std::chrono::steady_clock::now();
     const svbtdf::process::ProcessReport report = svbtdf::process::ProcessSession(session, calibration, out, options);
-    const double measured = Seconds(start);
+    const double measured = SecondsSince(start);
     std::printf("session: %zu images, %lld texels x %d dots\n", session.planned_keys().size(),
                 static_cast<long long>(report.texels), report.dots);
     if (baseline_wanted) std::printf("baseline, read every image once:   %.1f s (peak %.0f MB)\n", baseline, baseline_peak);

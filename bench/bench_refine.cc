@@ -21,18 +21,17 @@
 #include <unistd.h>
 
 #include "analytic_store.h"
+#include "bench_timing.h"
 #include "svbtdf/common/parallel.h"
 #include "svbtdf/fit/fit_material.h"
 #include "svbtdf/fit/refine_texels.h"
+
+using svbtdf::bench::SecondsSince;
 
 namespace {
 
 using namespace svbtdf;
 using namespace svbtdf::fit;
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
 
 double SecondsPerTexel(const SliceStore& store, const Material& fitted, int threads, bool uncertainty = true) {
   Material material = fitted;
@@ -43,7 +42,7 @@ double SecondsPerTexel(const SliceStore& store, const Material& fitted, int thre
   options.uncertainty = uncertainty;
   const auto start = std::chrono::steady_clock::now();
   RefineTexels(store, {}, texels, options, &material);
-  return Seconds(start) / static_cast<double>(texels.size());
+  return SecondsSince(start) / static_cast<double>(texels.size());
 }
 
 }  // namespace

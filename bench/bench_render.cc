@@ -14,19 +14,18 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "bench_timing.h"
 #include "paper_scale_material.h"
 #include "svbtdf/common/parallel.h"
 #include "svbtdf/common/random.h"
 #include "svbtdf/model/ggx.h"
 #include "svbtdf/render/renderer.h"
 
+using svbtdf::bench::SecondsSince;
+
 namespace {
 
 using namespace svbtdf;
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
 
 // The baseline: `samples` BSDF samples at random texels and views, spread over the threads.
 double TightLoopSeconds(const render::Surface& surface, int64_t samples) {
@@ -48,7 +47,7 @@ double TightLoopSeconds(const render::Surface& surface, int64_t samples) {
       kept += local;
     }
   });
-  const double seconds = Seconds(start);
+  const double seconds = SecondsSince(start);
   std::printf("  (%lld of the baseline's samples carried light)\n", static_cast<long long>(kept.load()));
   return seconds;
 }
@@ -61,7 +60,7 @@ int main(int argc, char** argv) {
   auto start = std::chrono::steady_clock::now();
   const fit::Material material = PaperScaleMaterial(600, 3600);
   const render::MaterialSurface surface(material, material.width_m, material.height_m, "synthetic material");
-  std::printf("600 x 600 material with 3,600 representatives built in %.1f s\n", Seconds(start));
+  std::printf("600 x 600 material with 3,600 representatives built in %.1f s\n", SecondsSince(start));
 
   render::RenderOptions options;
   options.camera.width = options.camera.height = resolution;
@@ -82,7 +81,7 @@ int main(int argc, char** argv) {
   const double baseline = TightLoopSeconds(surface, samples);
   start = std::chrono::steady_clock::now();
   render::Render(surface, scene, options);
-  const double measured = Seconds(start);
+  const double measured = SecondsSince(start);
   std::printf("threads: %d\n", common::ThreadCount(0));
   std::printf("baseline: %lld BSDF samples in a tight loop: %.1f s (%.2f M/s)\n", static_cast<long long>(samples),
               baseline, samples / baseline * 1e-6);

@@ -19,18 +19,17 @@
 #include <string>
 #include <vector>
 
+#include "bench_timing.h"
 #include "paper_scale_material.h"
 #include "svbtdf/common/parallel.h"
 #include "svbtdf/report/material_report.h"
+
+using svbtdf::bench::SecondsSince;
 
 namespace {
 
 using namespace svbtdf;
 namespace fs = std::filesystem;
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
 
 }  // namespace
 
@@ -50,14 +49,14 @@ int main(int argc, char** argv) {
     for (int64_t t = begin; t < end; ++t) local += evaluator.TexelCellD(static_cast<int>(t % side), static_cast<int>(t / side))[100];
     checksum = checksum + local;
   });
-  const double baseline = Seconds(start);
+  const double baseline = SecondsSince(start);
 
   report::MaterialReportOptions options;
   options.material_folder = (folder / "material").string();
   options.out = folder / "report";
   start = std::chrono::steady_clock::now();
   report::WriteMaterialReport(options);
-  const double seconds = Seconds(start);
+  const double seconds = SecondsSince(start);
 
   std::vector<std::pair<uintmax_t, std::string>> files;
   uintmax_t total = 0;

@@ -18,17 +18,16 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "bench_timing.h"
 #include "svbtdf/common/parallel.h"
 #include "svbtdf/simulate/capture_render.h"
 #include "svbtdf/simulate/presets.h"
 
+using svbtdf::bench::SecondsSince;
+
 namespace {
 
 using namespace svbtdf;
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
 
 uint64_t Fnv1a(const std::vector<uint16_t>& pixels, uint64_t hash) {
   for (const uint16_t v : pixels) {
@@ -46,7 +45,7 @@ int main(int argc, char** argv) {
 
   auto start = std::chrono::steady_clock::now();
   const auto setup = simulate::MakeSimulatedSetup(simulate::MakePreset("grid-sheet"), 1, threads, {});
-  const double setup_s = Seconds(start);
+  const double setup_s = SecondsSince(start);
   const simulate::RigRenderer& renderer = *setup->renderer;
   const std::vector<simulate::Dot>& dots = setup->rig->dots();
   const std::vector<double>& exposures = setup->plan.dot_exposures_s;
@@ -61,12 +60,12 @@ int main(int argc, char** argv) {
     const int q = static_cast<int>((static_cast<size_t>(n) * stride) % dots.size());
     start = std::chrono::steady_clock::now();
     renderer.RenderDot(dots[q], &radiance);
-    render_s += Seconds(start);
+    render_s += SecondsSince(start);
     for (size_t b = 0; b < exposures.size(); ++b) {
       start = std::chrono::steady_clock::now();
       const common::CameraImage image =
           renderer.Expose(radiance, exposures[b], setup->seed, simulate::NoiseStream("dots", q, static_cast<int>(b)));
-      expose_s += Seconds(start);
+      expose_s += SecondsSince(start);
       checksum = Fnv1a(image.pixels, checksum);
     }
   }

@@ -33,10 +33,8 @@ struct ScaledFit {
   double relative_squared_error = 1.0;
 };
 
-ScaledFit BestScale(const std::vector<double>& shape, const std::vector<double>& rho, double sum_rho_squared) {
-  const Eigen::Index n = static_cast<Eigen::Index>(rho.size());
-  const Eigen::Map<const Eigen::VectorXd> m(shape.data(), n), r(rho.data(), n);
-  const double dot = r.dot(m), shape_squared = m.squaredNorm();
+ScaledFit BestScale(const Eigen::ArrayXd& shape, const Eigen::ArrayXd& rho, double sum_rho_squared) {
+  const double dot = rho.matrix().dot(shape.matrix()), shape_squared = shape.matrix().squaredNorm();
   ScaledFit fit;
   if (!(shape_squared > 0) || !(sum_rho_squared > 0)) return fit;
   fit.scale = std::max(0.0, dot / shape_squared);
@@ -44,7 +42,8 @@ ScaledFit BestScale(const std::vector<double>& shape, const std::vector<double>&
   return fit;
 }
 
-double SumOfSquares(const std::vector<double>& v) {
+template <typename Values>
+double SumOfSquares(const Values& v) {
   double sum = 0;
   for (double x : v) sum += x * x;
   return sum;
@@ -91,6 +90,12 @@ SampleLookups LookupsOf(const model::DualMicrofacetParams& params, const model::
 // select on a boolean array, so the masks below are 0/1 arrays that multiply, and a logarithm's
 // argument is made positive before it is taken: the refinement's exponentials and logarithms
 // were a third of its time.
+//
+// Every array they write is Eigen's own (aligned to the vector width), never a Map over a
+// std::vector: Eigen computes the elements before the first aligned address with libm's scalar
+// functions and the rest with its vectorised ones, which differ in the last bit, so a result
+// written through a Map depended on where the heap put the vector (a fit resumed from its
+// checkpoint then differed from the uninterrupted one; tests/cli/durability_test.cc).
 Eigen::ArrayXd MaskOf(const Eigen::Array<bool, Eigen::Dynamic, 1>& condition) { return condition.cast<double>(); }
 
 class ScalarRefiner {
@@ -99,11 +104,14 @@ class ScalarRefiner {
   // so each sample costs two NDF lookups however long the search for alpha runs. `lookups`: the
   // texel's (LookupsOf), for the dual-microfacet model.
   ScalarRefiner(const TexelBtdf& texel, const TexelSlice& slice, const SampleLookups* lookups)
-      : slice_(slice), sum_rho_squared_(SumOfSquares(slice.rho)) {
+      : slice_(slice),
+        rho_(Eigen::Map<const Eigen::ArrayXd>(slice.rho.data(), static_cast<Eigen::Index>(slice.rho.size()))),
+        sum_rho_squared_(SumOfSquares(slice.rho)) {
     const Eigen::Index n = static_cast<Eigen::Index>(slice_.light.size());
     if (texel.model() != MaterialModel::kDualMicrofacet) {  // a parametric lobe: its shape is fixed
       const TexelBtdf shape = texel.UnitShape();
-      for (Eigen::Index k = 0; k < n; ++k) fixed_shape_.push_back(shape.Evaluate(slice_.light[k], slice_.view)[0]);
+      fixed_shape_.resize(n);
+      for (Eigen::Index k = 0; k < n; ++k) fixed_shape_[k] = shape.Evaluate(slice_.light[k], slice_.view)[0];
       return;
     }
     const std::vector<double>& ln_d = texel.ndf().ln_d();
@@ -129,50 +137,45 @@ class ScalarRefiner {
 
   // The shape of the model (its BTDF with k_s = 1) at blend weight `alpha` at every sample:
   // LogBlend with the logarithms taken once.
-  const std::vector<double>& Shape(double alpha) {
+  const Eigen::ArrayXd& Shape(double alpha) {
     if (rho_t_.size() == 0) {
       shape_ = fixed_shape_;
-      return shape_;
-    }
-    shape_.resize(static_cast<size_t>(rho_t_.size()));
-    Eigen::Map<Eigen::ArrayXd> shape(shape_.data(), rho_t_.size());
-    if (alpha >= 1.0 || alpha <= 0.0) {
-      shape = alpha >= 1.0 ? rho_t_ : rho_b_;
+    } else if (alpha >= 1.0 || alpha <= 0.0) {
+      shape_ = alpha >= 1.0 ? rho_t_ : rho_b_;
     } else {
-      shape = (alpha * ln_t_ + (1.0 - alpha) * ln_b_).exp() * both_;
+      shape_ = (alpha * ln_t_ + (1.0 - alpha) * ln_b_).exp() * both_;
     }
     return shape_;
   }
 
-  ScaledFit FitAt(double alpha) { return BestScale(Shape(alpha), slice_.rho, sum_rho_squared_); }
+  ScaledFit FitAt(double alpha) { return BestScale(Shape(alpha), rho_, sum_rho_squared_); }
 
   // Relative RMSE of the model at `alpha` with the luminance scale `scale`.
   double RelativeRmse(double alpha, double scale) {
-    const std::vector<double>& shape = Shape(alpha);
+    const Eigen::ArrayXd& shape = Shape(alpha);
     double squared_error = 0;
-    for (size_t k = 0; k < shape.size(); ++k) squared_error += model::Square(scale * shape[k] - slice_.rho[k]);
+    for (Eigen::Index k = 0; k < shape.size(); ++k) squared_error += model::Square(scale * shape[k] - rho_[k]);
     return std::sqrt(squared_error / sum_rho_squared_);
   }
 
   // d shape_k / d alpha at `alpha` for the shape last evaluated there (0 where the blend is flat).
-  double ShapeAlphaDerivative(size_t k) const {
-    const Eigen::Index i = static_cast<Eigen::Index>(k);
-    if (rho_t_.size() == 0 || !(both_[i] > 0)) return 0.0;
-    return shape_[k] * (ln_t_[i] - ln_b_[i]);
+  double ShapeAlphaDerivative(Eigen::Index k) const {
+    if (rho_t_.size() == 0 || !(both_[k] > 0)) return 0.0;
+    return shape_[k] * (ln_t_[k] - ln_b_[k]);
   }
   bool has_alpha() const { return rho_t_.size() > 0; }
-  const std::vector<double>& last_shape() const { return shape_; }
+  const Eigen::ArrayXd& last_shape() const { return shape_; }
 
   // Per-channel scales for the shape last evaluated.
   std::array<double, 3> ChannelScales(double luminance_scale) const {
     std::array<double, 3> scales;
     scales.fill(luminance_scale);
-    if (slice_.rho_rgb.size() != shape_.size()) return scales;
+    if (static_cast<Eigen::Index>(slice_.rho_rgb.size()) != shape_.size()) return scales;
     const double shape_squared = SumOfSquares(shape_);
     if (!(shape_squared > 0)) return scales;
     for (int c = 0; c < 3; ++c) {
       double dot = 0;
-      for (size_t k = 0; k < shape_.size(); ++k) dot += slice_.rho_rgb[k][c] * shape_[k];
+      for (Eigen::Index k = 0; k < shape_.size(); ++k) dot += slice_.rho_rgb[k][c] * shape_[k];
       scales[c] = std::max(0.0, dot / shape_squared);
     }
     return scales;
@@ -180,12 +183,13 @@ class ScalarRefiner {
 
  private:
   const TexelSlice& slice_;
+  Eigen::ArrayXd rho_;              // the slice's samples
   double sum_rho_squared_ = 0.0;
   Eigen::ArrayXd rho_t_, rho_b_;    // dual-microfacet: the two configurations (k_s = 1) ...
   Eigen::ArrayXd ln_t_, ln_b_;      // ... their logarithms (0 where they vanish) ...
   Eigen::ArrayXd both_;             // ... and 1 where both exist, 0 where the blend is 0
-  std::vector<double> fixed_shape_;  // walter-ggx: the shape, which has no alpha
-  std::vector<double> shape_;
+  Eigen::ArrayXd fixed_shape_;      // walter-ggx: the shape, which has no alpha
+  Eigen::ArrayXd shape_;
 };
 
 struct RefinedScalars {
@@ -451,17 +455,17 @@ struct TexelUncertainty {
 // rho_d, or 0.1% of the lobe's peak): there every sample is rho_d plus noise, and the store's
 // floor estimate is their mean (docs/slice-store.md), whose standard error is their standard
 // deviation over sqrt(n). Not known with fewer than 5 such samples.
-std::array<double, 3> RhoDStandardError(const TexelSlice& slice, const std::vector<double>& shape,
+std::array<double, 3> RhoDStandardError(const TexelSlice& slice, const Eigen::ArrayXd& shape,
                                         const std::array<double, 3>& k_s, const model::Rgb& rho_d, bool model_error) {
   std::array<double, 3> se = {-1, -1, -1};
-  if (slice.measured_rgb.size() != shape.size() || shape.empty()) return se;
+  if (static_cast<Eigen::Index>(slice.measured_rgb.size()) != shape.size() || shape.size() == 0) return se;
   const double scale = (k_s[0] + k_s[1] + k_s[2]) / 3.0;
   const double peak = scale * *std::max_element(shape.begin(), shape.end());
   const double threshold = std::max(0.05 * model::Luminance(rho_d), 1e-3 * peak);
   for (int c = 0; c < 3; ++c) {
     double sum = 0, sum_squared = 0;
     int n = 0;
-    for (size_t k = 0; k < shape.size(); ++k) {
+    for (Eigen::Index k = 0; k < shape.size(); ++k) {
       if (scale * shape[k] > threshold) continue;
       const double e = slice.measured_rgb[k][c] - k_s[c] * shape[k] - rho_d[c];
       sum += e;
@@ -484,13 +488,13 @@ std::array<double, 3> RhoDStandardError(const TexelSlice& slice, const std::vect
 // d alpha of the residuals scale shape_k - rho_k (only the scale for a model without alpha).
 void ScalarUncertainty(ScalarRefiner* refiner, const TexelSlice& slice, const RefinedScalars& best, bool with_alpha,
                        const Neighbours* neighbours, TexelUncertainty* u) {
-  const std::vector<double>& shape = refiner->Shape(best.alpha);
-  const size_t n = shape.size();
+  const Eigen::ArrayXd& shape = refiner->Shape(best.alpha);
+  const Eigen::Index n = shape.size();
   const int p = with_alpha && refiner->has_alpha() ? 2 : 1;
   Eigen::MatrixXd j(n, p);
   Eigen::VectorXd r(n);
   double norm = 0;
-  for (size_t k = 0; k < n; ++k) {
+  for (Eigen::Index k = 0; k < n; ++k) {
     j(k, 0) = shape[k];
     if (p == 2) j(k, 1) = best.scale * refiner->ShapeAlphaDerivative(k);
     r[k] = best.scale * shape[k] - slice.rho[k];
@@ -625,7 +629,9 @@ std::optional<std::pair<double, double>> RefineTexel(const RefineContext& contex
     // The texel's NDF width (a representative keeps its own fit's, with its error).
     const TexelWeights& weights = kept_weights ? *kept_weights : blended_weights;
     if (dual && !representatives_pass) {
-      u.ndf_width = NdfWidth(grid, evaluator.TexelCellD(x, y));
+      // The refit measured the width of the weights kept already: the tables need no third blend.
+      const double measured = kept_weights ? width_refitted : width_blended;
+      u.ndf_width = measured >= 0 ? measured : NdfWidth(grid, evaluator.TexelCellD(x, y));
       std::vector<double> amounts(weights.reps.size());
       for (size_t j = 0; j < amounts.size(); ++j) amounts[j] = weights.weights[j] * evaluator.RepresentativeScale(weights.reps[j]);
       const double tables = TablesVariance(weights.reps, amounts, moments, u.ndf_width);
