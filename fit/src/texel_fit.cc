@@ -583,8 +583,7 @@ TexelFitResult TexelFitter::FitDualTerms(const TexelSlice& slice, const GridSyst
   Eigen::VectorXd last_x;
   double last_data_ssr = 0.0;
   int last_data_rows = 0;
-  SparseMatrix last_normal;            // the last solve's normal matrix ...
-  SparseRows last_data;                // ... its data rows ...
+  SparseRows last_data;                // the last solve's data rows ...
   std::vector<int> last_row_sample;    // ... and the sample of each
   const auto solve_ln_d = [&](double alpha, bool with_symmetry) {
     SparseRows data;
@@ -631,7 +630,6 @@ TexelFitResult TexelFitter::FitDualTerms(const TexelSlice& slice, const GridSyst
     for (double r : row_residual) last_data_ssr += r * r;
     last_data_rows = used;
     last_x = x;
-    last_normal = std::move(normal);
     last_data = std::move(data);
     last_row_sample = std::move(row_sample);
     std::vector<double> ln_d(grid_.num_cells(), options_.horizon_ln_d);
@@ -657,20 +655,24 @@ TexelFitResult TexelFitter::FitDualTerms(const TexelSlice& slice, const GridSyst
   TexelFitResult result;
   double alpha = std::clamp(options_.initial_alpha, 0.0, 1.0);
   std::vector<double> ln_d = solve_ln_d(alpha, /*with_symmetry=*/true);
-  for (result.alternations = 1; result.alternations <= options_.max_alternations; ++result.alternations) {
+  // The last alternation ends at its alpha search: the final pass below solves ln D for that
+  // alpha afresh (without the symmetry rows), so a with-symmetry solve there would be discarded.
+  for (result.alternations = 1;; ++result.alternations) {
     const double next_alpha = search_alpha(ln_d);
     const double moved = std::abs(next_alpha - alpha);
     alpha = next_alpha;
+    if (moved < options_.alpha_tolerance || result.alternations == options_.max_alternations) break;
     ln_d = solve_ln_d(alpha, /*with_symmetry=*/true);
-    if (moved < options_.alpha_tolerance) break;
   }
-  result.alternations = std::min(result.alternations, options_.max_alternations);
   ln_d = solve_ln_d(alpha, /*with_symmetry=*/false);
 
   // The NDF's width and its standard error: var = s^2 g^T N^-1 g, with N the final pass's normal
-  // matrix (still factorised in the workspace: one more solve), g the width's gradient in the
-  // unknowns and s^2 the data rows' mean squared residual (docs/fitting.md, "Uncertainty").
-  const auto solve_final = [&](const Eigen::VectorXd& b) { return SolveNormalEquations(last_normal, b, {}, options_.iterative_solves, state); };
+  // matrix, g the width's gradient in the unknowns and s^2 the data rows' mean squared residual
+  // (docs/fitting.md, "Uncertainty"). The final pass factorised N and nothing has been factorised
+  // since, so each solve with it is one back-substitution, exact to rounding (the conjugate
+  // gradients preconditioned by the factor's single-precision copy took one iteration: a
+  // back-substitution in single precision and a product with N, and stopped at 1e-9).
+  const auto solve_final = [&](const Eigen::VectorXd& b) -> Eigen::VectorXd { return state->solver.solve(b); };
   if (options_.profile_uncertainty) {
     std::vector<double> d(grid_.num_cells());
     double mass = 0;
