@@ -54,6 +54,10 @@ void AddFitOptions(CLI::App* command, fit::FitMaterialOptions* options, std::str
   command->add_flag("!--fixed-horizon", options->free_horizon,
                     "hold the NDF at its horizon to the paper's 1e-6 instead of leaving it to the smoothness "
                     "prior (which fits rough lobes, GGX roughness above about 0.3, far better)");
+  command->add_flag("--secant-alternations", options->secant_alternations,
+                    "let alpha's alternations reach their fixed point by secant steps instead of stopping short "
+                    "of it towards their start (better alpha, error bars and held-out error on the presets; off "
+                    "by default until its effect on --internal-reflection is understood; docs/fitting.md)");
   command->add_flag("--internal-reflection", options->internal_reflection,
                     "add the light reflected once by each interface inside the slab to the model, fitted and "
                     "written with the material (format version 4; needs --fixed-horizon; about 0.4 ms more per "

@@ -330,6 +330,7 @@ class RepresentativeFits {
     TexelFitOptions fit_options;
     fit_options.ndf_resolution = options.ndf_resolution;
     fit_options.free_horizon = options.free_horizon;
+    fit_options.secant_alternations = options.secant_alternations;
     fit_options.profile_uncertainty = options.uncertainty;
     fit_options.standard_errors = options.standard_errors;
     fit_options.internal_reflection = options.internal_reflection;
@@ -421,6 +422,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
   // Only when set, so that journals written before the option existed still resume.
   if (options.free_horizon) identity["free_horizon"] = true;
   if (options.internal_reflection) identity["internal_reflection"] = true;
+  if (options.secant_alternations) identity["secant_alternations"] = true;
   if (options.model == MaterialModel::kSlab && options.slab_anisotropic) identity["slab_anisotropic"] = true;
   // A slab journal of before the longer paths' shape (material version 5) holds another model.
   if (options.model == MaterialModel::kSlab) identity["slab_longer_paths"] = true;
@@ -474,6 +476,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
         {"ndf_resolution", options.ndf_resolution},
         {"refine_texels", options.refine_texels},
         {"free_horizon", options.free_horizon},
+        {"secant_alternations", options.secant_alternations},
         {"uncertainty", options.uncertainty},
         {"internal_reflection", options.internal_reflection},
         {"slab_anisotropic", options.model == MaterialModel::kSlab && options.slab_anisotropic},

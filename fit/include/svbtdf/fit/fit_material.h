@@ -35,6 +35,9 @@ struct FitMaterialOptions {
   // TexelFitOptions::free_horizon for the dual-microfacet fits: on by default here (rice-paper's
   // NDF error 17.9% -> 3.7%, docs/fitting.md); false is the paper's fixed horizon.
   bool free_horizon = true;
+  // TexelFitOptions::secant_alternations (`--secant-alternations`): alpha's alternations reach
+  // their fixed point instead of stopping short of it (docs/fitting.md, step 3). Off by default.
+  bool secant_alternations = false;
   // Per-texel standard errors (docs/fitting.md, "Uncertainty"): the *_se maps of material format
   // version 3. false writes a material without them (version 1), as before.
   bool uncertainty = true;
