@@ -6,7 +6,9 @@
 // and what fitting 3,600 representatives (1% of 600 x 600 texels) takes on this machine's threads.
 // Then what the standard errors (docs/fitting.md, "Uncertainty"; TexelFitOptions::
 // profile_uncertainty) add to the measured fit: both settings timed twice, alternately, on the
-// same slices and threads, the faster of each pair kept (issue 20 asks for at most 20%).
+// same slices and threads, the faster of each pair kept (issue 20 asks for at most 20%). Last,
+// the alternations' secant steps (TexelFitOptions::secant_alternations, `--secant-alternations`)
+// against the default plain steps, timed the same way.
 //
 //   bench_fit [TEXELS]   (default 24)
 
@@ -77,5 +79,12 @@ int main(int argc, char** argv) {
   std::printf("3,600 representatives at this rate:      %.1f min\n", 3600 * shared_wall / 60.0);
   std::printf("without the standard errors (%d threads):  %.3f s per texel; they add %+.1f%%\n", threads, without,
               100.0 * (with / without - 1.0));
+  TexelFitOptions secant_options = options;
+  secant_options.secant_alternations = !options.secant_alternations;
+  const TexelFitter other_steps(1.5, secant_options);
+  const double other = std::min(shared_workspaces(other_steps), shared_workspaces(other_steps));
+  const double secant = options.secant_alternations ? with : other, plain = options.secant_alternations ? other : with;
+  std::printf("secant alternations (%d threads):        %.3f s per texel; plain / secant %.2f\n", threads, secant,
+              plain / secant);
   return 0;
 }

@@ -102,29 +102,28 @@ double MinimumIncludingEnds(const std::function<double(double)>& f, double lo, d
 class AlphaFixedPoint {
  public:
   // `secant` false: plain steps only, the paper's iteration.
-  AlphaFixedPoint(double start, bool secant) : alpha_(start), secant_(secant) {}
+  explicit AlphaFixedPoint(bool secant) : secant_(secant) {}
 
-  double Next(double g) {
+  // The alpha to try next, given the current `alpha` and the search's answer `g` for it.
+  double Next(double alpha, double g) {
     double next = g;
-    if (secant_ && has_previous_ && std::abs(alpha_ - previous_alpha_) > kMinSecantBase) {
-      const double slope = (g - previous_g_) / (alpha_ - previous_alpha_);
+    if (secant_ && previous_ && std::abs(alpha - previous_->alpha) > kMinSecantBase) {
+      const double slope = (g - previous_->g) / (alpha - previous_->alpha);
       // 1 / (1 - slope): the sum of the plain steps still to come, were g linear.
-      if (slope <= kMaxSlope) next = std::clamp(alpha_ + (g - alpha_) / (1.0 - slope), 0.0, 1.0);
+      if (slope <= kMaxSlope) next = std::clamp(alpha + (g - alpha) / (1.0 - slope), 0.0, 1.0);
     }
-    previous_alpha_ = alpha_;
-    previous_g_ = g;
-    has_previous_ = true;
-    alpha_ = next;
+    previous_ = Alternation{alpha, g};
     return next;
   }
 
  private:
   static constexpr double kMinSecantBase = 1e-3;  // ten times the alpha search's tolerance
   static constexpr double kMaxSlope = 0.75;        // at most 4 plain steps' worth
-  double alpha_;
+  struct Alternation {
+    double alpha, g;
+  };
   bool secant_;
-  double previous_alpha_ = 0.0, previous_g_ = 0.0;
-  bool has_previous_ = false;
+  std::optional<Alternation> previous_;
 };
 
 }  // namespace
@@ -698,9 +697,9 @@ TexelFitResult TexelFitter::FitDualTerms(const TexelSlice& slice, const GridSyst
   // steps towards it instead (docs/fitting.md, step 3). The last alternation ends at its step:
   // the final pass below solves ln D for that alpha afresh, so a with-symmetry solve there would
   // be discarded.
-  AlphaFixedPoint fixed_point(alpha, options_.secant_alternations);
+  AlphaFixedPoint fixed_point(options_.secant_alternations);
   for (result.alternations = 1;; ++result.alternations) {
-    const double next_alpha = fixed_point.Next(search_alpha(ln_d));
+    const double next_alpha = fixed_point.Next(alpha, search_alpha(ln_d));
     const double moved = std::abs(next_alpha - alpha);
     alpha = next_alpha;
     if (moved < options_.alpha_tolerance || result.alternations == options_.max_alternations) break;

@@ -143,9 +143,10 @@ TEST(TexelFit, SymbolicAnalysisIsSharedAcrossTexelsOfOneView) {
 // With `secant_alternations` the alternations reach the fixed point of alpha's criterion
 // (docs/fitting.md, step 3). For rough lobes seen at 45 degrees the paper's plain steps contract
 // slowly (each 0.6-0.7 of the last), and stopping at the first step below the tolerance leaves
-// alpha short of the fixed point, towards its start of 0.5: 0.772 after 7 alternations for a truth of 0.8 at roughness 0.4, where the
-// fixed point is 0.798 (30 plain alternations to 1e-6), and 0.2026 / 0.2006 / 0.7915 in the other
-// three cases. The secant steps stop within 0.001 of it in 4-5 alternations (measured).
+// alpha short of the fixed point, towards its start of 0.5: 0.772 after 7 alternations for a
+// truth of 0.8 at roughness 0.4, where the fixed point is 0.798 (30 plain alternations to 1e-6),
+// and 0.2026 / 0.2006 / 0.7915 in the other three cases. The secant steps stop within 0.001 of
+// it in 4-5 alternations (measured).
 TEST(TexelFit, SecantAlternationsReachTheCriterionsFixedPoint) {
   TexelFitOptions secant_options, converged_options;
   secant_options.secant_alternations = true;
