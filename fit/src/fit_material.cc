@@ -386,6 +386,27 @@ std::vector<uint8_t> FitPending(const SliceStore& store, const std::vector<int64
   return failed;
 }
 
+// Every sample of a texel was divided by the texel's white exitance, measured from one flat white
+// frame: that frame's noise (SliceStoreInfo::white_exitance_noise, relative) scales the texel's
+// whole slice, k_s and rho_d by the same factor, and no statistic over the dots sees it. It adds
+// in quadrature to their standard errors and to the predicted relative error of the BTDF (whose
+// luminance, the channels' mean, has sqrt(sum of the channels' variances) / 3 of it).
+void AddWhiteExitanceNoise(const std::array<double, 3>& noise, Material* material) {
+  const double luminance_noise = std::sqrt(model::Square(noise[0]) + model::Square(noise[1]) + model::Square(noise[2])) / 3.0;
+  const auto add = [](float* se, double relative, double value) {
+    if (*se >= 0) *se = static_cast<float>(std::hypot(static_cast<double>(*se), relative * value));
+  };
+  for (int y = 0; y < material->height; ++y) {
+    for (int x = 0; x < material->width; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        if (!material->k_s_se.pixels.empty()) add(&material->k_s_se.at(x, y, c), noise[c], material->k_s.at(x, y, c));
+        if (!material->rho_d_se.pixels.empty()) add(&material->rho_d_se.at(x, y, c), noise[c], material->rho_d.at(x, y, c));
+      }
+      if (!material->prediction_se.pixels.empty()) add(&material->prediction_se.at(x, y), luminance_noise, 1.0);
+    }
+  }
+}
+
 }  // namespace
 
 std::vector<int> HeldOutDots(int num_dots, double holdout, uint64_t seed) {
@@ -459,6 +480,7 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
     refined = RefineTexels(store, use_dot, valid, refine_options, &material);
   }
   const double refine_seconds = SecondsSince(refine_start);
+  if (options.uncertainty) AddWhiteExitanceNoise(store.info().white_exitance_noise, &material);
   if (!options.uncertainty) {
     for (common::FloatImage* map : {&material.alpha_se, &material.k_s_se, &material.rho_d_se, &material.shadowing_roughness_se,
                                     &material.ndf_width, &material.ndf_width_se, &material.prediction_se}) {
@@ -489,6 +511,8 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
         {"failed_representatives", FailedTexels(reps, failed)},
         {"resumed_fits", resumed},
         {"horizon_fixed_instead", horizon_fixed_instead},
+        // The store's flat white noise, in the standard errors of k_s and rho_d (docs/fitting.md).
+        {"white_exitance_noise", store.info().white_exitance_noise},
         {"median_relative_rmse", common::Median(residuals)},
         {"refined_representatives", refined.representatives},
         // The interpolated texels' residuals on their own samples, before and after refinement.

@@ -4,7 +4,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 
 #include "svbtdf/common/atomic_file.h"
@@ -19,7 +21,8 @@ namespace {
 nlohmann::json InfoToJson(const SliceStoreInfo& info) {
   return {{"texels_x", info.texels_x},     {"texels_y", info.texels_y},
           {"num_dots", info.num_dots},     {"light_resolution", info.light_resolution},
-          {"tile_texels", info.tile_texels}, {"eta", info.eta}};
+          {"tile_texels", info.tile_texels}, {"eta", info.eta},
+          {"white_exitance_noise", info.white_exitance_noise}};
 }
 
 nlohmann::json VectorToJson(const model::Vec3& v) { return {v.x(), v.y(), v.z()}; }
@@ -98,6 +101,15 @@ SliceStoreInfo InfoFromManifest(const nlohmann::json& j, const std::string& sour
   info.eta = j.value("eta", 0.0);
   info.provenance = j.value("provenance", nlohmann::json::object());
   if (!info.provenance.is_object()) common::ThrowFormatError(source, "has a \"provenance\" that is not an object");
+  if (const auto noise = j.find("white_exitance_noise"); noise != j.end()) {
+    const auto is_fraction = [](const nlohmann::json& v) {
+      return v.is_number() && std::isfinite(v.get<double>()) && v.get<double>() >= 0 && v.get<double>() < 1;
+    };
+    if (!noise->is_array() || noise->size() != 3 || !std::all_of(noise->begin(), noise->end(), is_fraction)) {
+      common::ThrowFormatError(source, "has a \"white_exitance_noise\" that is not three numbers in [0, 1)");
+    }
+    for (int c = 0; c < 3; ++c) info.white_exitance_noise[c] = (*noise)[c].get<double>();
+  }
   return info;
 }
 

@@ -21,6 +21,7 @@
 #include "svbtdf/common/interrupt.h"
 #include "svbtdf/common/parallel.h"
 #include "svbtdf/common/progress.h"
+#include "svbtdf/common/statistics.h"
 #include "svbtdf/fit/slice_store.h"
 #include "svbtdf/model/dual_microfacet.h"
 #include "svbtdf/model/polarisation.h"
@@ -437,6 +438,30 @@ ProcessReport FinishedReport(const fs::path& out, int num_dots, std::chrono::ste
 
 }  // namespace
 
+std::array<double, 3> WhiteExitanceNoise(const std::vector<float>& exitance, int texels_x, int texels_y) {
+  constexpr size_t kMinTriples = 16;
+  const auto log_at = [&](int x, int y, int c) {
+    const float e = exitance[(static_cast<size_t>(y) * texels_x + x) * 3 + c];
+    return e > 0 && std::isfinite(e) ? std::log(static_cast<double>(e)) : kNaN;
+  };
+  std::array<double, 3> noise = {0.0, 0.0, 0.0};
+  std::vector<double> deviations;
+  for (int c = 0; c < 3; ++c) {
+    deviations.clear();
+    const auto add = [&](double a, double t, double b) {
+      if (std::isfinite(a) && std::isfinite(t) && std::isfinite(b)) deviations.push_back(std::abs(t - 0.5 * (a + b)));
+    };
+    for (int y = 0; y < texels_y; ++y) {
+      for (int x = 0; x < texels_x; ++x) {
+        if (x > 0 && x + 1 < texels_x) add(log_at(x - 1, y, c), log_at(x, y, c), log_at(x + 1, y, c));
+        if (y > 0 && y + 1 < texels_y) add(log_at(x, y - 1, c), log_at(x, y, c), log_at(x, y + 1, c));
+      }
+    }
+    if (deviations.size() >= kMinTriples) noise[c] = common::Median(deviations) / 0.6745 / std::sqrt(1.5);
+  }
+  return noise;
+}
+
 ProcessReport ProcessSession(const session::Session& session, const calib::SessionCalibration& given,
                              const fs::path& out, const ProcessOptions& requested) {
   const auto start = std::chrono::steady_clock::now();
@@ -479,6 +504,7 @@ ProcessReport ProcessSession(const session::Session& session, const calib::Sessi
   for (const auto& [bracket, keys] : plan.dark_keys) darks[bracket] = reader.MeanDark(keys);
   const std::vector<float> exitance =
       WhiteExitance(reader, plan.flat_key, rectifier, geometry, calibration.monitor, options.threads);
+  const std::array<double, 3> exitance_noise = WhiteExitanceNoise(exitance, geometry.texels_x, geometry.texels_y);
 
   std::vector<std::pair<int, std::string>> order;
   for (int q = 0; q < num_dots; ++q) {
@@ -505,6 +531,7 @@ ProcessReport ProcessSession(const session::Session& session, const calib::Sessi
   if (progress) progress->Finish();
   SliceStoreWriter::FinishOptions finish;
   finish.diffuse_threshold = options.diffuse_threshold;
+  finish.white_exitance_noise = exitance_noise;
   finish.threads = options.threads;
   finish.progress = options.progress;
   if (polarisation.linear()) {

@@ -477,6 +477,7 @@ void SliceStoreWriter::Finish(const FinishOptions& options) {
   common::WriteFloatImage(s.folder / "reach.exr", reach_map, false, true);
   const nlohmann::json statistics = {
       {"texels", texels}, {"valid_texels", valid_texels}, {"texels_without_dot_beneath", without_dot_beneath}};
+  s.info.white_exitance_noise = options.white_exitance_noise;
   WriteManifest(s.folder, s.info, s.geometry, /*complete=*/true, statistics);
 }
 

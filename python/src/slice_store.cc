@@ -79,6 +79,8 @@ py::dict Info(const fit::SliceStore& store) {
   d["light_resolution"] = info.light_resolution;
   d["tile_texels"] = info.tile_texels;
   d["eta"] = info.eta;
+  d["white_exitance_noise"] = py::make_tuple(info.white_exitance_noise[0], info.white_exitance_noise[1],
+                                             info.white_exitance_noise[2]);
   d["sample_size"] = py::make_tuple(store.geometry().width_m, store.geometry().height_m);
   d["provenance"] = ToPython(info.provenance);
   return d;

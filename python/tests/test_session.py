@@ -57,6 +57,8 @@ def test_slice_store_samples_and_maps(tiny):
     assert (info["texels_x"], info["texels_y"]) == (material.width, material.height)
     assert store.rho_d.shape == (info["texels_y"], info["texels_x"], 3) and store.rho_d.dtype == np.float32
     assert store.mask.shape == store.reach.shape == (info["texels_y"], info["texels_x"])
+    # The flat white frame's noise per channel (docs/slice-store.md): a fraction of a percent here.
+    assert len(info["white_exitance_noise"]) == 3 and all(0.0 < v < 0.01 for v in info["white_exitance_noise"])
     # The material's rho_d is the store's (fit takes it as measured).
     np.testing.assert_array_equal(material.rho_d, store.rho_d)
 

@@ -32,15 +32,16 @@ TEST_F(FitChain, RecoversTheTruthOnHeldOutDots) {
   EXPECT_LT(m["rho_d_rel_error_median"].get<double>(), 0.02);
   // Per-texel uncertainty (docs/validation.md, "Per-texel uncertainty"): how often the truth lies
   // within 2 standard errors. Measured on seeds 1-3 of this fit (own calibration, 2026-12-06):
-  // alpha 86-92%, k_s 97-99%, rho_d 88-91%, shadowing 94-97% (64-73% before its profile over D),
-  // NDF width 97-98%, rank correlation of the predicted and the actual held-out error 0.38-0.57;
-  // this test's session (its true calibration) measured alpha 83.4%, k_s 98.2%, rho_d 83.4%,
+  // alpha 86-92%, k_s 97-99%, rho_d 97-98% (88-91% before the flat white's noise was counted,
+  // 2026-12-07), shadowing 94-97% (64-73% before its profile over D), NDF width 97-98%, rank
+  // correlation of the predicted and the actual held-out error 0.38-0.57; this test's session
+  // (its true calibration) measured alpha 83.4%, k_s 98.2%, rho_d 95.5% (83.4% before),
   // shadowing 97.7% (77.3% before its profile), NDF width 94.7%, rank correlation 0.37.
   // The target is 90-98%; the floors below hold what is reached, so that a change that
   // makes them worse, or inflates them into decoration (coverage near 100%), fails.
   const nlohmann::json& coverage = m["coverage_2se"];
   const std::pair<const char*, double> floors[] = {
-      {"alpha", 0.75}, {"k_s", 0.90}, {"rho_d", 0.72}, {"shadowing_roughness", 0.90}, {"ndf_width", 0.85}};
+      {"alpha", 0.75}, {"k_s", 0.90}, {"rho_d", 0.90}, {"shadowing_roughness", 0.90}, {"ndf_width", 0.85}};
   for (const auto& [parameter, floor] : floors) {
     ASSERT_TRUE(coverage[parameter].is_number()) << parameter;
     EXPECT_GE(coverage[parameter].get<double>(), floor) << parameter;

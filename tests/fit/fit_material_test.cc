@@ -5,6 +5,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -325,7 +327,66 @@ TEST(SliceStoreFormat, DamagedGeometryAndOldVersionsAreRefusedNamingTheManifest)
   const std::string not_boolean = open_with(complete_as_text);
   EXPECT_NE(not_boolean.find(manifest_path.string()), std::string::npos) << not_boolean;
   EXPECT_NE(not_boolean.find("\"complete\""), std::string::npos) << not_boolean;
+  // The flat white's noise: a store written before it has none (0, not measured); one that is not
+  // three fractions is refused.
+  nlohmann::json without_noise = manifest;
+  without_noise.erase("white_exitance_noise");
+  EXPECT_EQ(open_with(without_noise), "opened");
+  EXPECT_EQ(SliceStore::Open(dir).info().white_exitance_noise, (std::array<double, 3>{0.0, 0.0, 0.0}));
+  for (const nlohmann::json& bad : {nlohmann::json{0.001, 0.002}, nlohmann::json{0.001, -0.002, 0.0},
+                                    nlohmann::json{0.001, 1.5, 0.0}, nlohmann::json("0.001")}) {
+    nlohmann::json damaged_noise = manifest;
+    damaged_noise["white_exitance_noise"] = bad;
+    const std::string refused = open_with(damaged_noise);
+    EXPECT_NE(refused.find(manifest_path.string()), std::string::npos) << refused;
+    EXPECT_NE(refused.find("\"white_exitance_noise\""), std::string::npos) << refused;
+  }
   fs::remove_all(dir);
+}
+
+// The flat white's noise recorded by the store (SliceStoreInfo::white_exitance_noise) adds in
+// quadrature to the standard errors of k_s and rho_d, channel by channel, and to the predicted
+// error; nothing else of the material changes, and its provenance records it.
+TEST_F(FitMaterialTest, TheFlatWhitesNoiseWidensTheErrorsOfKsAndRhoDOnly) {
+  const fs::path noisy = dir_ / "noisy_flat";
+  testing::WriteAnalyticStore(noisy, truth_, 12, 0.01);
+  FitMaterialOptions options = Options(0.05);
+  options.ndf_resolution = 16;
+  const Material plain = FitMaterial(SliceStore::Open(noisy), options);
+  const std::array<double, 3> noise = {0.002, 0.004, 0.0};
+  nlohmann::json manifest = nlohmann::json::parse(common::ReadTextFile(noisy / "processed.json"));
+  manifest["white_exitance_noise"] = noise;
+  common::WriteTextAtomically(noisy / "processed.json", manifest.dump(2) + "\n");
+  const Material widened = FitMaterial(SliceStore::Open(noisy), options);
+  const auto recorded = widened.provenance.at("statistics").at("white_exitance_noise").get<std::array<double, 3>>();
+  EXPECT_EQ(recorded, noise);
+  EXPECT_EQ(widened.alpha.pixels, plain.alpha.pixels);
+  EXPECT_EQ(widened.k_s.pixels, plain.k_s.pixels);
+  EXPECT_EQ(widened.rho_d.pixels, plain.rho_d.pixels);
+  EXPECT_EQ(widened.alpha_se.pixels, plain.alpha_se.pixels);
+  const double luminance_noise = std::sqrt(0.002 * 0.002 + 0.004 * 0.004) / 3.0;
+  int known = 0;
+  for (int y = 0; y < plain.height; ++y) {
+    for (int x = 0; x < plain.width; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        const auto expect_widened = [&](const common::FloatImage& before, const common::FloatImage& after,
+                                        const common::FloatImage& value, const char* name) {
+          if (before.at(x, y, c) < 0) {
+            EXPECT_EQ(after.at(x, y, c), before.at(x, y, c)) << name;  // not known stays not known
+            return;
+          }
+          ++known;
+          EXPECT_NEAR(after.at(x, y, c), std::hypot(before.at(x, y, c), noise[c] * value.at(x, y, c)),
+                      1e-6 * after.at(x, y, c) + 1e-12) << name << " at " << x << ", " << y << ", channel " << c;
+        };
+        expect_widened(plain.k_s_se, widened.k_s_se, plain.k_s, "k_s_se");
+        expect_widened(plain.rho_d_se, widened.rho_d_se, plain.rho_d, "rho_d_se");
+      }
+      const float predicted = plain.prediction_se.at(x, y);
+      EXPECT_NEAR(widened.prediction_se.at(x, y), predicted < 0 ? predicted : std::hypot(predicted, luminance_noise), 1e-6);
+    }
+  }
+  EXPECT_GT(known, plain.width * plain.height * 3);  // k_s's everywhere, rho_d's where the floor has samples
 }
 
 // The paper's comparison: on a dual-microfacet truth, the single-interface GGX baseline predicts

@@ -64,6 +64,10 @@ struct SliceStoreInfo {
   int light_resolution = 16;  // light hemicube of slices.f16
   int tile_texels = 1024;
   double eta = 0.0;           // the sample's nominal eta from session.json (0: unknown)
+  // The relative standard deviation, per channel, of a texel's white exitance from the flat
+  // white capture, which divides every sample of the texel alike (docs/slice-store.md, "The
+  // flat white's noise"); 0 where not measured (stores written before it).
+  std::array<double, 3> white_exitance_noise = {0.0, 0.0, 0.0};
   nlohmann::json provenance = nlohmann::json::object();
 };
 

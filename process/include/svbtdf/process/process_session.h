@@ -7,9 +7,11 @@
 // Images are read once, in plan order; memory is bounded by a few images and one dot's texel
 // values, whatever the number of dots. An interrupted run resumes at the first unwritten dot.
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <vector>
 
 #include "svbtdf/calib/session_calibration.h"
 #include "svbtdf/session/session.h"
@@ -42,6 +44,16 @@ struct ProcessReport {
   double seconds = 0.0;
   bool already_complete = false;  // `out` held this processing, finished: nothing was done
 };
+
+// The relative standard deviation, per channel, of each texel's white exitance L as measured
+// from the flat white capture (one frame: its noise divides every sample of the texel alike, so
+// no statistic over the dots sees it). Measured from the capture itself: the true L (the
+// monitor's exitance times the camera's sensitivity and vignetting) is smooth from texel to
+// texel and the noise is not, so d = ln L_t - (ln L_a + ln L_b) / 2 over the texels a, b on
+// either side of t (along rows and along columns) has variance 1.5 sigma^2, and sigma is
+// median |d| / 0.6745 / sqrt(1.5). `exitance` holds texels_x * texels_y * 3 values, NaN or not
+// positive where unusable; a channel with fewer than 16 such triples gets 0 (not measured).
+std::array<double, 3> WhiteExitanceNoise(const std::vector<float>& exitance, int texels_x, int texels_y);
 
 // Writes the slice store into `out` (new, empty, or an unfinished processing of the same session
 // to resume; a finished one of the same settings is reported already_complete and left alone). Throws svbtdf::Error naming the image or file for anything wrong with the input.

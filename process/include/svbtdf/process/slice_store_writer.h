@@ -3,6 +3,7 @@
 // the samples dot by dot as processing produces them, then the diffuse separation, the push-pull
 // slices and the maps.
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -47,6 +48,8 @@ class SliceStoreWriter {
     // The diffuse floor is the same for every polarisation (the model's rho_d, as the simulator
     // renders it), so it is estimated from the samples multiplied back by it. Empty: unpolarised.
     std::function<double(const model::Vec3& light, int64_t texel)> polarisation_ratio;
+    // Recorded in the manifest (SliceStoreInfo::white_exitance_noise; WhiteExitanceNoise).
+    std::array<double, 3> white_exitance_noise = {0.0, 0.0, 0.0};
   };
   // After every dot: diffuse separation, push-pull slices, maps, manifest; the store is then
   // complete and SliceStore::Open accepts it.
