@@ -1,6 +1,7 @@
 #include "svbtdf/fit/quality.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdarg>
 #include <cstdint>
@@ -128,6 +129,30 @@ double DotsAcrossLobe(const TexelSlice& slice) {
   return std::sqrt(1.0 + 12.0 * narrowest / (spacing * spacing));
 }
 
+namespace {
+
+// The flat white frame's noise as the processing measured it (stores written before it have none).
+void CheckWhiteExitanceNoise(const fs::path& manifest_file, std::vector<QualityWarning>* warnings) {
+  std::array<double, 3> noise = {0.0, 0.0, 0.0};
+  try {
+    const nlohmann::json manifest = common::ReadJsonFile(manifest_file);
+    if (!manifest.contains("white_exitance_noise")) return;
+    noise = manifest.at("white_exitance_noise").get<std::array<double, 3>>();
+  } catch (const nlohmann::json::exception& e) {
+    common::ThrowFormatError(manifest_file.string(), std::string("cannot be read for its flat white noise: ") + e.what());
+  }
+  const double worst = *std::max_element(noise.begin(), noise.end());
+  if (!(worst > kMaxWhiteExitanceNoise)) return;
+  warnings->push_back({"process", manifest_file.string(), "flat-white-noise", "the flat white frame is noisy",
+                       FormatFigures("its noise is %.2f%% / %.2f%% / %.2f%% (R / G / B) per texel; limit %.0f%%",
+                                     100 * noise[0], 100 * noise[1], 100 * noise[2], 100 * kMaxWhiteExitanceNoise),
+                       "every texel's k_s and rho_d carry it (it divides all of a texel's samples): capture "
+                       "flat_white again with a longer exposure (flat_white_exposure_s), close to the top of the "
+                       "camera's range without saturating"});
+}
+
+}  // namespace
+
 std::vector<QualityWarning> CheckSliceStore(const fs::path& processed) {
   std::vector<QualityWarning> warnings;
   const fs::path mask_file = processed / "mask.exr";
@@ -173,6 +198,7 @@ std::vector<QualityWarning> CheckSliceStore(const fs::path& processed) {
                         "the dots do not reach beneath the sample: widen the dot grid (rig.dots) past the sample's "
                         "edges; those texels' lobe peaks are never sampled and their fits extrapolate"});
   }
+  CheckWhiteExitanceNoise(processed / "processed.json", &warnings);
   if (fs::exists(processed / "samples.f16")) CheckLobeSampling(processed, &warnings);
   return warnings;
 }

@@ -69,6 +69,25 @@ TEST_F(StoreCheck, TheManifestsCountServesWhenThereIsNoReachMap) {
   EXPECT_TRUE(CheckSliceStore(dir_).empty());
 }
 
+// The flat white frame's noise (processed.json `white_exitance_noise`): 1% or more in any channel
+// is a warning naming the manifest with the three figures; the presets' 0.2% is not; a store
+// written before it was measured has none to check; one that is not three numbers is refused.
+TEST_F(StoreCheck, ANoisyFlatWhiteIsAWarning) {
+  WriteMap("mask.exr", 0);
+  const auto with_noise = [&](const char* noise) {
+    common::WriteTextAtomically(dir_ / "processed.json",
+                                std::string(R"({"statistics": {"texels": 100}, "white_exitance_noise": )") + noise + "}");
+    return CheckSliceStore(dir_);
+  };
+  EXPECT_TRUE(with_noise("[0.0017, 0.0018, 0.0018]").empty());
+  const auto warnings = with_noise("[0.004, 0.012, 0.005]");
+  ASSERT_EQ(Checks(warnings), std::vector<std::string>{"flat-white-noise"});
+  EXPECT_EQ(warnings[0].file, (dir_ / "processed.json").string());
+  EXPECT_NE(warnings[0].figures.find("0.40% / 1.20% / 0.50%"), std::string::npos) << warnings[0].figures;
+  EXPECT_NE(warnings[0].likely_cause.find("longer exposure"), std::string::npos);
+  EXPECT_THROW(with_noise("\"high\""), common::Error);
+}
+
 // A slice seen from above, its dots on a square grid 2 degrees apart (21 x 21): rho = 0.8 where
 // `lit(column, row)`, 1 at the lobe's peak (the centre dot, when lit) and 0.01 elsewhere.
 template <typename Lit>

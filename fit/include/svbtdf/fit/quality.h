@@ -69,6 +69,11 @@ inline constexpr double kMinValidTexelFraction = 0.9;
 // Texels with no dot beneath them (reach.exr == 0) see only grazing light: their lobe peak is
 // never sampled and the fit extrapolates it.
 inline constexpr double kMaxTexelsWithoutDotFraction = 0.05;
+// The flat white frame's noise (processed.json `white_exitance_noise`, relative, per texel)
+// scales each texel's whole slice, k_s and rho_d alike. The presets measure 0.17-0.20%, already
+// most of rho_d's error there (the floor's own noise: 0.035%); at 1% it is the largest error of
+// every texel's scale and the k_s and rho_d maps show the frame's grain.
+inline constexpr double kMaxWhiteExitanceNoise = 0.01;
 
 // Sampling. A lobe whose half maximum spans fewer than two dots across is seen by one row of
 // dots: its width across, and with it alpha (which the lobe's shape decides) and the NDF there,
