@@ -163,8 +163,9 @@ void AddUncertaintyMaps(const fit::Material& material, const MapFunction& map) {
   const double alpha_hi = UpperScale(alpha_se, 1e-3);
   map("alpha_se.png", ScalarMap(alpha_se, 0, 0, alpha_hi),
       "standard error of alpha (docs/fitting.md, \"Uncertainty\"; white: not known). On simulated sessions the truth "
-      "lies within two standard errors for 86-92% of texels for alpha, 97-98% for the NDF width, 88-91% for rho_d, "
-      "97-99% for k_s (too wide) and 94-97% for the shadowing roughness, which one view barely constrains "
+      "lies within two standard errors for 86-92% of texels for alpha, 97-98% for the NDF width and for rho_d "
+      "(with the flat white frame's noise), 97-99% for k_s (too wide) and 94-97% for the shadowing roughness, "
+      "which one view barely constrains "
       "(docs/validation.md)", 0, alpha_hi, "unitless");
   const common::FloatImage k_s_se = KnownOnly(material.k_s_se, &material.k_s);
   const double k_s_hi = UpperScale(k_s_se, 1e-3);
