@@ -11,7 +11,6 @@
 #include "quality_output.h"
 #include "svbtdf/calib/emission_profile.h"
 #include "svbtdf/common/error.h"
-#include "svbtdf/fit/slice_store.h"
 #include "svbtdf/process/pipeline.h"
 
 namespace svbtdf::cli {
@@ -48,7 +47,7 @@ void RunProcess(ProcessCommandOptions options) {
                 static_cast<long long>(report.valid_texels), static_cast<long long>(report.texels));
   }
   std::printf("slice store: %s\n", options.out.c_str());
-  const std::array<double, 3> flat = fit::SliceStore::Open(options.out).info().white_exitance_noise;
+  const std::array<double, 3>& flat = report.white_exitance_noise;
   std::printf("flat white noise per texel: %.2f%% / %.2f%% / %.2f%% (R / G / B), in the error bars of k_s and rho_d\n",
               100 * flat[0], 100 * flat[1], 100 * flat[2]);
   PrintQualityWarnings(stage.warnings);

@@ -480,8 +480,9 @@ Material FitMaterial(const SliceStore& store, const FitMaterialOptions& options)
     refined = RefineTexels(store, use_dot, valid, refine_options, &material);
   }
   const double refine_seconds = SecondsSince(refine_start);
-  if (options.uncertainty) AddWhiteExitanceNoise(store.info().white_exitance_noise, &material);
-  if (!options.uncertainty) {
+  if (options.uncertainty) {
+    AddWhiteExitanceNoise(store.info().white_exitance_noise, &material);
+  } else {
     for (common::FloatImage* map : {&material.alpha_se, &material.k_s_se, &material.rho_d_se, &material.shadowing_roughness_se,
                                     &material.ndf_width, &material.ndf_width_se, &material.prediction_se}) {
       *map = common::FloatImage();

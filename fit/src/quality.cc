@@ -15,6 +15,7 @@
 #include "svbtdf/common/json.h"
 #include "svbtdf/common/image_io.h"
 #include "svbtdf/fit/slice_store.h"
+#include "svbtdf/fit/slice_store_format.h"
 
 namespace svbtdf::fit {
 namespace fs = std::filesystem;
@@ -133,14 +134,8 @@ namespace {
 
 // The flat white frame's noise as the processing measured it (stores written before it have none).
 void CheckWhiteExitanceNoise(const fs::path& manifest_file, std::vector<QualityWarning>* warnings) {
-  std::array<double, 3> noise = {0.0, 0.0, 0.0};
-  try {
-    const nlohmann::json manifest = common::ReadJsonFile(manifest_file);
-    if (!manifest.contains("white_exitance_noise")) return;
-    noise = manifest.at("white_exitance_noise").get<std::array<double, 3>>();
-  } catch (const nlohmann::json::exception& e) {
-    common::ThrowFormatError(manifest_file.string(), std::string("cannot be read for its flat white noise: ") + e.what());
-  }
+  const std::array<double, 3> noise =
+      store::WhiteExitanceNoiseFromManifest(common::ReadJsonFile(manifest_file), manifest_file.string());
   const double worst = *std::max_element(noise.begin(), noise.end());
   if (!(worst > kMaxWhiteExitanceNoise)) return;
   warnings->push_back({"process", manifest_file.string(), "flat-white-noise", "the flat white frame is noisy",

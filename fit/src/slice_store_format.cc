@@ -101,16 +101,22 @@ SliceStoreInfo InfoFromManifest(const nlohmann::json& j, const std::string& sour
   info.eta = j.value("eta", 0.0);
   info.provenance = j.value("provenance", nlohmann::json::object());
   if (!info.provenance.is_object()) common::ThrowFormatError(source, "has a \"provenance\" that is not an object");
-  if (const auto noise = j.find("white_exitance_noise"); noise != j.end()) {
-    const auto is_fraction = [](const nlohmann::json& v) {
-      return v.is_number() && std::isfinite(v.get<double>()) && v.get<double>() >= 0 && v.get<double>() < 1;
-    };
-    if (!noise->is_array() || noise->size() != 3 || !std::all_of(noise->begin(), noise->end(), is_fraction)) {
-      common::ThrowFormatError(source, "has a \"white_exitance_noise\" that is not three numbers in [0, 1)");
-    }
-    for (int c = 0; c < 3; ++c) info.white_exitance_noise[c] = (*noise)[c].get<double>();
-  }
+  info.white_exitance_noise = WhiteExitanceNoiseFromManifest(j, source);
   return info;
+}
+
+std::array<double, 3> WhiteExitanceNoiseFromManifest(const nlohmann::json& manifest, const std::string& source) {
+  std::array<double, 3> noise = {0.0, 0.0, 0.0};
+  const auto found = manifest.find("white_exitance_noise");
+  if (found == manifest.end()) return noise;
+  const auto is_fraction = [](const nlohmann::json& v) {
+    return v.is_number() && std::isfinite(v.get<double>()) && v.get<double>() >= 0 && v.get<double>() < 1;
+  };
+  if (!found->is_array() || found->size() != 3 || !std::all_of(found->begin(), found->end(), is_fraction)) {
+    common::ThrowFormatError(source, "has a \"white_exitance_noise\" that is not three numbers in [0, 1)");
+  }
+  for (int c = 0; c < 3; ++c) noise[c] = (*found)[c].get<double>();
+  return noise;
 }
 
 void CheckInfo(const SliceStoreInfo& info, const std::string& source) {

@@ -432,6 +432,7 @@ ProcessReport FinishedReport(const fs::path& out, int num_dots, std::chrono::ste
   report.texels = static_cast<int64_t>(store.mask().pixels.size());
   for (float m : store.mask().pixels) report.valid_texels += m > 0;
   report.dots = report.dots_resumed = num_dots;
+  report.white_exitance_noise = store.info().white_exitance_noise;
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
 }
@@ -544,6 +545,7 @@ ProcessReport ProcessSession(const session::Session& session, const calib::Sessi
   for (float m : store.mask().pixels) report.valid_texels += m > 0;
   report.dots = num_dots;
   report.images_read = reader.images_read();
+  report.white_exitance_noise = store.info().white_exitance_noise;
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
 }

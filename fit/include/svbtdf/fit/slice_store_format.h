@@ -71,6 +71,9 @@ SliceStoreInfo InfoFromManifest(const nlohmann::json& manifest, const std::strin
 // Whether the manifest says its processing finished ("complete"; absent means not). A value that
 // is not true or false throws svbtdf::Error naming `source`.
 bool CompleteFromManifest(const nlohmann::json& manifest, const std::string& source);
+// SliceStoreInfo::white_exitance_noise: 0 where the manifest has none (stores written before it);
+// anything but three numbers in [0, 1) throws svbtdf::Error naming `source`.
+std::array<double, 3> WhiteExitanceNoiseFromManifest(const nlohmann::json& manifest, const std::string& source);
 // `source` names the manifest in errors.
 TexelGeometry GeometryFromManifest(const nlohmann::json& manifest, const std::string& source);
 

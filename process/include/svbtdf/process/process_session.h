@@ -43,6 +43,7 @@ struct ProcessReport {
   int64_t images_read = 0;
   double seconds = 0.0;
   bool already_complete = false;  // `out` held this processing, finished: nothing was done
+  std::array<double, 3> white_exitance_noise = {0.0, 0.0, 0.0};  // the store's (WhiteExitanceNoise)
 };
 
 // The relative standard deviation, per channel, of each texel's white exitance L as measured
